@@ -1,0 +1,21 @@
+//! `dmpctl`: parses flags and calls the library. Exit codes: 0 success, 2 bad input (the message names the field),
+//! 1 any other failure.
+
+use std::process::ExitCode;
+
+use clap::Parser;
+use dmp_client::cli::{Cli, run};
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(out) => {
+            println!("{out}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("dmpctl: {e}");
+            ExitCode::from(if e.is_bad_input() { 2 } else { 1 })
+        }
+    }
+}

@@ -1,0 +1,56 @@
+//! Typed errors of the engine. Every error names the field at fault and the rule it breaks.
+
+use thiserror::Error;
+
+/// An input the engine refuses. `field` is a path such as `demonstration.t[4]` or `obstacles[1].semi_axes[0]`.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("{field}: {rule}")]
+pub struct InvalidInput {
+    /// Where the bad value sits.
+    pub field: String,
+    /// What it must satisfy.
+    pub rule: String,
+}
+
+impl InvalidInput {
+    /// Builds the error from anything printable.
+    pub fn new(field: impl Into<String>, rule: impl Into<String>) -> Self {
+        Self { field: field.into(), rule: rule.into() }
+    }
+}
+
+/// Errors of the `dmp` crate.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum DmpError {
+    /// An argument or a deserialized value breaks a rule.
+    #[error(transparent)]
+    Invalid(#[from] InvalidInput),
+    /// The least-squares fit of the forcing weights failed (degenerate basis).
+    #[error("learning failed: {0}")]
+    Learning(String),
+    /// A stored primitive was written by an unknown version of the format.
+    #[error("primitive format version {found} is not supported (this build reads version {supported})")]
+    UnsupportedVersion {
+        /// The version in the data.
+        found: u32,
+        /// The version this build writes and reads.
+        supported: u32,
+    },
+}
+
+/// Result alias of the crate.
+pub type Result<T, E = DmpError> = std::result::Result<T, E>;
+
+/// Returns an error naming `field` unless `value` is finite.
+pub(crate) fn ensure_finite(field: impl FnOnce() -> String, value: f64) -> Result<(), InvalidInput> {
+    if value.is_finite() { Ok(()) } else { Err(InvalidInput::new(field(), "must be a finite number")) }
+}
+
+/// Returns an error naming `field` unless `value` is finite and strictly positive.
+pub(crate) fn ensure_positive(field: impl FnOnce() -> String, value: f64) -> Result<(), InvalidInput> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(InvalidInput::new(field(), "must be a finite number greater than zero"))
+    }
+}

@@ -1,0 +1,45 @@
+//! Dynamic Movement Primitives with volumetric obstacle avoidance, after Ginesi et al., "Dynamic Movement
+//! Primitives: Volumetric Obstacle Avoidance Using Dynamic Potential Functions" (and its ERRATA.md).
+//!
+//! Pure math: no I/O, no clock, no async. Time and `dt` are arguments.
+//!
+//! | concept | module |
+//! | --- | --- |
+//! | canonical system (phase in closed form) | [`canonical`] |
+//! | Gaussian basis and forcing term | [`basis`] |
+//! | learning from one demonstration | [`learn`], [`derivatives`] |
+//! | the stored primitive | [`primitive`] |
+//! | RK4 integration, step by step | [`integrate`] |
+//! | isopotentials (superquadrics) | [`isopotential`] |
+//! | obstacles (pose, motion, boundary samples) | [`obstacle`] |
+//! | the five repulsive terms | [`avoidance`] |
+//! | a whole scene, robots as moving obstacles | [`field`] |
+//! | rollouts, stalls | [`rollout`], [`stall`] |
+
+pub mod avoidance;
+pub mod basis;
+pub mod canonical;
+pub mod derivatives;
+pub mod directions;
+pub mod distance;
+pub mod error;
+pub mod field;
+pub mod integrate;
+pub mod isopotential;
+pub mod learn;
+pub mod metrics;
+pub mod obstacle;
+pub mod primitive;
+pub mod rollout;
+pub mod scenario;
+pub mod stall;
+
+pub use avoidance::{Avoidance, Method};
+pub use error::{DmpError, InvalidInput, Result};
+pub use field::{Agent, Contact, RepulsiveField, Scene};
+pub use integrate::{Integrator, Motion, NoPerturbation, Perturbation, State};
+pub use isopotential::{Isopotential, NestedSuperquadric, Shape, Superquadric};
+pub use learn::{Demonstration, LearnConfig, learn};
+pub use obstacle::Obstacle;
+pub use primitive::Primitive;
+pub use rollout::{Rollout, Trajectory, rollout};

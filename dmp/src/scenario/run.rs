@@ -1,0 +1,180 @@
+//! Turning a scenario into engine objects (validating every field on the way) and running it offline.
+
+use super::model::{FootprintSpec, ObstacleSpec, Scenario};
+use crate::avoidance::Avoidance;
+use crate::error::{DmpError, InvalidInput, Result, ensure_positive};
+use crate::field::{Agent, RepulsiveField, Scene};
+use crate::integrate::Motion;
+use crate::isopotential::{NestedSuperquadric, Shape, Superquadric};
+use crate::learn::{Demonstration, LearnConfig, learn};
+use crate::metrics::{Metrics, metrics};
+use crate::obstacle::Obstacle;
+use crate::primitive::Primitive;
+use crate::rollout::{MAX_ROLLOUT_STEPS, Rollout, rollout};
+
+/// A validated scenario, learned and ready to roll out.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// The scenario's name.
+    pub name: String,
+    /// The demonstration.
+    pub demonstration: Demonstration,
+    /// The learned primitive.
+    pub primitive: Primitive,
+    /// Start, goal and tau of the rollout.
+    pub motion: Motion,
+    /// Obstacles, robots and methods.
+    pub scene: Scene,
+    /// Fixed step.
+    pub dt: f64,
+    /// Number of steps (`duration / dt`, rounded).
+    pub steps: usize,
+    /// Physical duration.
+    pub duration: f64,
+}
+
+impl Prepared {
+    /// The compiled repulsive field of the scene.
+    pub fn field(&self) -> Result<RepulsiveField> {
+        RepulsiveField::new(self.scene.clone(), self.primitive.dim)
+    }
+
+    /// The same robots with nothing to avoid: the obstacle-free DMP.
+    pub fn free_field(&self) -> Result<RepulsiveField> {
+        let scene = Scene { obstacles: Vec::new(), robot_avoidance: Avoidance::NONE, ..self.scene.clone() };
+        RepulsiveField::new(scene, self.primitive.dim)
+    }
+}
+
+/// The result of [`run`].
+#[derive(Debug, Clone)]
+pub struct ScenarioOutcome {
+    /// The obstacle-free rollout.
+    pub free: Rollout,
+    /// The rollout with avoidance.
+    pub adapted: Rollout,
+    /// The SPEC's metrics (`compute_seconds` is left at zero: the caller owns the clock).
+    pub metrics: Metrics,
+}
+
+/// Validates `s` and learns its primitive.
+pub fn prepare(s: &Scenario) -> Result<Prepared> {
+    let demonstration = Demonstration::new(s.demonstration.t.clone(), s.demonstration.x.clone())?;
+    let dim = demonstration.dim();
+    let config = LearnConfig {
+        n_basis: s.dmp.n,
+        k: s.dmp.k.to_vec(),
+        d: s.dmp.d.as_ref().map(|d| d.to_vec()),
+        alpha: s.dmp.alpha,
+    };
+    let primitive = learn(&demonstration, &config)?;
+
+    let r = &s.rollout;
+    ensure_positive(|| "rollout.dt".into(), r.dt)?;
+    ensure_positive(|| "rollout.duration".into(), r.duration)?;
+    let steps_f = (r.duration / r.dt).round();
+    if !(steps_f <= MAX_ROLLOUT_STEPS as f64) {
+        return Err(InvalidInput::new(
+            "rollout.duration",
+            format!("duration / dt = {steps_f:e} steps, more than the limit of {MAX_ROLLOUT_STEPS}"),
+        )
+        .into());
+    }
+    let steps = (steps_f as usize).max(1);
+    let motion = Motion {
+        start: r.start.clone().unwrap_or_else(|| primitive.start.clone()),
+        goal: r.goal.clone().unwrap_or_else(|| primitive.goal.clone()),
+        tau: r.tau.unwrap_or(primitive.tau),
+    };
+    motion.validate(dim).map_err(|e| prefixed("rollout", e))?;
+
+    let mut obstacles = Vec::with_capacity(s.obstacles.len());
+    for (i, o) in s.obstacles.iter().enumerate() {
+        if s.obstacles[..i].iter().any(|p| p.id == o.id) {
+            return Err(
+                InvalidInput::new(format!("obstacles[{i}].id"), format!("`{}` is used twice", o.id)).into()
+            );
+        }
+        obstacles.push(obstacle(o).map_err(|e| prefixed_err(&format!("obstacles[{i}]"), e))?);
+    }
+    let mut agents = Vec::with_capacity(s.robots.len());
+    for (i, r) in s.robots.iter().enumerate() {
+        if s.robots[..i].iter().any(|p| p.id == r.id) {
+            return Err(
+                InvalidInput::new(format!("robots[{i}].id"), format!("`{}` is used twice", r.id)).into()
+            );
+        }
+        let footprint =
+            footprint(&r.footprint).map_err(|e| prefixed_err(&format!("robots[{i}].footprint"), e))?;
+        agents.push(Agent { id: r.id.clone(), dims: r.dims.clone(), footprint: Some(footprint) });
+    }
+    let scene = Scene {
+        obstacles,
+        avoidance: s.avoidance,
+        agents,
+        robot_avoidance: s.robot_avoidance.unwrap_or(Avoidance::NONE),
+        point_samples: s.point_samples,
+    };
+    // Compiling the field checks dimensions and method parameters.
+    RepulsiveField::new(scene.clone(), dim)?;
+    Ok(Prepared {
+        name: s.name.clone(),
+        demonstration,
+        primitive,
+        motion,
+        scene,
+        dt: r.dt,
+        steps,
+        duration: r.duration,
+    })
+}
+
+/// Rolls the prepared scenario out with and without obstacles and measures it.
+pub fn run(p: &Prepared) -> Result<ScenarioOutcome> {
+    let free = rollout(&p.primitive, &p.motion, &mut p.free_field()?, p.dt, p.steps)?;
+    let mut field = p.field()?;
+    let adapted = rollout(&p.primitive, &p.motion, &mut field, p.dt, p.steps)?;
+    let metrics = metrics(p, &free, &adapted);
+    Ok(ScenarioOutcome { free, adapted, metrics })
+}
+
+fn obstacle(o: &ObstacleSpec) -> Result<Obstacle> {
+    let shape = match o.nested {
+        Some(n) => {
+            if o.exponents.is_some() {
+                return Err(
+                    InvalidInput::new("nested", "give either `exponents` or `nested`, not both").into()
+                );
+            }
+            let a: [f64; 3] = o.semi_axes.as_slice().try_into().map_err(|_| {
+                InvalidInput::new(
+                    "semi_axes",
+                    format!("the nested form is 3-D: needs 3 semi-axes, found {}", o.semi_axes.len()),
+                )
+            })?;
+            Shape::Nested(NestedSuperquadric::new(a, n.n, n.m)?)
+        }
+        None => superquadric(&o.semi_axes, o.exponents.as_deref())?,
+    };
+    Obstacle::new(o.id.clone(), shape, o.center.clone(), o.rotation.clone(), o.velocity.clone())
+}
+
+fn footprint(f: &FootprintSpec) -> Result<Shape> {
+    superquadric(&f.semi_axes, f.exponents.as_deref())
+}
+
+fn superquadric(semi_axes: &[f64], exponents: Option<&[f64]>) -> Result<Shape> {
+    let n = exponents.map(<[f64]>::to_vec).unwrap_or_else(|| vec![1.0; semi_axes.len()]);
+    Ok(Shape::Superquadric(Superquadric::new(semi_axes.to_vec(), n)?))
+}
+
+fn prefixed(prefix: &str, e: InvalidInput) -> DmpError {
+    InvalidInput::new(format!("{prefix}.{}", e.field), e.rule).into()
+}
+
+fn prefixed_err(prefix: &str, e: DmpError) -> DmpError {
+    match e {
+        DmpError::Invalid(i) => prefixed(prefix, i),
+        other => other,
+    }
+}

@@ -1,0 +1,1 @@
+//! The wire schema shared by gRPC and Zenoh (filled by the server issue).

@@ -1,0 +1,1 @@
+//! The long-running server (filled by the server issue).
