@@ -56,7 +56,7 @@ def main():
               dict(base, demonstration=paper_curve(), obstacles=two, avoidance=dict(method=method, **params)))
 
     # A moving obstacle crossing the paper's curve, with relative velocity.
-    moving = [ellipse("walker", [-0.9, 0.2], [0.15, 0.15], velocity=[0.6, 0.0])]
+    moving = [ellipse("walker", [-0.98, 0.53], [0.12, 0.12], velocity=[0.6, 0.0])]
     write("moving-obstacle-dynamic-volumetric",
           dict(base, demonstration=paper_curve(), obstacles=moving,
                avoidance={"method": "dynamic_volumetric", "lambda": 10.0, "beta": 2.0, "eta": 0.5}))

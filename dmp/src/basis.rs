@@ -3,8 +3,9 @@
 use crate::error::{InvalidInput, Result};
 
 /// Relative cut-off of the Gaussians: a basis function whose exponent lies more than this below the largest one
-/// contributes less than `exp(-CUTOFF)` (about 1e-22) of the sum and is not evaluated.
-const CUTOFF: f64 = 50.0;
+/// contributes less than `exp(-CUTOFF)` (about 1e-17, below the rounding of a double) of the sum and is not
+/// evaluated.
+const CUTOFF: f64 = 39.0;
 
 /// `N + 1` Gaussians over the phase (paper, `eq:gaussian_bf`, `eq:gbf_center`, `eq:bgf_width`).
 ///

@@ -117,18 +117,20 @@ impl Obstacle {
     }
 }
 
-/// Scratch and result of a world-frame evaluation of an isopotential: `C` and its gradient in the world frame, the
-/// Hessian kept in the obstacle's frame and applied on demand (the dynamic potential needs only two products).
+/// Scratch and result of an evaluation of an isopotential placed in the world: `C`, its derivatives in the
+/// obstacle's own frame (`y = R^T (x - c)`), and the world-frame gradient on request.
 #[derive(Debug, Clone)]
 pub struct WorldEval {
     /// `C`.
     pub c: f64,
-    /// `grad_x C`.
+    /// `grad_x C` (after [`WorldEval::eval`]).
     pub grad: Vec<f64>,
-    rotation: Option<Vec<f64>>,
-    y: Vec<f64>,
-    gy: Vec<f64>,
-    hy: Vec<f64>,
+    /// The point in the obstacle's frame.
+    pub y: Vec<f64>,
+    /// `grad_y C`.
+    pub gy: Vec<f64>,
+    /// Row-major `H_y`, the Hessian in the obstacle's frame.
+    pub hy: Vec<f64>,
     tmp: Vec<f64>,
     tmp2: Vec<f64>,
     hess: Vec<f64>,
@@ -140,7 +142,6 @@ impl WorldEval {
         Self {
             c: 0.0,
             grad: vec![0.0; d],
-            rotation: None,
             y: vec![0.0; d],
             gy: vec![0.0; d],
             hy: vec![0.0; d * d],
@@ -150,55 +151,43 @@ impl WorldEval {
         }
     }
 
-    /// `C` and `grad_x C` of `shape` centred at `center` with `rotation`, at `x`.
-    ///
-    /// # Formula
-    /// `y = R^T (x - c)`, `grad_x C = R grad_y C`, `H_x = R H_y R^T`.
-    pub fn eval(&mut self, shape: &Shape, rotation: Option<&[f64]>, center: &[f64], x: &[f64]) -> f64 {
+    /// `C`, `grad_y C` and `H_y` of `shape` centred at `center` with `rotation`, at `x`.
+    pub fn eval_local(&mut self, shape: &Shape, rotation: Option<&[f64]>, center: &[f64], x: &[f64]) -> f64 {
         let d = x.len();
         for i in 0..d {
             self.tmp[i] = x[i] - center[i];
         }
-        match rotation {
-            None => {
-                self.rotation = None;
-                self.c = shape.eval(&self.tmp, &mut self.grad, &mut self.hy);
-            }
-            Some(r) => {
-                match &mut self.rotation {
-                    Some(own) if own.as_slice() == r => {}
-                    own => *own = Some(r.to_vec()),
-                }
-                rotate_transposed(r, &self.tmp, &mut self.y);
-                self.c = shape.eval(&self.y, &mut self.gy, &mut self.hy);
-                rotate(Some(r), &self.gy, &mut self.grad);
-            }
-        }
+        rotate_transposed(rotation, &self.tmp, &mut self.y);
+        self.c = shape.eval(&self.y, &mut self.gy, &mut self.hy);
         self.c
     }
 
-    /// `out = H_x v` for the point of the last [`WorldEval::eval`].
-    pub fn hess_mul(&mut self, v: &[f64], out: &mut [f64]) {
-        let d = v.len();
-        match &self.rotation {
-            None => mat_vec(&self.hy, v, out),
-            Some(r) => {
-                rotate_transposed(r, v, &mut self.tmp);
-                mat_vec(&self.hy, &self.tmp, &mut self.tmp2);
-                rotate(Some(r), &self.tmp2[..d], out);
-            }
-        }
+    /// As [`WorldEval::eval_local`], and the world gradient into `grad`.
+    ///
+    /// # Formula
+    /// `y = R^T (x - c)`, `grad_x C = R grad_y C`, `H_x = R H_y R^T`.
+    pub fn eval(&mut self, shape: &Shape, rotation: Option<&[f64]>, center: &[f64], x: &[f64]) -> f64 {
+        self.eval_local(shape, rotation, center, x);
+        rotate(rotation, &self.gy, &mut self.grad);
+        self.c
     }
 
-    /// The full world-frame Hessian (row-major) at the point of the last [`WorldEval::eval`].
-    pub fn hessian(&mut self) -> &[f64] {
+    /// `out = H_x v = R H_y R^T v` at the point of the last evaluation.
+    pub fn hess_mul(&mut self, rotation: Option<&[f64]>, v: &[f64], out: &mut [f64]) {
+        rotate_transposed(rotation, v, &mut self.tmp);
+        mat_vec(&self.hy, &self.tmp, &mut self.tmp2);
+        rotate(rotation, &self.tmp2, out);
+    }
+
+    /// The full world-frame Hessian (row-major) at the point of the last evaluation.
+    pub fn hessian(&mut self, rotation: Option<&[f64]>) -> &[f64] {
         let d = self.grad.len();
         let mut e = vec![0.0; d];
         let mut col = vec![0.0; d];
         for j in 0..d {
             e.fill(0.0);
             e[j] = 1.0;
-            self.hess_mul(&e, &mut col);
+            self.hess_mul(rotation, &e, &mut col);
             for i in 0..d {
                 self.hess[i * d + j] = col[i];
             }
@@ -212,28 +201,20 @@ impl WorldEval {
         for i in 0..d {
             self.tmp[i] = x[i] - center[i];
         }
-        match rotation {
-            None => shape.value(&self.tmp),
-            Some(r) => {
-                rotate_transposed(r, &self.tmp, &mut self.y);
-                shape.value(&self.y)
-            }
-        }
+        rotate_transposed(rotation, &self.tmp, &mut self.y);
+        shape.value(&self.y)
     }
 
     /// The point `x` in the obstacle's frame, `R^T (x - c)`, written into `out`.
     pub fn to_local(rotation: Option<&[f64]>, center: &[f64], x: &[f64], out: &mut [f64]) {
         let d = x.len();
         let diff: Vec<f64> = (0..d).map(|i| x[i] - center[i]).collect();
-        match rotation {
-            None => out[..d].copy_from_slice(&diff),
-            Some(r) => rotate_transposed(r, &diff, out),
-        }
+        rotate_transposed(rotation, &diff, out);
     }
 }
 
 /// `out = M v` for a row-major square `M`.
-fn mat_vec(m: &[f64], v: &[f64], out: &mut [f64]) {
+pub(crate) fn mat_vec(m: &[f64], v: &[f64], out: &mut [f64]) {
     let d = v.len();
     for (i, o) in out.iter_mut().enumerate().take(d) {
         *o = m[i * d..(i + 1) * d].iter().zip(v).map(|(a, b)| a * b).sum();
@@ -253,11 +234,16 @@ pub(crate) fn rotate(r: Option<&[f64]>, v: &[f64], out: &mut [f64]) {
     }
 }
 
-/// `out = R^T v`.
-fn rotate_transposed(r: &[f64], v: &[f64], out: &mut [f64]) {
+/// `out = R^T v` (identity when `r` is `None`).
+pub(crate) fn rotate_transposed(r: Option<&[f64]>, v: &[f64], out: &mut [f64]) {
     let d = v.len();
-    for i in 0..d {
-        out[i] = (0..d).map(|k| r[k * d + i] * v[k]).sum();
+    match r {
+        None => out[..d].copy_from_slice(v),
+        Some(r) => {
+            for i in 0..d {
+                out[i] = (0..d).map(|k| r[k * d + i] * v[k]).sum();
+            }
+        }
     }
 }
 
@@ -311,7 +297,7 @@ mod tests {
         let mut e = WorldEval::new(2);
         let x = [0.45, 0.2];
         e.eval(o.shape(), o.rotation(), o.center(), &x);
-        let (g, h) = (e.grad.clone(), e.hessian().to_vec());
+        let (g, h) = (e.grad.clone(), e.hessian(o.rotation()).to_vec());
         let eps = 1e-6;
         for j in 0..2 {
             let (mut xp, mut xm) = (x, x);

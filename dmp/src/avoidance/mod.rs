@@ -189,12 +189,36 @@ pub(crate) fn norm(a: &[f64]) -> f64 {
 
 /// `x^p` for `x >= 0`, exact and fast for the exponents the paper uses (integers and halves).
 pub(crate) fn pow(x: f64, p: f64) -> f64 {
-    if p.fract() == 0.0 && p.abs() < 64.0 {
-        x.powi(p as i32)
-    } else if (2.0 * p).fract() == 0.0 && p.abs() < 64.0 {
-        x.powi((p - 0.5) as i32) * x.sqrt()
-    } else {
-        x.powf(p)
+    Exponent::new(p).pow(x)
+}
+
+/// An exponent classified once, so that raising to it in a hot loop costs no classification: integers use
+/// `powi`, halves `powi` and one square root, the rest `powf`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Exponent {
+    Int(i32),
+    Half(i32),
+    Real(f64),
+}
+
+impl Exponent {
+    pub(crate) fn new(p: f64) -> Self {
+        if p.fract() == 0.0 && p.abs() < 64.0 {
+            Exponent::Int(p as i32)
+        } else if (2.0 * p).fract() == 0.0 && p.abs() < 64.0 {
+            Exponent::Half((p - 0.5) as i32)
+        } else {
+            Exponent::Real(p)
+        }
+    }
+
+    #[inline]
+    pub(crate) fn pow(self, x: f64) -> f64 {
+        match self {
+            Exponent::Int(k) => x.powi(k),
+            Exponent::Half(k) => x.powi(k) * x.sqrt(),
+            Exponent::Real(p) => x.powf(p),
+        }
     }
 }
 

@@ -151,7 +151,7 @@ proptest! {
         let params = DynamicVolumetric { lambda, beta, eta };
         let mut f = vec![0.0; d];
         let mut e = e;
-        let hess = e.hessian().to_vec();
+        let hess = e.hessian(o.rotation()).to_vec();
         let hu: Vec<f64> = (0..d).map(|i| dot(&hess[i * d..(i + 1) * d], u)).collect();
         let hg: Vec<f64> = (0..d).map(|i| dot(&hess[i * d..(i + 1) * d], &e.grad)).collect();
         dynamic_volumetric::add_force(e.c, &e.grad, &hu, &hg, u, &params, &mut f);

@@ -114,6 +114,17 @@ impl Superquadric {
         &self.exponents
     }
 
+    /// One axis' share of the isopotential at the local coordinate `y_i`: its term of `C` (without the `- 1`),
+    /// of the gradient, and of the diagonal Hessian.
+    #[inline]
+    pub fn axis_terms(&self, i: usize, y_i: f64) -> (f64, f64, f64) {
+        let ax = self.axes[i];
+        let q = y_i * ax.inv_a;
+        let q_2n2 = ax.q_2n2(q);
+        let q_2n1 = q * q_2n2;
+        (q_2n1 * q, ax.two_n * ax.inv_a * q_2n1, ax.two_n * (ax.two_n - 1.0) * ax.inv_a * ax.inv_a * q_2n2)
+    }
+
     /// Every semi-axis enlarged by `margin`.
     pub fn inflated(&self, margin: f64) -> Result<Self> {
         Self::new(self.semi_axes.iter().map(|a| a + margin).collect(), self.exponents.clone())

@@ -73,7 +73,7 @@ pub fn prepare(s: &Scenario) -> Result<Prepared> {
     ensure_positive(|| "rollout.dt".into(), r.dt)?;
     ensure_positive(|| "rollout.duration".into(), r.duration)?;
     let steps_f = (r.duration / r.dt).round();
-    if !(steps_f <= MAX_ROLLOUT_STEPS as f64) {
+    if steps_f > MAX_ROLLOUT_STEPS as f64 {
         return Err(InvalidInput::new(
             "rollout.duration",
             format!("duration / dt = {steps_f:e} steps, more than the limit of {MAX_ROLLOUT_STEPS}"),

@@ -1,10 +1,14 @@
 //! The repulsive field of a whole scene: fixed and moving obstacles, and robots that are obstacles for each other.
 
+mod kernel;
+
+use kernel::DynamicVolumetricKernel;
+
 use crate::avoidance::{self, Avoidance, Method, dot};
 use crate::error::{InvalidInput, Result};
 use crate::integrate::Perturbation;
 use crate::isopotential::{Isopotential, Shape};
-use crate::obstacle::{Obstacle, WorldEval};
+use crate::obstacle::{Obstacle, WorldEval, mat_vec, rotate, rotate_transposed};
 
 /// Floor on `C` in the volumetric terms: inside an obstacle (`C <= 0`) they are undefined, so they are evaluated at
 /// this value, which pushes outward along `grad C`. The step is flagged as a collision by [`RepulsiveField::contacts`].
@@ -85,6 +89,8 @@ pub struct RepulsiveField {
     obstacle_samples: Vec<Vec<f64>>,
     footprint_samples: Vec<Vec<f64>>,
     max_perturbation: f64,
+    /// Classified parameters of the dynamic volumetric method for obstacles and for robots, when used.
+    kernels: [Option<DynamicVolumetricKernel>; 2],
     s: Scratch,
 }
 
@@ -98,6 +104,8 @@ struct Scratch {
     center: Vec<f64>,
     hu: Vec<f64>,
     hg: Vec<f64>,
+    u_local: Vec<f64>,
+    phi_local: Vec<f64>,
     eval: WorldEval,
 }
 
@@ -159,8 +167,11 @@ impl RepulsiveField {
             center: vec![0.0; sub_dim],
             hu: vec![0.0; sub_dim],
             hg: vec![0.0; sub_dim],
+            u_local: vec![0.0; sub_dim],
+            phi_local: vec![0.0; sub_dim],
             eval: WorldEval::new(sub_dim),
         };
+        let (scene_avoidance, scene_robot_avoidance) = (scene.avoidance.method, scene.robot_avoidance.method);
         Ok(Self {
             scene,
             agents,
@@ -168,6 +179,7 @@ impl RepulsiveField {
             obstacle_samples,
             footprint_samples,
             max_perturbation: DEFAULT_MAX_PERTURBATION,
+            kernels: [kernel_of(&scene_avoidance), kernel_of(&scene_robot_avoidance)],
             s,
         })
     }
@@ -236,7 +248,14 @@ impl RepulsiveField {
                 for i in 0..self.sub_dim {
                     s.u[i] = if av.relative_velocity { s.v[i] - tau * o.velocity()[i] } else { s.v[i] };
                 }
-                apply(&av.method, o.shape(), o.rotation(), &self.obstacle_samples[oi], s);
+                apply(
+                    &av.method,
+                    self.kernels[0].as_ref(),
+                    o.shape(),
+                    o.rotation(),
+                    &self.obstacle_samples[oi],
+                    s,
+                );
             }
         }
         let rv = self.scene.robot_avoidance;
@@ -248,7 +267,7 @@ impl RepulsiveField {
                     s.center[k] = x[dim];
                     s.u[k] = if rv.relative_velocity { s.v[k] - v[dim] } else { s.v[k] };
                 }
-                apply(&rv.method, footprint, None, &self.footprint_samples[bi], s);
+                apply(&rv.method, self.kernels[1].as_ref(), footprint, None, &self.footprint_samples[bi], s);
             }
         }
         let norm = dot(&s.phi, &s.phi).sqrt();
@@ -271,8 +290,22 @@ impl Perturbation for RepulsiveField {
 }
 
 /// Adds the term of `method` for one obstacle (centre in `s.center`, relative velocity in `s.u`) to `s.phi`.
-fn apply(method: &Method, shape: &Shape, rotation: Option<&[f64]>, samples: &[f64], s: &mut Scratch) {
+fn apply(
+    method: &Method,
+    kernel: Option<&DynamicVolumetricKernel>,
+    shape: &Shape,
+    rotation: Option<&[f64]>,
+    samples: &[f64],
+    s: &mut Scratch,
+) {
     let d = s.x.len();
+    if let (Some(k), Shape::Superquadric(sq)) = (kernel, shape) {
+        match d {
+            2 => return k.add::<2>(sq, rotation, &s.center, &s.x, &s.u, &mut s.phi),
+            3 => return k.add::<3>(sq, rotation, &s.center, &s.x, &s.u, &mut s.phi),
+            _ => {}
+        }
+    }
     match method {
         Method::None => {}
         Method::StaticPoint(p) => {
@@ -298,15 +331,35 @@ fn apply(method: &Method, shape: &Shape, rotation: Option<&[f64]>, samples: &[f6
             avoidance::static_volumetric::add_force(c, &s.eval.grad, p.a, p.eta, &mut s.phi);
         }
         Method::DynamicVolumetric(p) => {
-            let c = s.eval.eval(shape, rotation, &s.center, &s.x).max(C_FLOOR);
-            if avoidance::dynamic_volumetric::is_active(&s.eval.grad, &s.u) {
-                s.eval.hess_mul(&s.u, &mut s.hu);
-                let grad = std::mem::take(&mut s.eval.grad);
-                s.eval.hess_mul(&grad, &mut s.hg);
-                avoidance::dynamic_volumetric::add_force(c, &grad, &s.hu, &s.hg, &s.u, p, &mut s.phi);
-                s.eval.grad = grad;
+            // The potential is invariant under rotation: work in the obstacle's frame, where the Hessian of a
+            // per-axis superquadric is diagonal, and rotate the term back.
+            let c = s.eval.eval_local(shape, rotation, &s.center, &s.x).max(C_FLOOR);
+            rotate_transposed(rotation, &s.u, &mut s.u_local);
+            let e = &s.eval;
+            if avoidance::dynamic_volumetric::is_active(&e.gy, &s.u_local) {
+                mat_vec(&e.hy, &s.u_local, &mut s.hu);
+                mat_vec(&e.hy, &e.gy, &mut s.hg);
+                s.phi_local.fill(0.0);
+                avoidance::dynamic_volumetric::add_force(
+                    c,
+                    &e.gy,
+                    &s.hu,
+                    &s.hg,
+                    &s.u_local,
+                    p,
+                    &mut s.phi_local,
+                );
+                rotate(rotation, &s.phi_local, &mut s.hu);
+                s.phi.iter_mut().zip(&s.hu).for_each(|(a, b)| *a += b);
             }
         }
+    }
+}
+
+fn kernel_of(method: &Method) -> Option<DynamicVolumetricKernel> {
+    match method {
+        Method::DynamicVolumetric(p) => Some(DynamicVolumetricKernel::new(p)),
+        _ => None,
     }
 }
 
