@@ -33,14 +33,72 @@ pub enum ClientError {
         /// The rule.
         source: dmp::DmpError,
     },
+    /// An argument of a call or of the command line breaks a rule.
+    #[error("{field}: {message}")]
+    Argument {
+        /// The argument or field at fault, e.g. `--goal` or `demonstration.positions[3]`.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The server answered with a gRPC status other than OK. InvalidArgument and NotFound are bad input; their
+    /// message names the field.
+    #[error("server: {} ({code:?})", if message.is_empty() { "no message" } else { message.as_str() })]
+    Status {
+        /// The gRPC code.
+        code: tonic::Code,
+        /// The server's message.
+        message: String,
+    },
+    /// The server could not be reached (refused, timed out, bad address).
+    #[error("cannot connect to the server at {url}: {message}")]
+    Connect {
+        /// The address dialled.
+        url: String,
+        /// Why.
+        message: String,
+    },
+    /// The server sent something that breaks the schema's contract (e.g. a segment with the wrong number of values).
+    #[error("unexpected answer from the server: {0}")]
+    Protocol(String),
+    /// A stream or session already ended (`0` names it).
+    #[error("{0} has ended")]
+    Closed(String),
+    /// Zenoh failed (opening the session, publishing), or nobody subscribes.
+    #[error("zenoh: {0}")]
+    Zenoh(String),
     /// The plot could not be drawn.
     #[error("plot: {0}")]
     Plot(String),
 }
 
 impl ClientError {
-    /// True when the user's input is at fault (the CLI exits with code 2).
+    /// True when the user's input is at fault (the CLI exits with code 2): a bad scenario or argument, or a
+    /// request the server refused as InvalidArgument or NotFound.
     pub fn is_bad_input(&self) -> bool {
-        matches!(self, ClientError::Parse { .. } | ClientError::Invalid { .. })
+        match self {
+            ClientError::Parse { .. } | ClientError::Invalid { .. } | ClientError::Argument { .. } => true,
+            ClientError::Status { code, .. } => matches!(code, tonic::Code::InvalidArgument | tonic::Code::NotFound),
+            _ => false,
+        }
+    }
+
+    /// An argument error.
+    pub fn argument(field: impl Into<String>, message: impl Into<String>) -> Self {
+        ClientError::Argument { field: field.into(), message: message.into() }
+    }
+
+    /// The gRPC code, when the server answered with a status.
+    pub fn code(&self) -> Option<tonic::Code> {
+        match self {
+            ClientError::Status { code, .. } => Some(*code),
+            _ => None,
+        }
+    }
+}
+
+impl From<tonic::Status> for ClientError {
+    fn from(s: tonic::Status) -> Self {
+        ClientError::Status { code: s.code(), message: s.message().to_string() }
     }
 }

@@ -6,13 +6,31 @@
 //! | offline runs and timing | [`offline`] |
 //! | output files | [`outputs`] |
 //! | figures | [`plot`] |
+//! | the gRPC client of the server's three services | [`grpc`] |
+//! | wire schema <-> engine and scenario format | [`convert`] |
+//! | the setpoints in force after a stream of segments (supersession) | [`setpoints`] |
+//! | publishing obstacles over Zenoh (perception nodes) | [`zenoh_pub`] |
+//! | demonstrations from CSV | [`demo_csv`] |
+//! | the server-side commands of `dmpctl` | [`remote`] |
+//! | `scenario run` through the server | [`remote_scenario`] |
 //! | the command line | [`cli`] |
 
 pub mod cli;
+pub mod convert;
+pub mod demo_csv;
 pub mod error;
+pub mod grpc;
+#[cfg(test)]
+mod mock_server;
 pub mod offline;
 pub mod outputs;
 pub mod plot;
+pub mod remote;
+pub mod remote_scenario;
 pub mod scenario_file;
+pub mod setpoints;
+pub mod zenoh_pub;
 
 pub use error::ClientError;
+pub use grpc::DmpClient;
+pub use setpoints::Setpoints;

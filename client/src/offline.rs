@@ -17,6 +17,8 @@ use crate::scenario_file::prepare_scenario;
 pub struct RunSummary {
     /// The metrics written to `metrics.json`.
     pub metrics: Metrics,
+    /// Remarks worth printing (e.g. where a run through the server departs from the offline one).
+    pub notes: Vec<String>,
 }
 
 fn invalid(path: &Path) -> impl FnOnce(dmp::DmpError) -> ClientError + '_ {
@@ -31,7 +33,7 @@ pub fn run_scenario(path: &Path, out: &Path) -> Result<RunSummary, ClientError> 
         dmp::scenario::run(&prepared).map_err(invalid(path))?;
     metrics.compute_seconds = started.elapsed().as_secs_f64();
     write_outputs(&prepared, &free.trajectory, &adapted.trajectory, &metrics, out)?;
-    Ok(RunSummary { metrics })
+    Ok(RunSummary { metrics, notes: Vec::new() })
 }
 
 /// Writes the three files of a run.

@@ -164,3 +164,28 @@ fn a_missing_file_is_an_io_error_not_bad_input() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent/scenario.json"));
 }
+
+#[test]
+fn server_commands_exit_1_when_the_server_is_unreachable_and_2_on_bad_arguments() {
+    // Port 1 on loopback: nothing listens.
+    let o = dmpctl(&["--server", "http://127.0.0.1:1", "list", "--robot", "r"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("cannot connect to the server at http://127.0.0.1:1"), "{err}");
+
+    let o = dmpctl(&["plan", "--robot", "r", "--name", "p", "--goal", "1,x", "--out", "/tmp/never"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--goal") && err.contains("entry 2"), "{err}");
+
+    // A bad obstacle file is refused before anything is sent, naming the field.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("o.json");
+    std::fs::write(&file, r#"{"id": "a", "center": [0, 0], "semi_axes": [0.1, -1]}"#).unwrap();
+    for via in ["grpc", "zenoh"] {
+        let o = dmpctl(&["scene", "put", file.to_str().unwrap(), "--via", via, "--server", "http://127.0.0.1:1"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains("semi_axes[1]"), "{err}");
+    }
+}

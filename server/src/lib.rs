@@ -1,1 +1,27 @@
-//! The long-running server (filled by the server issue).
+//! The DMP cell's server: a thin adapter around the `dmp` engine. It stores learned primitives per robot (redb),
+//! takes obstacle updates over Zenoh (and gRPC), and streams trajectory segments over gRPC to many robots at once.
+//!
+//! | concept | module |
+//! | --- | --- |
+//! | configuration (file, then flags) | [`config`], [`cli`] |
+//! | wire <-> engine conversions, validation | [`convert`] |
+//! | errors and their gRPC status | [`error`] |
+//! | the scene (obstacles, robot states) | [`scene`] |
+//! | shared state of the services | [`state`] |
+//! | the embedded store of primitives (redb) | [`store`] |
+//! | robots' states: local scene and `dmp/<cell>/robots/<id>/state` | [`robots`] |
+//! | the Zenoh session and the subscribers that feed the scene | [`zenoh_bridge`] |
+//! | the gRPC services, one file each | [`services`] |
+
+pub mod cli;
+pub mod config;
+pub mod convert;
+pub mod error;
+pub mod executor;
+pub mod robots;
+pub mod run;
+pub mod scene;
+pub mod services;
+pub mod state;
+pub mod store;
+pub mod zenoh_bridge;

@@ -1,0 +1,423 @@
+//! `dmpctl scenario run FILE --server URL --out DIR`: the offline experiment, computed by the server.
+//!
+//! The scenario is validated and learned locally too ([`dmp::scenario::prepare`]): the local [`Prepared`] gives the
+//! metrics their scene, and its primitive is compared with the server's. Then:
+//!
+//! - **one robot** (no `robots`): the demonstration is learned under robot [`SCENARIO_ROBOT`], name = the
+//!   scenario's name sanitized; two `Plan`s with the scenario's `dt`, `duration`, start, goal and `tau`: one with
+//!   the scenario's obstacles as `extra_obstacles` (`ignore_scene = true`, so the cell's own scene is left out) and
+//!   its avoidance, one with method `none` and no obstacles (the obstacle-free twin). A plan is the engine's
+//!   rollout, so the metrics are the offline run's.
+//! - **several robots**: each robot's dimensions of the demonstration are learned as its own primitive (robot
+//!   `scenario-<id>`), and the two runs are `ExecuteGroup` streams paced as fast as read, one member per robot,
+//!   `max_duration_s` = the scenario's duration; the members' setpoints are put back together in the scenario's
+//!   dimension order. Learning is per dimension, so each robot's primitive is the rows of the whole one; the
+//!   metrics equal the offline run's when the server's group integration is the engine's multi-robot rollout and
+//!   its stream has the same rows (`steps + 1`, from `t = 0`). When the two runs differ in length both are cut to
+//!   the shorter, and a note says so.
+//!
+//! Contacts are not needed by the metrics; stalls are: they are detected again here, with the engine's detector on
+//! the server's trajectory, exactly as the rollout does.
+
+use std::path::Path;
+use std::time::Instant;
+
+use dmp::scenario::{Prepared, Scenario};
+use dmp::stall::{StallConfig, StallDetector};
+use dmp::{Avoidance, Rollout, Trajectory};
+use dmp_proto::v1;
+use tokio_stream::StreamExt;
+
+use crate::convert::{avoidance_to_proto, footprint_to_proto, learn_parameters, obstacle_to_proto};
+use crate::error::ClientError;
+use crate::grpc::{DmpClient, record_primitive};
+use crate::offline::{RunSummary, write_outputs};
+use crate::scenario_file::load_scenario;
+use crate::setpoints::Setpoints;
+
+/// The robot a single-robot scenario's primitive is stored under.
+pub const SCENARIO_ROBOT: &str = "scenario";
+
+/// A robot id or primitive name the server accepts: 1 to 128 characters of `[A-Za-z0-9_.-]`, others replaced by
+/// `_`; empty gives `scenario`.
+pub fn sanitize(name: &str) -> String {
+    let s: String = name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.') { c } else { '_' })
+        .take(128)
+        .collect();
+    if s.is_empty() { "scenario".into() } else { s }
+}
+
+/// Runs the scenario at `path` through the server and writes the three files of the offline run into `out`.
+pub async fn run_scenario_remote(client: &DmpClient, path: &Path, out: &Path) -> Result<RunSummary, ClientError> {
+    let started = Instant::now();
+    let scenario = load_scenario(path)?;
+    let p = dmp::scenario::prepare(&scenario)
+        .map_err(|source| ClientError::Invalid { path: path.to_path_buf(), source })?;
+    let mut notes = Vec::new();
+    let (free, adapted) = if scenario.robots.is_empty() {
+        single(client, &scenario, &p, &mut notes).await?
+    } else {
+        group(client, &scenario, &p, &mut notes).await?
+    };
+    let stalls = detect_stalls(&p, &adapted)?;
+    let free = Rollout { trajectory: free, contacts: vec![], stalls: vec![] };
+    let adapted = Rollout { trajectory: adapted, contacts: vec![], stalls };
+    let mut metrics = dmp::metrics::metrics(&p, &free, &adapted);
+    metrics.compute_seconds = started.elapsed().as_secs_f64();
+    write_outputs(&p, &free.trajectory, &adapted.trajectory, &metrics, out)?;
+    Ok(RunSummary { metrics, notes })
+}
+
+/// The stalls the rollout would report: one detector per robot, fed every row.
+fn detect_stalls(p: &Prepared, traj: &Trajectory) -> Result<Vec<(usize, dmp::stall::Stall)>, ClientError> {
+    let field = p.field().map_err(|e| ClientError::Protocol(e.to_string()))?;
+    let mut detectors: Vec<StallDetector> =
+        field.agents().iter().map(|a| StallDetector::new(StallConfig::default(), a.dims.clone())).collect();
+    let mut stalls = Vec::new();
+    for k in 0..traj.len() {
+        for (i, d) in detectors.iter_mut().enumerate() {
+            if let Some(s) = d.update(traj.t[k], traj.position(k), traj.velocity(k), &p.motion.goal) {
+                stalls.push((i, s));
+            }
+        }
+    }
+    Ok(stalls)
+}
+
+/// Notes a primitive of the server that differs from the engine's.
+fn compare_primitive(
+    record: &v1::PrimitiveRecord,
+    expected: &dmp::Primitive,
+    what: &str,
+    notes: &mut Vec<String>,
+) -> Result<(), ClientError> {
+    let got = record_primitive(record)?;
+    if &got != expected {
+        let dw = got
+            .weights
+            .iter()
+            .flatten()
+            .zip(expected.weights.iter().flatten())
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        notes.push(format!(
+            "the server's primitive for {what} differs from the engine's (largest weight difference {dw:e})"
+        ));
+    }
+    Ok(())
+}
+
+/// Checks a plan's trajectory against the scenario's shape.
+fn check_rows(traj: &Trajectory, p: &Prepared, what: &str) -> Result<(), ClientError> {
+    if traj.dim() != p.primitive.dim || traj.len() != p.steps + 1 {
+        return Err(ClientError::Protocol(format!(
+            "the {what} plan has {} rows of dimension {}; the scenario needs {} rows (duration / dt + 1) of dimension {}",
+            traj.len(),
+            traj.dim(),
+            p.steps + 1,
+            p.primitive.dim
+        )));
+    }
+    Ok(())
+}
+
+fn plan_trajectory(r: v1::PlanResponse) -> Result<Trajectory, ClientError> {
+    let seg = r.trajectory.ok_or_else(|| ClientError::Protocol("the plan has no trajectory".into()))?;
+    let mut s = Setpoints::new();
+    s.push(&seg)?;
+    Ok(s.into_trajectory())
+}
+
+async fn single(
+    client: &DmpClient,
+    s: &Scenario,
+    p: &Prepared,
+    notes: &mut Vec<String>,
+) -> Result<(Trajectory, Trajectory), ClientError> {
+    let name = sanitize(&s.name);
+    let record =
+        client.learn(SCENARIO_ROBOT, &name, &s.demonstration.t, &s.demonstration.x, learn_parameters(&s.dmp)).await?;
+    compare_primitive(&record, &p.primitive, &format!("{SCENARIO_ROBOT}/{name}"), notes)?;
+    let motion = |avoidance: &Avoidance, obstacles: Vec<v1::Obstacle>| v1::MotionSpec {
+        robot_id: SCENARIO_ROBOT.into(),
+        primitive: name.clone(),
+        version: record.version,
+        start: p.motion.start.clone(),
+        goal: p.motion.goal.clone(),
+        tau: p.motion.tau,
+        avoidance: Some(avoidance_to_proto(avoidance, s.point_samples)),
+        extra_obstacles: obstacles,
+        ignore_scene: true,
+        ..Default::default()
+    };
+    let obstacles: Vec<v1::Obstacle> = s.obstacles.iter().map(|o| obstacle_to_proto(o, 0.0, 0.0)).collect();
+    let plan = |m: v1::MotionSpec| v1::PlanRequest { motion: Some(m), dt: p.dt, duration: p.duration };
+    let (adapted, free) = tokio::join!(
+        client.plan(plan(motion(&s.avoidance, obstacles))),
+        client.plan(plan(motion(&Avoidance::NONE, Vec::new()))),
+    );
+    let (adapted, free) = (plan_trajectory(adapted?)?, plan_trajectory(free?)?);
+    check_rows(&adapted, p, "adapted")?;
+    check_rows(&free, p, "obstacle-free")?;
+    Ok((free, adapted))
+}
+
+/// The entries of a per-dimension parameter (one value, or one per dimension) for the dimensions `dims`.
+fn pick(v: Vec<f64>, dims: &[usize]) -> Vec<f64> {
+    if v.len() <= 1 { v } else { dims.iter().map(|&i| v[i]).collect() }
+}
+
+async fn group(
+    client: &DmpClient,
+    s: &Scenario,
+    p: &Prepared,
+    notes: &mut Vec<String>,
+) -> Result<(Trajectory, Trajectory), ClientError> {
+    let name = sanitize(&s.name);
+    let whole = learn_parameters(&s.dmp);
+    let mut members = Vec::with_capacity(s.robots.len());
+    for r in &s.robots {
+        let robot = sanitize(&format!("scenario-{}", r.id));
+        let x: Vec<Vec<f64>> = s.demonstration.x.iter().map(|row| r.dims.iter().map(|&i| row[i]).collect()).collect();
+        let params = v1::LearnParameters {
+            k: pick(whole.k.clone(), &r.dims),
+            d: pick(whole.d.clone(), &r.dims),
+            ..whole.clone()
+        };
+        let record = client.learn(&robot, &name, &s.demonstration.t, &x, params).await?;
+        let mut expected = p.primitive.clone();
+        let sub = |v: &[f64]| r.dims.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+        expected.dim = r.dims.len();
+        expected.k = sub(&p.primitive.k);
+        expected.d = sub(&p.primitive.d);
+        expected.start = sub(&p.primitive.start);
+        expected.goal = sub(&p.primitive.goal);
+        expected.weights = r.dims.iter().map(|&i| p.primitive.weights[i].clone()).collect();
+        compare_primitive(&record, &expected, &format!("{robot}/{name}"), notes)?;
+        members.push((robot, record.version, r));
+    }
+    let obstacles: Vec<v1::Obstacle> = s.obstacles.iter().map(|o| obstacle_to_proto(o, 0.0, 0.0)).collect();
+    let request = |free: bool| v1::ExecuteGroupRequest {
+        members: members
+            .iter()
+            .map(|(robot, version, r)| {
+                let sub = |v: &[f64]| r.dims.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+                let none = Avoidance::NONE;
+                let (avoidance, robot_avoidance) = if free {
+                    (none, none)
+                } else {
+                    (s.avoidance, s.robot_avoidance.unwrap_or(none))
+                };
+                v1::GroupMember {
+                    motion: Some(v1::MotionSpec {
+                        robot_id: robot.clone(),
+                        primitive: name.clone(),
+                        version: *version,
+                        start: sub(&p.motion.start),
+                        goal: sub(&p.motion.goal),
+                        tau: p.motion.tau,
+                        avoidance: Some(avoidance_to_proto(&avoidance, s.point_samples)),
+                        robot_avoidance: Some(avoidance_to_proto(&robot_avoidance, s.point_samples)),
+                        footprint: Some(footprint_to_proto(&r.footprint)),
+                        extra_obstacles: if free { Vec::new() } else { obstacles.clone() },
+                        ignore_scene: true,
+                    }),
+                }
+            })
+            .collect(),
+        dt: p.dt,
+        segment_s: 0.0,
+        pacing: v1::Pacing::AsFastAsRead as i32,
+        lookahead_s: 0.0,
+        max_duration_s: p.duration,
+        tau: p.motion.tau,
+    };
+    let dims: Vec<&[usize]> = s.robots.iter().map(|r| r.dims.as_slice()).collect();
+    let (adapted, free) =
+        tokio::join!(run_group(client, request(false), &dims, p), run_group(client, request(true), &dims, p));
+    let (mut adapted, mut free) = (adapted?, free?);
+    let rows = adapted.len().min(free.len());
+    if rows == 0 {
+        return Err(ClientError::Protocol("a group stream carried no points".into()));
+    }
+    if adapted.len() != p.steps + 1 || free.len() != p.steps + 1 {
+        notes.push(format!(
+            "the group streams have {} (adapted) and {} (obstacle-free) rows, the offline run {}: metrics are over \
+             the first {rows}",
+            adapted.len(),
+            free.len(),
+            p.steps + 1
+        ));
+        truncate(&mut adapted, rows);
+        truncate(&mut free, rows);
+    }
+    Ok((free, adapted))
+}
+
+fn truncate(t: &mut Trajectory, rows: usize) {
+    let d = t.dim();
+    t.t.truncate(rows);
+    t.x.truncate(rows * d);
+    t.xd.truncate(rows * d);
+    t.xdd.truncate(rows * d);
+}
+
+/// Reads a group stream to its end and puts the members' setpoints back into the scenario's dimensions.
+async fn run_group(
+    client: &DmpClient,
+    request: v1::ExecuteGroupRequest,
+    dims: &[&[usize]],
+    p: &Prepared,
+) -> Result<Trajectory, ClientError> {
+    let mut stream = client.execute_group(request).await?;
+    let mut members: Vec<Setpoints> = dims.iter().map(|_| Setpoints::new()).collect();
+    while let Some(step) = stream.next().await {
+        let step = step?;
+        if step.segments.len() != members.len() {
+            return Err(ClientError::Protocol(format!(
+                "group step {} has {} segments for {} members",
+                step.sequence,
+                step.segments.len(),
+                members.len()
+            )));
+        }
+        for (m, seg) in members.iter_mut().zip(&step.segments) {
+            m.push(seg)?;
+        }
+    }
+    let parts: Vec<Trajectory> = members.into_iter().map(Setpoints::into_trajectory).collect();
+    let rows = parts.iter().map(Trajectory::len).min().unwrap_or(0);
+    let d = p.primitive.dim;
+    let mut out = Trajectory::with_capacity(d, rows);
+    let (mut x, mut xd, mut xdd) = (vec![0.0; d], vec![0.0; d], vec![0.0; d]);
+    for k in 0..rows {
+        for (part, owned) in parts.iter().zip(dims) {
+            if part.dim() != owned.len() {
+                return Err(ClientError::Protocol(format!(
+                    "a member's segments have dimension {}, its robot owns {}",
+                    part.dim(),
+                    owned.len()
+                )));
+            }
+            for (j, &i) in owned.iter().enumerate() {
+                x[i] = part.position(k)[j];
+                xd[i] = part.velocity(k)[j];
+                xdd[i] = part.acceleration(k)[j];
+            }
+        }
+        // Segment times are `start_time + j dt`; on the scenario's grid `k dt` they are written as the offline run
+        // writes them.
+        let (t, grid) = (parts[0].t[k], k as f64 * p.dt);
+        out.push(if (t - grid).abs() <= 1e-6 * p.dt { grid } else { t }, &x, &xd, &xdd);
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_sanitized_for_the_server() {
+        assert_eq!(sanitize("paper one/obstacle: dynamic"), "paper_one_obstacle__dynamic");
+        assert_eq!(sanitize("youbots-three_dynamic.v1"), "youbots-three_dynamic.v1");
+        assert_eq!(sanitize(""), "scenario");
+        assert_eq!(sanitize(&"x".repeat(300)).len(), 128);
+    }
+
+    #[test]
+    fn stalls_are_found_again_on_a_trajectory() {
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/dynamic_volumetric.json");
+        let p = dmp::scenario::prepare(&load_scenario(&file).unwrap()).unwrap();
+        let out = dmp::scenario::run(&p).unwrap();
+        let stalls = detect_stalls(&p, &out.adapted.trajectory).unwrap();
+        assert_eq!(stalls, out.adapted.stalls);
+        // Rebuilding the rollout from its trajectory alone gives the offline metrics.
+        let again = dmp::metrics::metrics(
+            &p,
+            &Rollout { trajectory: out.free.trajectory.clone(), contacts: vec![], stalls: vec![] },
+            &Rollout { trajectory: out.adapted.trajectory.clone(), contacts: vec![], stalls },
+        );
+        assert_eq!(again, out.metrics);
+    }
+}
+
+#[cfg(test)]
+mod through_a_mock_server {
+    use super::*;
+    use crate::mock_server;
+
+    /// Runs `file` offline and through the mock server (whose plans are the engine's rollouts); the metrics must be
+    /// the same, `compute_seconds` aside.
+    async fn same_metrics(file: &str) -> Vec<String> {
+        same_metrics_at(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios").join(file)).await.1
+    }
+
+    /// Returns the offline metrics and the notes of the run through the server.
+    async fn same_metrics_at(path: &Path) -> (dmp::metrics::Metrics, Vec<String>) {
+        let file = path.display();
+        let dir = tempfile::tempdir().unwrap();
+        let offline = crate::offline::run_scenario(path, &dir.path().join("offline")).unwrap();
+        let client = DmpClient::connect(format!("http://{}", mock_server::spawn().await)).await.unwrap();
+        let remote = run_scenario_remote(&client, path, &dir.path().join("remote")).await.unwrap();
+        let (mut a, mut b) = (offline.metrics, remote.metrics);
+        a.compute_seconds = 0.0;
+        b.compute_seconds = 0.0;
+        assert_eq!(a, b, "{file}");
+        for f in ["trajectory.csv", "metrics.json", "plot.svg"] {
+            assert!(dir.path().join("remote").join(f).exists(), "{f}");
+        }
+        let csv = |d: &str| std::fs::read_to_string(dir.path().join(d).join("trajectory.csv")).unwrap();
+        assert_eq!(csv("offline"), csv("remote"), "{file}");
+        (a, remote.notes)
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn stalls_are_reported_as_offline() {
+        // 1-D: a wall on the only way to the goal, a local minimum.
+        let t: Vec<f64> = (0..=100).map(|k| k as f64 / 100.0).collect();
+        let x: Vec<Vec<f64>> = t.iter().map(|t| vec![*t]).collect();
+        let s = serde_json::json!({
+            "name": "stall 1d", "demonstration": {"t": t, "x": x}, "dmp": {"N": 10, "K": 1050, "alpha": 4},
+            "rollout": {"dt": 0.001, "duration": 2.0},
+            "obstacles": [{"id": "wall", "center": [0.5], "semi_axes": [0.1]}],
+            "avoidance": {"method": "static_volumetric", "A": 10, "eta": 1}
+        });
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("stall.json");
+        std::fs::write(&file, s.to_string()).unwrap();
+        let (metrics, _) = same_metrics_at(&file).await;
+        assert_eq!(metrics.stalls.len(), 1);
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn single_robot_scenarios_give_the_offline_metrics() {
+        for m in ["none", "static_point", "dynamic_point", "steering_angle", "static_volumetric", "dynamic_volumetric"] {
+            let notes = same_metrics(&format!("paper-one-obstacle/{m}.json")).await;
+            assert!(notes.is_empty(), "{notes:?}");
+        }
+        same_metrics("moving-obstacle-dynamic-volumetric.json").await;
+        same_metrics("paper-two-obstacles-steering-angle.json").await;
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn group_scenarios_give_the_offline_metrics() {
+        let notes = same_metrics("youbots-three-dynamic.json").await;
+        assert!(notes.is_empty(), "{notes:?}");
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn a_bad_scenario_is_refused_before_the_server_is_asked() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("bad.json");
+        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/none.json");
+        let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(src).unwrap()).unwrap();
+        v["rollout"]["dt"] = 0.0.into();
+        std::fs::write(&file, v.to_string()).unwrap();
+        let client = DmpClient::connect(format!("http://{}", mock_server::spawn().await)).await.unwrap();
+        let e = run_scenario_remote(&client, &file, &dir.path().join("out")).await.unwrap_err();
+        assert!(e.is_bad_input() && e.to_string().contains("rollout.dt"), "{e}");
+    }
+}

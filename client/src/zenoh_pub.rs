@@ -1,0 +1,264 @@
+//! Publishing obstacles over Zenoh, for perception nodes (and `dmpctl scene put --via zenoh`).
+//!
+//! Keys are `dmp/<cell>/obstacles/<obstacle-id>`: a put adds or replaces the obstacle, a delete removes it. The
+//! payload is either the JSON obstacle of the scenario format (plus optional `margin` and `ttl_s`), encoding
+//! `application/json`, or the protobuf `dmp.v1.Obstacle`, encoding `application/protobuf`.
+//!
+//! Zenoh drops a put made before the subscriber is known to the publisher: call
+//! [`ObstaclePublisher::wait_for_subscriber`] once after opening, before the first put. Puts use congestion control
+//! `Block` and [`ObstaclePublisher::close`] closes the session gracefully, so a short-lived program loses nothing.
+//! `zenoh::open` needs tokio's multi-threaded runtime.
+
+use std::fmt;
+use std::time::Duration;
+
+use dmp::scenario::ObstacleSpec;
+use dmp_proto::{codec, v1};
+use zenoh::bytes::Encoding;
+use zenoh::pubsub::Publisher;
+use zenoh::qos::CongestionControl;
+
+use crate::convert::JsonObstacle;
+use crate::error::ClientError;
+
+/// How long opening waits for the `connect` endpoints before failing.
+pub const CONNECT_TIMEOUT_MS: u64 = 5000;
+
+fn zerr(context: &str) -> impl FnOnce(zenoh::Error) -> ClientError + '_ {
+    move |e| ClientError::Zenoh(format!("{context}: {e}"))
+}
+
+/// The key of an obstacle.
+pub fn obstacle_key(cell: &str, id: &str) -> String {
+    format!("dmp/{cell}/obstacles/{id}")
+}
+
+/// Checks that `s` is one chunk of a key (non-empty, none of `/ * $ ? #`).
+fn check_chunk(field: &str, s: &str) -> Result<(), ClientError> {
+    if s.is_empty() {
+        return Err(ClientError::argument(field, "must not be empty"));
+    }
+    if let Some(c) = s.chars().find(|c| matches!(c, '/' | '*' | '$' | '?' | '#') || c.is_whitespace()) {
+        return Err(ClientError::argument(field, format!("has `{c}`, which a Zenoh key chunk cannot hold")));
+    }
+    Ok(())
+}
+
+/// The Zenoh configuration of a publishing peer. With `connect` endpoints, multicast scouting is off and opening
+/// fails after [`CONNECT_TIMEOUT_MS`] if they cannot be reached; without, Zenoh's defaults apply (multicast scouting
+/// finds the server on the LAN). `listen` endpoints are optional (none: with `connect`, nothing is listened on).
+pub fn peer_config(connect: &[String], listen: &[String]) -> Result<zenoh::Config, ClientError> {
+    let mut c = zenoh::Config::default();
+    let json = |v: &[String]| serde_json::to_string(v).unwrap_or_else(|_| "[]".into());
+    let mut set = |key: &str, value: String| {
+        c.insert_json5(key, &value).map_err(|e| ClientError::argument("zenoh", format!("{key} = {value}: {e}")))
+    };
+    set("mode", "\"peer\"".into())?;
+    if !connect.is_empty() {
+        set("connect/endpoints", json(connect))?;
+        set("connect/timeout_ms", CONNECT_TIMEOUT_MS.to_string())?;
+        set("connect/exit_on_failure", "true".into())?;
+        set("scouting/multicast/enabled", "false".into())?;
+        set("listen/endpoints", json(listen))?;
+    } else if !listen.is_empty() {
+        set("listen/endpoints", json(listen))?;
+    }
+    Ok(c)
+}
+
+/// A Zenoh peer that publishes the obstacles of one cell.
+pub struct ObstaclePublisher {
+    cell: String,
+    session: zenoh::Session,
+    /// Declared on `dmp/<cell>/obstacles/*` and never put on: its matching status says whether a subscriber of the
+    /// cell's obstacles is known.
+    probe: Publisher<'static>,
+}
+
+impl fmt::Debug for ObstaclePublisher {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("ObstaclePublisher").field("cell", &self.cell).field("zid", &self.session.zid()).finish()
+    }
+}
+
+impl ObstaclePublisher {
+    /// Opens a peer session for `cell` (see [`peer_config`]).
+    pub async fn open(cell: &str, connect: &[String], listen: &[String]) -> Result<Self, ClientError> {
+        Self::open_with(cell, peer_config(connect, listen)?).await
+    }
+
+    /// Opens a session with a given configuration.
+    pub async fn open_with(cell: &str, config: zenoh::Config) -> Result<Self, ClientError> {
+        check_chunk("cell", cell)?;
+        let session = zenoh::open(config).await.map_err(zerr("opening the session"))?;
+        let probe = session
+            .declare_publisher(format!("dmp/{cell}/obstacles/*"))
+            .await
+            .map_err(zerr("declaring the publisher"))?;
+        Ok(Self { cell: cell.into(), session, probe })
+    }
+
+    /// The cell.
+    pub fn cell(&self) -> &str {
+        &self.cell
+    }
+
+    /// The session (e.g. to read its locators).
+    pub fn session(&self) -> &zenoh::Session {
+        &self.session
+    }
+
+    /// Waits until a subscriber of the cell's obstacles (the server) is known, at most `timeout`.
+    pub async fn wait_for_subscriber(&self, timeout: Duration) -> Result<(), ClientError> {
+        let listener = self.probe.matching_listener().await.map_err(zerr("matching listener"))?;
+        if self.probe.matching_status().await.map_err(zerr("matching status"))?.matching() {
+            return Ok(());
+        }
+        let matched = async {
+            while let Ok(status) = listener.recv_async().await {
+                if status.matching() {
+                    return true;
+                }
+            }
+            false
+        };
+        match tokio::time::timeout(timeout, matched).await {
+            Ok(true) => Ok(()),
+            _ => Err(ClientError::Zenoh(format!(
+                "no subscriber of dmp/{}/obstacles/** after {timeout:?}: is the server running with Zenoh on, in this \
+                 cell, and reachable (--zenoh-connect)?",
+                self.cell
+            ))),
+        }
+    }
+
+    /// Puts a JSON obstacle under `id` (its own `id`, if any, should be the same).
+    pub async fn put_json(&self, id: &str, obstacle: &serde_json::Value) -> Result<(), ClientError> {
+        check_chunk("id", id)?;
+        let bytes = serde_json::to_vec(obstacle).map_err(|e| ClientError::argument("obstacle", e.to_string()))?;
+        self.session
+            .put(obstacle_key(&self.cell, id), bytes)
+            .encoding(Encoding::APPLICATION_JSON)
+            .congestion_control(CongestionControl::Block)
+            .await
+            .map_err(zerr("put"))
+    }
+
+    /// Puts a scenario-format obstacle with an optional time to live (seconds; 0: forever).
+    pub async fn put_spec(&self, spec: &ObstacleSpec, ttl_s: f64) -> Result<(), ClientError> {
+        self.put_obstacle(&JsonObstacle { spec: spec.clone(), margin: 0.0, ttl_s }).await
+    }
+
+    /// Puts a JSON obstacle read with [`crate::convert::obstacle_from_json`].
+    pub async fn put_obstacle(&self, obstacle: &JsonObstacle) -> Result<(), ClientError> {
+        self.put_json(&obstacle.spec.id, &obstacle.to_json()).await
+    }
+
+    /// Puts a protobuf obstacle (encoding `application/protobuf`) under its id.
+    pub async fn put_proto(&self, obstacle: &v1::Obstacle) -> Result<(), ClientError> {
+        check_chunk("id", &obstacle.id)?;
+        self.session
+            .put(obstacle_key(&self.cell, &obstacle.id), codec::encode(obstacle))
+            .encoding(Encoding::from(codec::PROTOBUF_ENCODING))
+            .congestion_control(CongestionControl::Block)
+            .await
+            .map_err(zerr("put"))
+    }
+
+    /// Removes the obstacle `id`.
+    pub async fn delete(&self, id: &str) -> Result<(), ClientError> {
+        check_chunk("id", id)?;
+        self.session
+            .delete(obstacle_key(&self.cell, id))
+            .congestion_control(CongestionControl::Block)
+            .await
+            .map_err(zerr("delete"))
+    }
+
+    /// Closes the session gracefully (what was put is sent first).
+    pub async fn close(self) -> Result<(), ClientError> {
+        drop(self.probe);
+        self.session.close().await.map_err(zerr("close"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use zenoh::sample::SampleKind;
+
+    const WAIT: Duration = Duration::from_secs(10);
+
+    /// A subscriber peer on loopback, without scouting, as the server would be; returns it and its locator.
+    async fn subscriber_peer() -> (zenoh::Session, String) {
+        let mut c = zenoh::Config::default();
+        c.insert_json5("mode", "\"peer\"").unwrap();
+        c.insert_json5("listen/endpoints", "[\"tcp/127.0.0.1:0\"]").unwrap();
+        c.insert_json5("scouting/multicast/enabled", "false").unwrap();
+        c.insert_json5("scouting/gossip/enabled", "false").unwrap();
+        let s = zenoh::open(c).await.unwrap();
+        let locator = s.info().locators().await[0].to_string();
+        (s, locator)
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn puts_and_deletes_reach_a_subscriber_with_their_encodings() {
+        let (server, locator) = subscriber_peer().await;
+        let sub = server.declare_subscriber("dmp/cellA/obstacles/**").await.unwrap();
+        let publisher = ObstaclePublisher::open("cellA", &[locator], &[]).await.unwrap();
+        publisher.wait_for_subscriber(WAIT).await.unwrap();
+
+        let spec: ObstacleSpec =
+            serde_json::from_value(serde_json::json!({"id": "box1", "center": [0.5, 0.5], "semi_axes": [0.2, 0.1]}))
+                .unwrap();
+        publisher.put_spec(&spec, 2.5).await.unwrap();
+        let proto = JsonObstacle { spec: spec.clone(), margin: 0.05, ttl_s: 0.0 }.to_proto();
+        publisher.put_proto(&v1::Obstacle { id: "box2".into(), ..proto.clone() }).await.unwrap();
+        publisher.delete("box1").await.unwrap();
+        // Closing right after the last put loses nothing.
+        publisher.close().await.unwrap();
+
+        let s = tokio::time::timeout(WAIT, sub.recv_async()).await.unwrap().unwrap();
+        assert_eq!(s.key_expr().as_str(), "dmp/cellA/obstacles/box1");
+        assert_eq!(s.encoding(), &Encoding::APPLICATION_JSON);
+        let v: serde_json::Value = serde_json::from_slice(&s.payload().to_bytes()).unwrap();
+        assert_eq!(v["ttl_s"], 2.5);
+        assert_eq!(v["semi_axes"], serde_json::json!([0.2, 0.1]));
+
+        let s = tokio::time::timeout(WAIT, sub.recv_async()).await.unwrap().unwrap();
+        assert_eq!(s.key_expr().as_str(), "dmp/cellA/obstacles/box2");
+        assert_eq!(s.encoding().to_string(), codec::PROTOBUF_ENCODING);
+        let o: v1::Obstacle = codec::decode(&s.payload().to_bytes()).unwrap();
+        assert_eq!(o.id, "box2");
+        assert_eq!(o.margin, 0.05);
+        assert_eq!(o.shape, proto.shape);
+
+        let s = tokio::time::timeout(WAIT, sub.recv_async()).await.unwrap().unwrap();
+        assert_eq!(s.kind(), SampleKind::Delete);
+        assert_eq!(s.key_expr().as_str(), "dmp/cellA/obstacles/box1");
+        server.close().await.unwrap();
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn waiting_without_a_subscriber_times_out_and_bad_ids_are_refused() {
+        let (other, locator) = subscriber_peer().await;
+        // A subscriber of another cell does not count.
+        let _sub = other.declare_subscriber("dmp/elsewhere/obstacles/**").await.unwrap();
+        let publisher = ObstaclePublisher::open("cellB", &[locator], &[]).await.unwrap();
+        let e = publisher.wait_for_subscriber(Duration::from_millis(300)).await.unwrap_err();
+        assert!(e.to_string().contains("dmp/cellB/obstacles"), "{e}");
+        let e = publisher.delete("a/b").await.unwrap_err();
+        assert!(e.is_bad_input() && e.to_string().contains("id"), "{e}");
+        publisher.close().await.unwrap();
+        other.close().await.unwrap();
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn an_unreachable_endpoint_fails_fast() {
+        // Port 1 on loopback: nothing listens there.
+        let started = std::time::Instant::now();
+        let e = ObstaclePublisher::open("c", &["tcp/127.0.0.1:1".into()], &[]).await.unwrap_err();
+        assert!(started.elapsed() < Duration::from_millis(CONNECT_TIMEOUT_MS + 5000), "{e}");
+        assert!(!e.is_bad_input());
+    }
+}

@@ -1,0 +1,214 @@
+//! The server's command line: a TOML file (`--config`), then flags on top of it.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Parser;
+
+use crate::config::Config;
+
+/// The DMP cell's server: primitives per robot, obstacle scenes over Zenoh, trajectories over gRPC.
+///
+/// Settings come from the defaults, then the `--config` file, then these flags. Logging follows `RUST_LOG`
+/// (default `info`).
+#[derive(Debug, Clone, Default, Parser)]
+#[command(name = "dmp-server", version)]
+pub struct Args {
+    /// TOML configuration file (see `deploy/dmp-server.toml`); the flags below override it.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Address of the gRPC server [default: 127.0.0.1:50051].
+    #[arg(long, value_name = "ADDR")]
+    pub grpc_addr: Option<SocketAddr>,
+    /// Directory of the embedded store, created if missing [default: data].
+    #[arg(long, value_name = "DIR")]
+    pub data_dir: Option<PathBuf>,
+    /// The robot cell: Zenoh keys are `dmp/<cell>/...` [default: default].
+    #[arg(long, value_name = "NAME")]
+    pub cell: Option<String>,
+    /// Zenoh mode: an embedded `peer`, or a `client` of a router [default: peer].
+    #[arg(long, value_name = "MODE", value_parser = ["peer", "client"])]
+    pub zenoh_mode: Option<String>,
+    /// Zenoh endpoint to listen on, e.g. `tcp/0.0.0.0:7447` (repeatable; replaces the file's list).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub zenoh_listen: Vec<String>,
+    /// Zenoh endpoint (router or peer) to connect to (repeatable; replaces the file's list).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub zenoh_connect: Vec<String>,
+    /// Turn Zenoh's multicast scouting off (find peers only through the connect endpoints).
+    #[arg(long)]
+    pub zenoh_no_multicast: bool,
+    /// Run without Zenoh (gRPC only).
+    #[arg(long)]
+    pub no_zenoh: bool,
+    /// Print the effective configuration as TOML and exit.
+    #[arg(long)]
+    pub print_config: bool,
+}
+
+/// The effective configuration: the defaults, then the file of `--config`, then the flags.
+pub fn load_config(args: &Args) -> anyhow::Result<Config> {
+    let mut config = match &args.config {
+        None => Config::default(),
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read the configuration file {}", path.display()))?;
+            toml::from_str(&text).with_context(|| format!("invalid configuration file {}", path.display()))?
+        }
+    };
+    if let Some(addr) = args.grpc_addr {
+        config.grpc_addr = addr;
+    }
+    if let Some(dir) = &args.data_dir {
+        config.data_dir = dir.clone();
+    }
+    if let Some(cell) = &args.cell {
+        config.cell = cell.clone();
+    }
+    crate::convert::check_name("cell", &config.cell).map_err(|e| anyhow::anyhow!("{e}"))?;
+    if let Some(mode) = &args.zenoh_mode {
+        config.zenoh.mode = mode.clone();
+    }
+    if !args.zenoh_listen.is_empty() {
+        config.zenoh.listen = args.zenoh_listen.clone();
+    }
+    if !args.zenoh_connect.is_empty() {
+        config.zenoh.connect = args.zenoh_connect.clone();
+    }
+    if args.zenoh_no_multicast {
+        config.zenoh.multicast_scouting = false;
+    }
+    if args.no_zenoh {
+        config.zenoh.disabled = true;
+    }
+    Ok(config)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(flags: &[&str]) -> Args {
+        Args::try_parse_from(std::iter::once("dmp-server").chain(flags.iter().copied())).unwrap()
+    }
+
+    #[test]
+    fn no_file_and_no_flags_give_the_defaults() {
+        assert_eq!(load_config(&args(&[])).unwrap(), Config::default());
+    }
+
+    #[test]
+    fn the_file_then_the_flags() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("server.toml");
+        std::fs::write(
+            &file,
+            r#"
+grpc_addr = "0.0.0.0:6000"
+data_dir = "/var/lib/dmp"
+cell = "cell-a"
+
+[zenoh]
+mode = "client"
+connect = ["tcp/10.0.0.1:7447", "tcp/10.0.0.2:7447"]
+listen = ["tcp/0.0.0.0:7447"]
+
+[limits]
+max_streams = 10
+"#,
+        )
+        .unwrap();
+        let path = file.to_str().unwrap();
+
+        let from_file = load_config(&args(&["--config", path])).unwrap();
+        assert_eq!(from_file.grpc_addr, "0.0.0.0:6000".parse().unwrap());
+        assert_eq!(from_file.data_dir, PathBuf::from("/var/lib/dmp"));
+        assert_eq!(from_file.cell, "cell-a");
+        assert_eq!(from_file.zenoh.mode, "client");
+        assert_eq!(from_file.zenoh.connect, ["tcp/10.0.0.1:7447", "tcp/10.0.0.2:7447"]);
+        assert!(from_file.zenoh.multicast_scouting && !from_file.zenoh.disabled);
+        assert_eq!(from_file.limits.max_streams, 10);
+        assert_eq!(
+            from_file.limits.max_samples,
+            Config::default().limits.max_samples,
+            "unset keys keep defaults"
+        );
+
+        let merged = load_config(&args(&[
+            "--config",
+            path,
+            "--grpc-addr",
+            "127.0.0.1:7000",
+            "--cell",
+            "cell-b",
+            "--zenoh-mode",
+            "peer",
+            "--zenoh-connect",
+            "tcp/127.0.0.1:1",
+            "--zenoh-connect",
+            "tcp/127.0.0.1:2",
+            "--zenoh-no-multicast",
+            "--no-zenoh",
+        ]))
+        .unwrap();
+        assert_eq!(merged.grpc_addr, "127.0.0.1:7000".parse().unwrap());
+        assert_eq!(merged.cell, "cell-b");
+        assert_eq!(merged.zenoh.mode, "peer");
+        assert_eq!(merged.zenoh.connect, ["tcp/127.0.0.1:1", "tcp/127.0.0.1:2"], "flags replace the list");
+        assert_eq!(merged.zenoh.listen, ["tcp/0.0.0.0:7447"], "an unset flag keeps the file's value");
+        assert_eq!(merged.data_dir, PathBuf::from("/var/lib/dmp"));
+        assert!(!merged.zenoh.multicast_scouting && merged.zenoh.disabled);
+        assert_eq!(merged.limits.max_streams, 10);
+    }
+
+    #[test]
+    fn bad_files_and_flags_are_refused_clearly() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("bad.toml");
+        std::fs::write(&file, "grpc_adr = \"0.0.0.0:1\"\n").unwrap();
+        let e = load_config(&args(&["--config", file.to_str().unwrap()])).unwrap_err();
+        let msg = format!("{e:#}");
+        assert!(msg.contains("bad.toml") && msg.contains("grpc_adr"), "{msg}");
+
+        let e = load_config(&args(&["--config", "/nonexistent/dmp.toml"])).unwrap_err();
+        assert!(format!("{e:#}").contains("cannot read"), "{e:#}");
+
+        let e = load_config(&args(&["--cell", "a/b"])).unwrap_err();
+        assert!(e.to_string().starts_with("cell:"), "{e}");
+
+        assert!(Args::try_parse_from(["dmp-server", "--zenoh-mode", "router"]).is_err());
+        assert!(Args::try_parse_from(["dmp-server", "--grpc-addr", "nowhere"]).is_err());
+    }
+
+    /// Every key path of a TOML document, e.g. `zenoh.listen`.
+    fn keys(v: &toml::Value, prefix: &str, out: &mut Vec<String>) {
+        if let toml::Value::Table(t) = v {
+            for (k, v) in t {
+                let path = if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") };
+                keys(v, &path, out);
+                out.push(path);
+            }
+        }
+    }
+
+    #[test]
+    fn the_example_configuration_has_every_key_and_loads() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../deploy/dmp-server.toml");
+        let config = load_config(&args(&["--config", path])).unwrap();
+        assert_eq!(config.data_dir, PathBuf::from("/var/lib/dmp-server"));
+        assert_eq!(Config { data_dir: Config::default().data_dir, ..config }, Config::default());
+        let (mut documented, mut all) = (Vec::new(), Vec::new());
+        keys(&toml::from_str(&std::fs::read_to_string(path).unwrap()).unwrap(), "", &mut documented);
+        keys(&toml::Value::try_from(Config::default()).unwrap(), "", &mut all);
+        documented.sort();
+        all.sort();
+        assert_eq!(documented, all, "deploy/dmp-server.toml must list every key of Config");
+    }
+
+    #[test]
+    fn the_default_configuration_round_trips_through_toml() {
+        let text = toml::to_string_pretty(&Config::default()).unwrap();
+        assert_eq!(toml::from_str::<Config>(&text).unwrap(), Config::default());
+    }
+}

@@ -1,0 +1,124 @@
+//! The server's configuration: a TOML file, then flags on top (see `bin/dmp-server.rs`).
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+
+/// Everything the server needs to start.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Config {
+    /// Address of the gRPC server.
+    pub grpc_addr: SocketAddr,
+    /// Directory of the embedded store.
+    pub data_dir: PathBuf,
+    /// The robot cell this server serves: Zenoh keys are `dmp/<cell>/...`.
+    pub cell: String,
+    /// The Zenoh session.
+    pub zenoh: ZenohConfig,
+    /// Defaults applied when a request names no avoidance method.
+    pub defaults: Defaults,
+    /// Bounds on requests and resources.
+    pub limits: Limits,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            grpc_addr: "127.0.0.1:50051".parse().expect("a valid literal address"),
+            data_dir: PathBuf::from("data"),
+            cell: "default".into(),
+            zenoh: ZenohConfig::default(),
+            defaults: Defaults::default(),
+            limits: Limits::default(),
+        }
+    }
+}
+
+/// The embedded Zenoh peer (or client of a router network).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ZenohConfig {
+    /// Run without Zenoh at all (gRPC only).
+    pub disabled: bool,
+    /// `peer` or `client`.
+    pub mode: String,
+    /// Endpoints to listen on, e.g. `tcp/127.0.0.1:7447`. Empty: Zenoh's default.
+    pub listen: Vec<String>,
+    /// Endpoints to connect to (routers or peers).
+    pub connect: Vec<String>,
+    /// Multicast scouting (finding peers on the LAN). On by default, as Zenoh's own default.
+    pub multicast_scouting: bool,
+}
+
+impl Default for ZenohConfig {
+    fn default() -> Self {
+        Self { disabled: false, mode: "peer".into(), listen: Vec::new(), connect: Vec::new(), multicast_scouting: true }
+    }
+}
+
+/// Avoidance used when a request does not name a method.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Defaults {
+    /// For the scene's obstacles: the paper's dynamic volumetric potential with its synthetic-test gains.
+    pub avoidance: dmp::Avoidance,
+    /// For other robots: the dynamic volumetric potential with the youBot test's gains.
+    pub robot_avoidance: dmp::Avoidance,
+}
+
+impl Default for Defaults {
+    fn default() -> Self {
+        use dmp::avoidance::DynamicVolumetric;
+        Self {
+            avoidance: dmp::Avoidance::new(dmp::Method::DynamicVolumetric(DynamicVolumetric {
+                lambda: 10.0,
+                beta: 2.0,
+                eta: 0.5,
+            })),
+            robot_avoidance: dmp::Avoidance::new(dmp::Method::DynamicVolumetric(DynamicVolumetric {
+                lambda: 60.0,
+                beta: 2.0,
+                eta: 0.2,
+            })),
+        }
+    }
+}
+
+/// Bounds: every request is checked against them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Limits {
+    /// Largest gRPC message, bytes.
+    pub max_message_bytes: usize,
+    /// Most samples in a demonstration.
+    pub max_samples: usize,
+    /// Largest dimension of a primitive.
+    pub max_dim: usize,
+    /// Largest N.
+    pub max_basis: usize,
+    /// Most obstacles in the scene.
+    pub max_obstacles: usize,
+    /// Most concurrent streams (Execute, Session, ExecuteGroup, WatchScene).
+    pub max_streams: usize,
+    /// Longest plan or run, in steps.
+    pub max_steps: usize,
+    /// Segments buffered per stream before the producer waits for the reader (backpressure).
+    pub stream_buffer: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self {
+            max_message_bytes: 16 * 1024 * 1024,
+            max_samples: 200_000,
+            max_dim: 64,
+            max_basis: 1000,
+            max_obstacles: 1000,
+            max_streams: 2000,
+            max_steps: dmp::rollout::MAX_ROLLOUT_STEPS,
+            stream_buffer: 4,
+        }
+    }
+}

@@ -1,0 +1,81 @@
+//! The server's typed errors and their one conversion to a gRPC status.
+
+use thiserror::Error;
+use tonic::Status;
+
+/// Everything a request can fail with.
+#[derive(Debug, Error)]
+pub enum ServerError {
+    /// A field of the request breaks a rule.
+    #[error("{field}: {reason}")]
+    InvalidArgument {
+        /// Path of the field, e.g. `motion.goal[2]`.
+        field: String,
+        /// The rule.
+        reason: String,
+    },
+    /// The thing named does not exist.
+    #[error("{0}")]
+    NotFound(String),
+    /// A bound was reached (streams, sizes, counts).
+    #[error("{0}")]
+    ResourceExhausted(String),
+    /// The request is valid but cannot be served in the current state.
+    #[error("{0}")]
+    FailedPrecondition(String),
+    /// The store failed.
+    #[error("storage: {0}")]
+    Storage(String),
+    /// The server is shutting down.
+    #[error("the server is shutting down")]
+    ShuttingDown,
+    /// A bug or an unexpected failure.
+    #[error("internal: {0}")]
+    Internal(String),
+}
+
+impl ServerError {
+    /// An invalid argument.
+    pub fn invalid(field: impl Into<String>, reason: impl Into<String>) -> Self {
+        ServerError::InvalidArgument { field: field.into(), reason: reason.into() }
+    }
+
+    /// The same error with `prefix.` in front of its field, when it names one.
+    pub fn within(self, prefix: &str) -> Self {
+        match self {
+            ServerError::InvalidArgument { field, reason } => {
+                ServerError::InvalidArgument { field: format!("{prefix}.{field}"), reason }
+            }
+            other => other,
+        }
+    }
+}
+
+impl From<dmp::DmpError> for ServerError {
+    fn from(e: dmp::DmpError) -> Self {
+        match e {
+            dmp::DmpError::Invalid(i) => ServerError::InvalidArgument { field: i.field, reason: i.rule },
+            other => ServerError::invalid("primitive", other.to_string()),
+        }
+    }
+}
+
+impl From<dmp::InvalidInput> for ServerError {
+    fn from(i: dmp::InvalidInput) -> Self {
+        ServerError::InvalidArgument { field: i.field, reason: i.rule }
+    }
+}
+
+impl From<ServerError> for Status {
+    fn from(e: ServerError) -> Self {
+        let msg = e.to_string();
+        match e {
+            ServerError::InvalidArgument { .. } => Status::invalid_argument(msg),
+            ServerError::NotFound(_) => Status::not_found(msg),
+            ServerError::ResourceExhausted(_) => Status::resource_exhausted(msg),
+            ServerError::FailedPrecondition(_) => Status::failed_precondition(msg),
+            ServerError::ShuttingDown => Status::unavailable(msg),
+            ServerError::Storage(_) | ServerError::Internal(_) => Status::internal(msg),
+        }
+    }
+}

@@ -1,0 +1,401 @@
+//! One run on one phase: a robot, or a group of robots sharing a DMP, stepped segment by segment. Scene, goal and
+//! tau changes are applied from the current state (never by a jump), and the run can roll back to a recent point
+//! so that a new segment supersedes setpoints already sent.
+
+use std::collections::VecDeque;
+
+use dmp::field::{Agent, Contact, RepulsiveField, Scene};
+use dmp::stall::{StallConfig, StallDetector};
+use dmp::{Avoidance, Integrator, Motion, Obstacle, Perturbation, Primitive, State};
+use dmp_proto::v1;
+
+use crate::error::ServerError;
+use crate::scene::{RemoteRobot, SceneSnapshot};
+
+/// Distance to the goal and speed under which a robot has arrived.
+const ARRIVED_DISTANCE: f64 = 1e-3;
+const ARRIVED_SPEED: f64 = 1e-3;
+
+/// A robot of the run and the dimensions of the shared DMP it owns.
+#[derive(Debug, Clone)]
+pub struct Member {
+    /// Its id.
+    pub robot_id: String,
+    /// The DMP dimensions it owns (contiguous).
+    pub dims: std::ops::Range<usize>,
+    /// What other robots avoid.
+    pub footprint: Option<dmp::Shape>,
+    /// The footprint as sent, for its published state.
+    pub footprint_proto: Option<v1::Superquadric>,
+}
+
+/// How a run avoids things.
+#[derive(Debug, Clone)]
+pub struct AvoidanceSpec {
+    /// Method for obstacles and its boundary sample count.
+    pub obstacles: (Avoidance, usize),
+    /// Method for other robots (of the group and of the cell) and its sample count.
+    pub robots: (Avoidance, usize),
+    /// Obstacles of this run only (centres at the start of the run).
+    pub extra: Vec<Obstacle>,
+    /// Ignore the cell's scene.
+    pub ignore_scene: bool,
+}
+
+/// What happened over a stretch of steps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// Moving.
+    Running,
+    /// Every robot at its goal and at rest.
+    GoalReached,
+    /// A robot stopped away from its goal.
+    Stalled,
+    /// A robot is inside an obstacle's true shape or another robot's footprint.
+    Collision,
+    /// Holding (pause or stop in progress).
+    Holding,
+}
+
+/// A point of the output: time, position, velocity, acceleration (each of the DMP's dimension).
+#[derive(Debug, Clone, Default)]
+pub struct Points {
+    /// Time of the first point.
+    pub start_time: f64,
+    /// Positions, row-major.
+    pub x: Vec<f64>,
+    /// Velocities.
+    pub xd: Vec<f64>,
+    /// Accelerations.
+    pub xdd: Vec<f64>,
+    /// The worst outcome met.
+    pub outcome: Option<Outcome>,
+}
+
+/// Adds two perturbations.
+struct Both<'a>(&'a mut RepulsiveField, &'a mut RepulsiveField);
+
+impl Perturbation for Both<'_> {
+    fn add(&mut self, t: f64, x: &[f64], v: &[f64], tau: f64, out: &mut [f64]) {
+        self.0.add(t, x, v, tau, out);
+        self.1.add(t, x, v, tau, out);
+    }
+}
+
+/// The state machine of a run.
+#[derive(Debug)]
+pub struct Runner {
+    members: Vec<Member>,
+    primitive: Primitive,
+    integrator: Integrator,
+    motion: Motion,
+    state: State,
+    dt: f64,
+    avoidance: AvoidanceSpec,
+    /// The scene's obstacles and the group's robots.
+    field: RepulsiveField,
+    /// The cell's other robots.
+    remote: RepulsiveField,
+    scene_version: u64,
+    /// States at the start of each recent step, for rollbacks.
+    history: VecDeque<State>,
+    history_len: usize,
+    holding: bool,
+    stall: Vec<StallDetector>,
+    acc: Vec<f64>,
+    contacts: Vec<Contact>,
+    /// Everything touched so far: obstacle ids and robot ids.
+    touched: std::collections::BTreeSet<String>,
+}
+
+impl Runner {
+    /// A run of `primitive` (dimension = the members' dims together) with `motion`, output step `dt`. Keeps the
+    /// last `history_len` states for rollbacks.
+    pub fn new(
+        members: Vec<Member>,
+        primitive: Primitive,
+        motion: Motion,
+        dt: f64,
+        avoidance: AvoidanceSpec,
+        history_len: usize,
+    ) -> Result<Self, ServerError> {
+        motion.validate(primitive.dim).map_err(|e| ServerError::from(e).within("motion"))?;
+        if !(dt.is_finite() && dt > 0.0 && dt <= 0.1) {
+            return Err(ServerError::invalid("dt", "must be greater than 0 and at most 0.1 s"));
+        }
+        let integrator = Integrator::new(&primitive)?;
+        let state = State::at_rest(&motion.start);
+        let agents = agents(&members);
+        let field = build_field(&agents, &avoidance, Vec::new(), primitive.dim)?;
+        let remote = build_remote(&agents, &avoidance, Vec::new(), primitive.dim)?;
+        let stall = members
+            .iter()
+            .map(|m| StallDetector::new(StallConfig::default(), m.dims.clone().collect()))
+            .collect();
+        let dim = primitive.dim;
+        Ok(Self {
+            members,
+            primitive,
+            integrator,
+            motion,
+            state,
+            dt,
+            avoidance,
+            field,
+            remote,
+            scene_version: 0,
+            history: VecDeque::with_capacity(history_len + 1),
+            history_len,
+            holding: false,
+            stall,
+            acc: vec![0.0; dim],
+            contacts: Vec::new(),
+            touched: Default::default(),
+        })
+    }
+
+    /// The members.
+    pub fn members(&self) -> &[Member] {
+        &self.members
+    }
+
+    /// Current time of the run.
+    pub fn time(&self) -> f64 {
+        self.state.t
+    }
+
+    /// The current state.
+    pub fn state(&self) -> &State {
+        &self.state
+    }
+
+    /// The scene version the field was built with.
+    pub fn scene_version(&self) -> u64 {
+        self.scene_version
+    }
+
+    /// The motion (start, goal, tau).
+    pub fn motion(&self) -> &Motion {
+        &self.motion
+    }
+
+    /// Output step.
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// Rebuilds the field from the scene (obstacles as they are at wall time `now_unix_s`, which is the run's
+    /// current time) and the cell's other robots.
+    pub fn apply_scene(&mut self, snap: &SceneSnapshot, remote: &[RemoteRobot], now_unix_s: f64) -> Result<(), ServerError> {
+        let t = self.state.t;
+        let sub = self.field.agent_dim();
+        let mut obstacles = Vec::new();
+        if !self.avoidance.ignore_scene {
+            for o in snap.obstacles.values() {
+                if o.engine.dim() != sub {
+                    continue;
+                }
+                // Centre now, moved back along its velocity to the run's time zero.
+                let mut now = vec![0.0; sub];
+                o.engine.center_at(now_unix_s - o.received_unix_s, &mut now);
+                let c0: Vec<f64> = now.iter().zip(o.engine.velocity()).map(|(c, v)| c - v * t).collect();
+                obstacles.push(o.engine.with_center(c0));
+            }
+        }
+        let agents = agents(&self.members);
+        self.field = build_field(&agents, &self.avoidance, obstacles, self.primitive.dim)?;
+        self.scene_version = snap.version;
+        self.set_remote(remote, now_unix_s)
+    }
+
+    /// Updates the cell's other robots (moving obstacles with their footprints).
+    pub fn set_remote(&mut self, remote: &[RemoteRobot], now_unix_s: f64) -> Result<(), ServerError> {
+        let t = self.state.t;
+        let sub = self.field.agent_dim();
+        let mut obstacles = Vec::new();
+        for r in remote {
+            if self.members.iter().any(|m| m.robot_id == r.state.robot_id) {
+                continue;
+            }
+            let Some(fp) = &r.footprint else { continue };
+            if r.state.position.len() != sub || r.state.velocity.len() != sub || dmp::Isopotential::dim(fp) != sub {
+                continue;
+            }
+            let age = now_unix_s - r.state.stamp_unix_s;
+            let c0: Vec<f64> =
+                r.state.position.iter().zip(&r.state.velocity).map(|(p, v)| p + v * age - v * t).collect();
+            if let Ok(o) = Obstacle::new(r.state.robot_id.clone(), fp.clone(), c0, None, Some(r.state.velocity.clone())) {
+                obstacles.push(o);
+            }
+        }
+        let agents = agents(&self.members);
+        self.remote = build_remote(&agents, &self.avoidance, obstacles, self.primitive.dim)?;
+        Ok(())
+    }
+
+    /// Changes the goal from now on (position and velocity stay continuous).
+    pub fn set_goal(&mut self, goal: Vec<f64>) -> Result<(), ServerError> {
+        crate::convert::vector("goal", &goal, self.primitive.dim)?;
+        self.motion.goal = goal;
+        Ok(())
+    }
+
+    /// Changes tau from now on (the state keeps dx/dt, so the velocity is continuous).
+    pub fn set_tau(&mut self, tau: f64) -> Result<(), ServerError> {
+        if !(tau.is_finite() && tau > 0.0) {
+            return Err(ServerError::invalid("tau", "must be a finite number greater than zero"));
+        }
+        self.motion.tau = tau;
+        Ok(())
+    }
+
+    /// Holds (decelerates to rest, phase frozen) or resumes.
+    pub fn set_holding(&mut self, holding: bool) {
+        self.holding = holding;
+    }
+
+    /// True while holding.
+    pub fn is_holding(&self) -> bool {
+        self.holding
+    }
+
+    /// Rolls back to the first recorded state at or after `t` (no-op when `t` is at or past the current time, or
+    /// older than the history). Returns the time the run continues from.
+    pub fn rollback_to(&mut self, t: f64) -> f64 {
+        if t >= self.state.t {
+            return self.state.t;
+        }
+        while let Some(s) = self.history.back() {
+            if s.t + 0.5 * self.dt < t {
+                break;
+            }
+            self.state = self.history.pop_back().expect("checked by back()");
+        }
+        self.state.t
+    }
+
+    /// Every obstacle or robot touched so far.
+    pub fn touched(&self) -> &std::collections::BTreeSet<String> {
+        &self.touched
+    }
+
+    /// Current speed of the slowest-to-stop member, and whether every member is at its goal.
+    pub fn arrived(&self) -> bool {
+        self.members.iter().all(|m| {
+            let dist: f64 = m.dims.clone().map(|i| (self.state.x[i] - self.motion.goal[i]).powi(2)).sum::<f64>().sqrt();
+            let speed: f64 = m.dims.clone().map(|i| self.state.xd[i].powi(2)).sum::<f64>().sqrt();
+            dist <= ARRIVED_DISTANCE && speed <= ARRIVED_SPEED
+        })
+    }
+
+    /// True when every member is at rest.
+    pub fn at_rest(&self) -> bool {
+        self.state.xd.iter().map(|v| v * v).sum::<f64>().sqrt() <= ARRIVED_SPEED
+    }
+
+    /// Computes `n` points from the current state (the first is the current state), advancing the run.
+    pub fn advance(&mut self, n: usize) -> Points {
+        let d = self.primitive.dim;
+        let mut p = Points {
+            start_time: self.state.t,
+            x: Vec::with_capacity(n * d),
+            xd: Vec::with_capacity(n * d),
+            xdd: Vec::with_capacity(n * d),
+            outcome: None,
+        };
+        let mut worst = Outcome::Running;
+        for _ in 0..n {
+            if self.history.len() == self.history_len {
+                self.history.pop_front();
+            }
+            self.history.push_back(self.state.clone());
+            p.x.extend_from_slice(&self.state.x);
+            p.xd.extend_from_slice(&self.state.xd);
+            if self.holding {
+                self.hold_step();
+            } else {
+                let mut both = Both(&mut self.field, &mut self.remote);
+                self.integrator.step(&self.motion, &mut both, &mut self.state, self.dt, &mut self.acc);
+            }
+            p.xdd.extend_from_slice(&self.acc);
+            self.contacts.clear();
+            let (t, x) = (self.state.t, &self.state.x);
+            let local = self.field.contacts(t, x, &mut self.contacts);
+            let n_local = self.contacts.len();
+            if local | self.remote.contacts(t, x, &mut self.contacts) {
+                worst = Outcome::Collision;
+                for (i, c) in self.contacts.iter().enumerate() {
+                    let f = if i < n_local { &self.field } else { &self.remote };
+                    let id = match *c {
+                        Contact::Obstacle { obstacle, .. } => f.scene().obstacles[obstacle].id().to_string(),
+                        Contact::Robot { other, .. } => f.agents()[other].id.clone(),
+                    };
+                    self.touched.insert(id);
+                }
+            }
+            for det in &mut self.stall {
+                if det.update(self.state.t, &self.state.x, &self.state.xd, &self.motion.goal).is_some()
+                    && worst == Outcome::Running
+                {
+                    worst = Outcome::Stalled;
+                }
+            }
+        }
+        p.outcome = Some(if self.holding && worst == Outcome::Running {
+            Outcome::Holding
+        } else if worst == Outcome::Running && self.arrived() {
+            Outcome::GoalReached
+        } else {
+            worst
+        });
+        p
+    }
+
+    /// One step of holding: the phase is frozen and the robot decelerates under the DMP's damping alone,
+    /// `d2x/dt2 = -(D / tau) dx/dt`, integrated exactly.
+    fn hold_step(&mut self) {
+        let tau = self.motion.tau;
+        for i in 0..self.primitive.dim {
+            let k = self.primitive.d[i] / tau;
+            let v0 = self.state.xd[i];
+            self.acc[i] = -k * v0;
+            let decay = (-k * self.dt).exp();
+            self.state.x[i] += if k > 0.0 { v0 * (1.0 - decay) / k } else { v0 * self.dt };
+            self.state.xd[i] = v0 * decay;
+        }
+        self.state.t += self.dt;
+    }
+}
+
+fn agents(members: &[Member]) -> Vec<Agent> {
+    members
+        .iter()
+        .map(|m| Agent { id: m.robot_id.clone(), dims: m.dims.clone().collect(), footprint: m.footprint.clone() })
+        .collect()
+}
+
+/// Obstacles with the obstacle method, and the group's robots with the robot method.
+fn build_field(agents: &[Agent], a: &AvoidanceSpec, mut obstacles: Vec<Obstacle>, dim: usize) -> Result<RepulsiveField, ServerError> {
+    obstacles.extend(a.extra.iter().cloned());
+    let group = agents.len() > 1;
+    let scene = Scene {
+        obstacles,
+        avoidance: a.obstacles.0,
+        agents: agents.to_vec(),
+        robot_avoidance: if group { a.robots.0 } else { Avoidance::NONE },
+        point_samples: a.obstacles.1.max(a.robots.1),
+    };
+    Ok(RepulsiveField::new(scene, dim)?)
+}
+
+/// The cell's other robots, as moving obstacles with the robot method.
+fn build_remote(agents: &[Agent], a: &AvoidanceSpec, obstacles: Vec<Obstacle>, dim: usize) -> Result<RepulsiveField, ServerError> {
+    let scene = Scene {
+        obstacles,
+        avoidance: a.robots.0,
+        agents: agents.to_vec(),
+        robot_avoidance: Avoidance::NONE,
+        point_samples: a.robots.1,
+    };
+    Ok(RepulsiveField::new(scene, dim)?)
+}

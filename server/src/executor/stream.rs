@@ -1,0 +1,239 @@
+//! The producer task of a streamed execution: one task and one bounded channel per stream (the bound is the
+//! backpressure: a slow reader holds the producer, never grows memory). Real-time pacing computes each segment
+//! `lookahead` ahead of the wall clock; a scene change or a command is applied from the robot's current time by
+//! rolling back and sending a segment that supersedes the points already sent.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use dmp_proto::v1;
+use tokio::sync::mpsc;
+use tokio::time::Instant;
+use tracing::{debug, info, warn};
+
+use super::runner::{Outcome, Runner};
+use crate::error::ServerError;
+use crate::scene::now_unix_s;
+use crate::state::AppState;
+
+/// Robot states older than this are ignored.
+const REMOTE_MAX_AGE_S: f64 = 0.5;
+
+/// How a stream is paced and bounded.
+#[derive(Debug, Clone)]
+pub struct StreamConfig {
+    /// Points per segment.
+    pub segment_points: usize,
+    /// Real time (true) or as fast as the client reads.
+    pub realtime: bool,
+    /// Real-time: how far ahead of the wall clock segments are computed.
+    pub lookahead: Duration,
+    /// The run ends at this time (seconds of run time).
+    pub max_duration: f64,
+}
+
+/// A command of a session.
+#[derive(Debug, Clone)]
+pub enum Control {
+    /// New goal.
+    SetGoal(Vec<f64>),
+    /// New tau.
+    SetTau(f64),
+    /// Hold position.
+    Pause,
+    /// Continue.
+    Resume,
+    /// Decelerate to rest and end.
+    Stop,
+    /// The robot's measured state: published to the cell.
+    State(v1::RobotState),
+}
+
+/// What the loop sends: one segment per member, all covering the same times.
+pub type Batch = Vec<v1::Segment>;
+
+/// Runs `runner` until the goal, a stop, `max_duration`, the client leaving or shutdown. Items go to `tx`
+/// (mapped by the caller's stream); errors end the stream with a status.
+pub async fn run_stream(
+    app: Arc<AppState>,
+    mut runner: Runner,
+    cfg: StreamConfig,
+    tx: mpsc::Sender<Result<Batch, tonic::Status>>,
+    mut control: Option<mpsc::Receiver<Control>>,
+) {
+    let ids: Vec<String> = runner.members().iter().map(|m| m.robot_id.clone()).collect();
+    let result = produce(&app, &mut runner, &cfg, &tx, &mut control).await;
+    for id in &ids {
+        app.robots.retire(id).await;
+    }
+    match result {
+        Ok(reason) => info!(robots = ?ids, reason, t = runner.time(), "stream ended"),
+        Err(e) => {
+            warn!(robots = ?ids, error = %e, "stream failed");
+            let _ = tx.send(Err(e.into())).await;
+        }
+    }
+}
+
+async fn produce(
+    app: &AppState,
+    runner: &mut Runner,
+    cfg: &StreamConfig,
+    tx: &mpsc::Sender<Result<Batch, tonic::Status>>,
+    control: &mut Option<mpsc::Receiver<Control>>,
+) -> Result<&'static str, ServerError> {
+    let mut scene_rx = app.scene.subscribe();
+    let first_robot = runner.members()[0].robot_id.clone();
+    let snap = scene_rx.borrow_and_update().clone();
+    runner.apply_scene(&snap, &app.scene.other_robots(&first_robot, now_unix_s(), REMOTE_MAX_AGE_S), now_unix_s())?;
+    let start = Instant::now();
+    let start_unix = now_unix_s();
+    let dt = runner.dt();
+    let mut seq = 0u64;
+    let mut stopping = false;
+    loop {
+        // 1. Wait until the next segment is due (real time) while reacting to changes; as fast as read: take what
+        //    is pending and go on.
+        let mut changed_scene = false;
+        let mut commands = Vec::new();
+        if cfg.realtime {
+            let due = start + Duration::from_secs_f64(runner.time()).saturating_sub(cfg.lookahead);
+            tokio::select! {
+                _ = tokio::time::sleep_until(due) => {}
+                r = scene_rx.changed() => {
+                    if r.is_err() { return Ok("scene closed") }
+                    changed_scene = true;
+                }
+                c = recv(control) => match c {
+                    Some(c) => commands.push(c),
+                    None => *control = None,
+                },
+                _ = app.shutdown.cancelled() => return Ok("shutdown"),
+                _ = tx.closed() => return Ok("client left"),
+            }
+        } else {
+            if app.shutdown.is_cancelled() {
+                return Ok("shutdown");
+            }
+            changed_scene = scene_rx.has_changed().unwrap_or(false);
+        }
+        if let Some(rx) = control.as_mut() {
+            while let Ok(c) = rx.try_recv() {
+                commands.push(c);
+            }
+        }
+        // 2. Apply changes from the robot's current time: roll back what was computed ahead of it.
+        if (changed_scene || !commands.is_empty()) && cfg.realtime {
+            let now_t = start.elapsed().as_secs_f64() + dt;
+            runner.rollback_to(now_t);
+        }
+        let now = now_unix_s();
+        if changed_scene {
+            let snap = scene_rx.borrow_and_update().clone();
+            runner.apply_scene(&snap, &app.scene.other_robots(&first_robot, now, REMOTE_MAX_AGE_S), now)?;
+            debug!(robot = %first_robot, version = snap.version, t = runner.time(), "scene applied");
+        } else {
+            runner.set_remote(&app.scene.other_robots(&first_robot, now, REMOTE_MAX_AGE_S), now)?;
+        }
+        for c in commands {
+            match c {
+                Control::SetGoal(g) => runner.set_goal(g)?,
+                Control::SetTau(tau) => runner.set_tau(tau)?,
+                Control::Pause => runner.set_holding(true),
+                Control::Resume => {
+                    if !stopping {
+                        runner.set_holding(false)
+                    }
+                }
+                Control::Stop => {
+                    stopping = true;
+                    runner.set_holding(true);
+                }
+                Control::State(s) => {
+                    let fp = runner.members().iter().find(|m| m.robot_id == s.robot_id).and_then(|m| m.footprint.clone());
+                    app.robots.publish(s, fp).await;
+                }
+            }
+        }
+        // 3. Compute and send one segment.
+        let points = runner.advance(cfg.segment_points);
+        let outcome = points.outcome.unwrap_or(Outcome::Running);
+        let end_time = runner.time();
+        let (status, last) = if stopping && runner.at_rest() {
+            (v1::SegmentStatus::Stopped, Some("stopped"))
+        } else if outcome == Outcome::GoalReached {
+            (v1::SegmentStatus::GoalReached, Some("goal reached"))
+        } else if end_time >= cfg.max_duration {
+            (v1::SegmentStatus::Stopped, Some("max duration"))
+        } else {
+            (
+                match outcome {
+                    Outcome::Running | Outcome::GoalReached => v1::SegmentStatus::Running,
+                    Outcome::Stalled => v1::SegmentStatus::Stalled,
+                    Outcome::Collision => v1::SegmentStatus::Collision,
+                    Outcome::Holding => v1::SegmentStatus::Paused,
+                },
+                None,
+            )
+        };
+        let batch = split(runner, &points, seq, status, cfg.realtime.then_some(start_unix));
+        publish_states(app, runner, &points, cfg.realtime.then_some(start_unix)).await;
+        if tx.send(Ok(batch)).await.is_err() {
+            return Ok("client left");
+        }
+        seq += 1;
+        if let Some(reason) = last {
+            return Ok(reason);
+        }
+    }
+}
+
+async fn recv(control: &mut Option<mpsc::Receiver<Control>>) -> Option<Control> {
+    match control {
+        Some(rx) => rx.recv().await,
+        None => std::future::pending().await,
+    }
+}
+
+/// One segment per member out of the run's points.
+fn split(runner: &Runner, p: &super::runner::Points, seq: u64, status: v1::SegmentStatus, start_unix: Option<f64>) -> Batch {
+    let d = runner.state().x.len();
+    let n = p.x.len() / d;
+    runner
+        .members()
+        .iter()
+        .map(|m| {
+            let pick = |v: &[f64]| -> Vec<f64> { (0..n).flat_map(|k| v[k * d + m.dims.start..k * d + m.dims.end].iter().copied()).collect() };
+            v1::Segment {
+                robot_id: m.robot_id.clone(),
+                sequence: seq,
+                start_time: p.start_time,
+                dt: runner.dt(),
+                dim: m.dims.len() as u32,
+                positions: pick(&p.x),
+                velocities: pick(&p.xd),
+                accelerations: pick(&p.xdd),
+                status: status as i32,
+                scene_version: runner.scene_version(),
+                start_unix_s: start_unix.map(|s| s + p.start_time).unwrap_or(0.0),
+            }
+        })
+        .collect()
+}
+
+/// Publishes each member's state at the segment's first point.
+async fn publish_states(app: &AppState, runner: &Runner, p: &super::runner::Points, start_unix: Option<f64>) {
+    let d = runner.state().x.len();
+    let stamp = start_unix.map(|s| s + p.start_time).unwrap_or_else(now_unix_s);
+    for m in runner.members() {
+        let state = v1::RobotState {
+            robot_id: m.robot_id.clone(),
+            stamp_unix_s: stamp,
+            position: p.x[m.dims.clone()].to_vec(),
+            velocity: p.xd[m.dims.clone()].to_vec(),
+            footprint: m.footprint_proto.clone(),
+        };
+        debug_assert!(m.dims.end <= d);
+        app.robots.publish(state, m.footprint.clone()).await;
+    }
+}

@@ -1,0 +1,248 @@
+//! The robots' state bus: every executing robot's state is recorded in the local scene and, with Zenoh, published on
+//! `dmp/<cell>/robots/<robot-id>/state` (protobuf `dmp.v1.RobotState`), so that the robots of the cell, served by
+//! this server or another, see each other as moving obstacles.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+use dmp::Isopotential;
+use dmp_proto::{codec, v1};
+use tracing::{debug, warn};
+use zenoh::Session;
+use zenoh::bytes::Encoding;
+use zenoh::pubsub::Publisher;
+
+use crate::convert::{check_name, superquadric_to_shape, vector};
+use crate::error::ServerError;
+use crate::scene::SceneState;
+use crate::zenoh_bridge::robot_state_key;
+
+/// Checks a robot state (a named robot, finite stamp, position and velocity of one dimension, a footprint of that
+/// dimension) and returns its footprint in the engine's form.
+pub fn check_robot_state(s: &v1::RobotState) -> Result<Option<dmp::Shape>, ServerError> {
+    check_name("robot_id", &s.robot_id)?;
+    if !s.stamp_unix_s.is_finite() {
+        return Err(ServerError::invalid("stamp_unix_s", "must be a finite number"));
+    }
+    let dim = s.position.len();
+    if dim == 0 {
+        return Err(ServerError::invalid("position", "must not be empty"));
+    }
+    vector("position", &s.position, dim)?;
+    if !s.velocity.is_empty() {
+        vector("velocity", &s.velocity, dim)?;
+    }
+    let Some(f) = &s.footprint else { return Ok(None) };
+    let shape = superquadric_to_shape(f).map_err(|e| e.within("footprint"))?;
+    if shape.dim() != dim {
+        return Err(ServerError::invalid(
+            "footprint.semi_axes",
+            format!("must have {dim} entries (the position's dimension), found {}", shape.dim()),
+        ));
+    }
+    Ok(Some(shape))
+}
+
+/// Publishes executing robots' states: into the local scene always, and on Zenoh when the server has a session.
+/// Cheap to clone; a Zenoh error is logged, never returned (a robot's motion never waits on the network).
+#[derive(Debug, Clone)]
+pub struct RobotBus {
+    scene: SceneState,
+    zenoh: Option<Arc<ZenohOut>>,
+}
+
+/// The Zenoh side: one publisher per robot, declared at its first state (a declared publisher keeps its routes,
+/// unlike a `session.put` per state) and undeclared when it retires.
+#[derive(Debug)]
+struct ZenohOut {
+    session: Session,
+    cell: String,
+    /// By robot id. The lock is held only to look up or insert, never across an await.
+    publishers: Mutex<HashMap<String, Arc<Publisher<'static>>>>,
+}
+
+impl RobotBus {
+    /// A bus on `scene`, publishing on `dmp/<cell>/robots/...` of the session when one is given.
+    pub fn new(scene: SceneState, zenoh: Option<(Session, String)>) -> Self {
+        let zenoh = zenoh.map(|(session, cell)| {
+            Arc::new(ZenohOut { session, cell, publishers: Mutex::new(HashMap::new()) })
+        });
+        Self { scene, zenoh }
+    }
+
+    /// Records a robot's state in the local scene and publishes it on Zenoh (encoding `application/protobuf`).
+    pub async fn publish(&self, state: v1::RobotState, footprint: Option<dmp::Shape>) {
+        let Some(z) = &self.zenoh else {
+            self.scene.update_robot(state, footprint);
+            return;
+        };
+        let payload = codec::encode(&state);
+        let robot_id = state.robot_id.clone();
+        self.scene.update_robot(state, footprint);
+        let Some(publisher) = z.publisher(&robot_id).await else { return };
+        if let Err(e) = publisher.put(payload).await {
+            warn!(robot = %robot_id, error = %e, "zenoh: robot state not published");
+        }
+    }
+
+    /// Forgets a robot whose run ended, locally and on Zenoh (a delete on its key).
+    pub async fn retire(&self, robot_id: &str) {
+        self.scene.remove_robot(robot_id);
+        let Some(z) = &self.zenoh else { return };
+        let publisher = z.publishers.lock().unwrap_or_else(|p| p.into_inner()).remove(robot_id);
+        let result = match publisher {
+            Some(p) => p.delete().await,
+            None if check_name("robot_id", robot_id).is_ok() => {
+                z.session.delete(robot_state_key(&z.cell, robot_id)).await
+            }
+            None => return,
+        };
+        match result {
+            Ok(()) => debug!(robot = %robot_id, "zenoh: robot retired"),
+            Err(e) => warn!(robot = %robot_id, error = %e, "zenoh: robot retirement not published"),
+        }
+    }
+
+    /// How many robots currently have a Zenoh publisher.
+    pub fn publishers(&self) -> usize {
+        self.zenoh.as_ref().map_or(0, |z| z.publishers.lock().unwrap_or_else(|p| p.into_inner()).len())
+    }
+}
+
+impl ZenohOut {
+    /// The robot's publisher, declared at first use; None (logged) for an id that cannot be a key chunk.
+    async fn publisher(&self, robot_id: &str) -> Option<Arc<Publisher<'static>>> {
+        if let Some(p) = self.publishers.lock().unwrap_or_else(|p| p.into_inner()).get(robot_id) {
+            return Some(p.clone());
+        }
+        if let Err(e) = check_name("robot_id", robot_id) {
+            warn!(robot = %robot_id, reason = %e, "zenoh: robot state not published");
+            return None;
+        }
+        let declared = self
+            .session
+            .declare_publisher(robot_state_key(&self.cell, robot_id))
+            .encoding(Encoding::APPLICATION_PROTOBUF)
+            .await;
+        match declared {
+            Ok(p) => {
+                let mut publishers = self.publishers.lock().unwrap_or_else(|p| p.into_inner());
+                // A concurrent first publish may have won: keep its publisher, drop (undeclare) this one.
+                Some(publishers.entry(robot_id.to_owned()).or_insert_with(|| Arc::new(p)).clone())
+            }
+            Err(e) => {
+                warn!(robot = %robot_id, error = %e, "zenoh: cannot declare the robot's publisher");
+                None
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::ZenohConfig;
+    use crate::scene::now_unix_s;
+    use crate::zenoh_bridge::{ZenohBridge, locators, obstacle_key, open_session};
+    use std::future::IntoFuture;
+    use std::time::Duration;
+    use tokio_util::sync::CancellationToken;
+
+    async fn within<F: IntoFuture>(what: &str, f: F) -> F::Output {
+        tokio::time::timeout(Duration::from_secs(10), f).await.unwrap_or_else(|_| panic!("timed out: {what}"))
+    }
+
+    fn state(id: &str, x: f64) -> v1::RobotState {
+        v1::RobotState {
+            robot_id: id.into(),
+            stamp_unix_s: now_unix_s(),
+            position: vec![x, 0.0, 0.0],
+            velocity: vec![0.0; 3],
+            footprint: Some(v1::Superquadric { semi_axes: vec![0.2; 3], exponents: vec![] }),
+        }
+    }
+
+    #[test]
+    fn robot_states_are_checked() {
+        assert!(check_robot_state(&state("r1", 0.0)).unwrap().is_some());
+        let mut s = state("r1", f64::NAN);
+        assert!(check_robot_state(&s).unwrap_err().to_string().starts_with("position[0]"));
+        s = state("r1", 0.0);
+        s.velocity = vec![0.0; 2];
+        assert!(check_robot_state(&s).unwrap_err().to_string().starts_with("velocity"));
+        s = state("r1", 0.0);
+        s.footprint = Some(v1::Superquadric { semi_axes: vec![0.2; 2], exponents: vec![] });
+        assert!(check_robot_state(&s).unwrap_err().to_string().starts_with("footprint.semi_axes"));
+        s.footprint = Some(v1::Superquadric { semi_axes: vec![0.2, 0.0, 0.2], exponents: vec![] });
+        assert!(check_robot_state(&s).unwrap_err().to_string().starts_with("footprint."));
+        assert!(check_robot_state(&state("a/b", 0.0)).is_err());
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn without_zenoh_states_stay_local() {
+        let scene = SceneState::new(10);
+        let bus = RobotBus::new(scene.clone(), None);
+        bus.publish(state("r1", 1.0), None).await;
+        assert_eq!(scene.other_robots("r2", now_unix_s(), 60.0).len(), 1);
+        bus.retire("r1").await;
+        assert!(scene.other_robots("r2", now_unix_s(), 60.0).is_empty());
+    }
+
+    /// Two servers of one cell: the robots of one are seen by the other through Zenoh.
+    #[tokio::test(flavor = "multi_thread")]
+    async fn zenoh_robot_states_reach_another_server() {
+        let cfg = |connect| ZenohConfig {
+            disabled: false,
+            mode: "peer".into(),
+            listen: vec!["tcp/127.0.0.1:0".into()],
+            connect,
+            multicast_scouting: false,
+        };
+        // b (with the bridge) listens; a (with the bus) connects to it and so knows b's subscribers on opening.
+        let b = within("open b", open_session(&cfg(vec![]))).await.unwrap();
+        let scene_b = SceneState::new(10);
+        let shutdown = CancellationToken::new();
+        let bridge =
+            within("bridge b", ZenohBridge::start(b.clone(), "c", scene_b.clone(), shutdown.clone()))
+                .await
+                .unwrap();
+        let a = within("open a", open_session(&cfg(locators(&b).await))).await.unwrap();
+        let scene_a = SceneState::new(10);
+        let bus = RobotBus::new(scene_a.clone(), Some((a.clone(), "c".into())));
+
+        // Belt and braces: a knows b's robot subscriber (declared after the obstacle one) before publishing.
+        let probe = within("probe", a.declare_publisher(robot_state_key("c", "probe"))).await.unwrap();
+        let listener = within("listener", probe.matching_listener()).await.unwrap();
+        if !within("status", probe.matching_status()).await.unwrap().matching() {
+            while !within("matching", listener.recv_async()).await.unwrap().matching() {}
+        }
+        drop(listener);
+        drop(probe);
+        let mut rx = scene_b.subscribe();
+        bus.publish(state("r1", 1.0), None).await;
+        bus.publish(state("r1", 2.0), None).await;
+        assert_eq!(bus.publishers(), 1);
+        // A sentinel obstacle sent after the states on the same session: when it arrives, so have they.
+        let sentinel = obstacle_key("c", "sentinel");
+        within("sentinel", a.put(&sentinel, r#"{"center": [0], "semi_axes": [1]}"#)).await.unwrap();
+        within("scene b", rx.changed()).await.unwrap();
+        let seen = scene_b.other_robots("r2", now_unix_s(), 60.0);
+        assert_eq!(seen.len(), 1);
+        assert_eq!(seen[0].state.position, vec![2.0, 0.0, 0.0]);
+        assert!(seen[0].footprint.is_some());
+        assert_eq!(scene_a.other_robots("r2", now_unix_s(), 60.0).len(), 1, "recorded locally");
+
+        bus.retire("r1").await;
+        assert_eq!(bus.publishers(), 0);
+        assert!(scene_a.other_robots("r2", now_unix_s(), 60.0).is_empty());
+        within("sentinel delete", a.delete(&sentinel)).await.unwrap();
+        within("scene b", rx.changed()).await.unwrap();
+        assert!(scene_b.other_robots("r2", now_unix_s(), 60.0).is_empty());
+        assert_eq!(bridge.malformed_payloads(), 0);
+
+        shutdown.cancel();
+        within("close bridge", bridge.close()).await;
+        within("session a", a.close()).await.unwrap();
+        within("session b", b.close()).await.unwrap();
+    }
+}

@@ -1,0 +1,153 @@
+//! Assembling and running the server: store, scene, Zenoh, the gRPC services (with health and reflection), and one
+//! shutdown path for all of them.
+
+use std::future::Future;
+use std::net::SocketAddr;
+use std::sync::Arc;
+
+use dmp_proto::v1::motion_service_server::MotionServiceServer;
+use dmp_proto::v1::primitive_service_server::PrimitiveServiceServer;
+use dmp_proto::v1::scene_service_server::SceneServiceServer;
+use tokio::net::TcpListener;
+use tokio::sync::Semaphore;
+use tokio::task::JoinHandle;
+use tokio_stream::wrappers::TcpListenerStream;
+use tokio_util::sync::CancellationToken;
+use tonic::transport::Server;
+use tracing::{info, warn};
+
+use crate::config::Config;
+use crate::error::ServerError;
+use crate::robots::RobotBus;
+use crate::scene::SceneState;
+use crate::services::motion::MotionServiceImpl;
+use crate::services::primitives::PrimitiveServiceImpl;
+use crate::services::scene::SceneServiceImpl;
+use crate::state::AppState;
+use crate::store::Store;
+use crate::zenoh_bridge::{ZenohBridge, locators, open_session};
+
+/// A running server.
+#[derive(Debug)]
+pub struct ServerHandle {
+    /// The address gRPC listens on (the real port when the configuration said 0).
+    pub grpc_addr: SocketAddr,
+    /// Zenoh locators the embedded peer listens on (empty without Zenoh).
+    pub zenoh_locators: Vec<String>,
+    state: Arc<AppState>,
+    bridge_malformed: Option<Arc<std::sync::atomic::AtomicU64>>,
+    task: JoinHandle<Result<(), ServerError>>,
+}
+
+impl ServerHandle {
+    /// The shared state (tests look at the scene and the stream permits).
+    pub fn state(&self) -> &Arc<AppState> {
+        &self.state
+    }
+
+    /// Malformed Zenoh payloads received so far.
+    pub fn malformed_payloads(&self) -> u64 {
+        self.bridge_malformed.as_ref().map(|c| c.load(std::sync::atomic::Ordering::Relaxed)).unwrap_or(0)
+    }
+
+    /// Streams currently open.
+    pub fn open_streams(&self) -> usize {
+        self.state.config.limits.max_streams - self.state.streams.available_permits()
+    }
+
+    /// Stops: streams end, gRPC drains, Zenoh closes. Returns once everything is down.
+    pub async fn shutdown(self) -> Result<(), ServerError> {
+        self.state.shutdown.cancel();
+        self.task.await.map_err(|e| ServerError::Internal(e.to_string()))?
+    }
+}
+
+/// Starts the server and returns once it serves (health SERVING).
+pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
+    let listener = TcpListener::bind(config.grpc_addr)
+        .await
+        .map_err(|e| ServerError::FailedPrecondition(format!("cannot listen on {}: {e}", config.grpc_addr)))?;
+    let grpc_addr = listener.local_addr().map_err(|e| ServerError::Internal(e.to_string()))?;
+    let dir = config.data_dir.clone();
+    let store = tokio::task::spawn_blocking(move || Store::open(&dir))
+        .await
+        .map_err(|e| ServerError::Internal(e.to_string()))??;
+    let scene = SceneState::new(config.limits.max_obstacles);
+    let shutdown = CancellationToken::new();
+
+    let (session, bridge, robots, zenoh_locators) = if config.zenoh.disabled {
+        (None, None, RobotBus::new(scene.clone(), None), Vec::new())
+    } else {
+        let session = open_session(&config.zenoh).await?;
+        let bridge = ZenohBridge::start(session.clone(), config.cell.clone(), scene.clone(), shutdown.clone()).await?;
+        let locs = locators(&session).await;
+        let robots = RobotBus::new(scene.clone(), Some((session.clone(), config.cell.clone())));
+        (Some(session), Some(bridge), robots, locs)
+    };
+    let bridge_malformed = bridge.as_ref().map(|b| b.malformed_counter());
+
+    let state = Arc::new(AppState {
+        streams: Arc::new(Semaphore::new(config.limits.max_streams)),
+        config,
+        store,
+        scene,
+        robots,
+        shutdown: shutdown.clone(),
+    });
+    let max = state.config.limits.max_message_bytes;
+
+    let (health, health_service) = tonic_health::server::health_reporter();
+    health.set_serving::<PrimitiveServiceServer<PrimitiveServiceImpl>>().await;
+    health.set_serving::<SceneServiceServer<SceneServiceImpl>>().await;
+    health.set_serving::<MotionServiceServer<MotionServiceImpl>>().await;
+    health.set_service_status("", tonic_health::ServingStatus::Serving).await;
+    let reflection = tonic_reflection::server::Builder::configure()
+        .register_encoded_file_descriptor_set(dmp_proto::FILE_DESCRIPTOR_SET)
+        .build_v1()
+        .map_err(|e| ServerError::Internal(e.to_string()))?;
+
+    let router = Server::builder()
+        .add_service(health_service)
+        .add_service(reflection)
+        .add_service(
+            PrimitiveServiceServer::new(PrimitiveServiceImpl::new(state.clone()))
+                .max_decoding_message_size(max)
+                .max_encoding_message_size(max),
+        )
+        .add_service(
+            SceneServiceServer::new(SceneServiceImpl::new(state.clone()))
+                .max_decoding_message_size(max)
+                .max_encoding_message_size(max),
+        )
+        .add_service(
+            MotionServiceServer::new(MotionServiceImpl::new(state.clone()))
+                .max_decoding_message_size(max)
+                .max_encoding_message_size(max),
+        );
+    let incoming = TcpListenerStream::new(listener);
+    let stop = shutdown.clone();
+    let task = tokio::spawn(async move {
+        let served = router.serve_with_incoming_shutdown(incoming, stop.cancelled_owned()).await;
+        health.set_service_status("", tonic_health::ServingStatus::NotServing).await;
+        if let Some(b) = bridge {
+            b.close().await;
+        }
+        if let Some(s) = session
+            && let Err(e) = s.close().await
+        {
+            warn!(error = %e, "closing the Zenoh session");
+        }
+        info!("server stopped");
+        served.map_err(|e| ServerError::Internal(format!("gRPC server: {e}")))
+    });
+    info!(grpc = %grpc_addr, zenoh = ?zenoh_locators, cell = %state.config.cell, "serving");
+    Ok(ServerHandle { grpc_addr, zenoh_locators, state, bridge_malformed, task })
+}
+
+/// Runs the server until `shutdown` completes (the binary passes SIGINT or SIGTERM), then stops it cleanly.
+pub async fn run(config: Config, shutdown: impl Future<Output = ()> + Send + 'static) -> Result<(), ServerError> {
+    let handle = start(config).await?;
+    shutdown.await;
+    info!("shutting down: draining streams, closing Zenoh");
+    handle.shutdown().await
+}

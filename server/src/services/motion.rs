@@ -1,0 +1,408 @@
+//! The motion service: whole plans, streamed executions, sessions and groups on one phase.
+
+use std::pin::Pin;
+use std::sync::Arc;
+use std::time::Duration;
+
+use dmp::{Motion, Primitive};
+use dmp_proto::v1;
+use dmp_proto::v1::motion_service_server::MotionService;
+use tokio::sync::mpsc;
+use tokio_stream::wrappers::ReceiverStream;
+use tokio_stream::{Stream, StreamExt};
+use tonic::{Request, Response, Status, Streaming};
+use tracing::info;
+
+use crate::convert::{avoidance_from_proto, check_name, obstacle_to_engine, primitive_from_proto, superquadric_to_shape, vector};
+use crate::error::ServerError;
+use crate::executor::runner::{AvoidanceSpec, Member, Runner};
+use crate::executor::stream::{Batch, Control, StreamConfig, run_stream};
+use crate::scene::now_unix_s;
+use crate::state::AppState;
+
+/// Default output step.
+const DEFAULT_DT: f64 = 0.001;
+/// Default segment length, seconds.
+const DEFAULT_SEGMENT_S: f64 = 0.01;
+/// Default real-time lookahead, seconds.
+const DEFAULT_LOOKAHEAD_S: f64 = 0.05;
+
+/// Implements `dmp.v1.MotionService`.
+#[derive(Debug, Clone)]
+pub struct MotionServiceImpl {
+    state: Arc<AppState>,
+}
+
+impl MotionServiceImpl {
+    /// The service over the shared state.
+    pub fn new(state: Arc<AppState>) -> Self {
+        Self { state }
+    }
+}
+
+type SegmentStream = Pin<Box<dyn Stream<Item = Result<v1::Segment, Status>> + Send + 'static>>;
+type GroupStream = Pin<Box<dyn Stream<Item = Result<v1::GroupSegment, Status>> + Send + 'static>>;
+
+/// A motion request resolved against the store: the primitive, the motion, the avoidance.
+struct Resolved {
+    robot_id: String,
+    primitive: Primitive,
+    motion: Motion,
+    avoidance: AvoidanceSpec,
+    footprint: Option<dmp::Shape>,
+    footprint_proto: Option<v1::Superquadric>,
+}
+
+impl MotionServiceImpl {
+    async fn resolve(&self, spec: Option<&v1::MotionSpec>, prefix: &str) -> Result<Resolved, ServerError> {
+        let spec = spec.ok_or_else(|| ServerError::invalid(prefix, "is required"))?;
+        check_name(&format!("{prefix}.robot_id"), &spec.robot_id)?;
+        check_name(&format!("{prefix}.primitive"), &spec.primitive)?;
+        let store = self.state.store.clone();
+        let (robot, name, version) = (spec.robot_id.clone(), spec.primitive.clone(), spec.version);
+        let record = tokio::task::spawn_blocking(move || store.get(&robot, &name, version))
+            .await
+            .map_err(|e| ServerError::Internal(e.to_string()))??;
+        let proto = record.primitive.ok_or_else(|| ServerError::Internal("stored record without primitive".into()))?;
+        let primitive = primitive_from_proto(&proto, &self.state.config.limits)?;
+        let d = primitive.dim;
+        let pick = |field: &str, v: &[f64], default: &[f64]| -> Result<Vec<f64>, ServerError> {
+            if v.is_empty() {
+                Ok(default.to_vec())
+            } else {
+                vector(&format!("{prefix}.{field}"), v, d)?;
+                Ok(v.to_vec())
+            }
+        };
+        let start = pick("start", &spec.start, &primitive.start)?;
+        let goal = pick("goal", &spec.goal, &primitive.goal)?;
+        let tau = if spec.tau == 0.0 { primitive.tau } else { spec.tau };
+        if !(tau.is_finite() && tau > 0.0) {
+            return Err(ServerError::invalid(format!("{prefix}.tau"), "must be a finite number greater than zero"));
+        }
+        let defaults = &self.state.config.defaults;
+        let obstacles = avoidance_from_proto(spec.avoidance.as_ref(), defaults.avoidance)
+            .map_err(|e| e.within(&format!("{prefix}.avoidance")))?;
+        let robots = avoidance_from_proto(spec.robot_avoidance.as_ref(), defaults.robot_avoidance)
+            .map_err(|e| e.within(&format!("{prefix}.robot_avoidance")))?;
+        if spec.extra_obstacles.len() > self.state.config.limits.max_obstacles {
+            return Err(ServerError::ResourceExhausted(format!(
+                "{prefix}.extra_obstacles: more than {} obstacles",
+                self.state.config.limits.max_obstacles
+            )));
+        }
+        let mut extra = Vec::with_capacity(spec.extra_obstacles.len());
+        for (i, o) in spec.extra_obstacles.iter().enumerate() {
+            extra.push(obstacle_to_engine(o).map_err(|e| e.within(&format!("{prefix}.extra_obstacles[{i}]")))?);
+        }
+        let footprint = spec
+            .footprint
+            .as_ref()
+            .map(superquadric_to_shape)
+            .transpose()
+            .map_err(|e| e.within(&format!("{prefix}.footprint")))?;
+        Ok(Resolved {
+            robot_id: spec.robot_id.clone(),
+            primitive,
+            motion: Motion { start, goal, tau },
+            avoidance: AvoidanceSpec { obstacles, robots, extra, ignore_scene: spec.ignore_scene },
+            footprint,
+            footprint_proto: spec.footprint.clone(),
+        })
+    }
+
+    fn stream_config(
+        &self,
+        dt: f64,
+        segment_s: f64,
+        pacing: i32,
+        lookahead_s: f64,
+        max_duration_s: f64,
+        tau: f64,
+    ) -> Result<(f64, StreamConfig), ServerError> {
+        let dt = if dt == 0.0 { DEFAULT_DT } else { dt };
+        if !(dt.is_finite() && dt > 0.0 && dt <= 0.1) {
+            return Err(ServerError::invalid("dt", "must be greater than 0 and at most 0.1 s"));
+        }
+        let segment_s = if segment_s == 0.0 { DEFAULT_SEGMENT_S } else { segment_s };
+        if !(segment_s.is_finite() && segment_s >= dt && segment_s <= 10.0) {
+            return Err(ServerError::invalid("segment_s", "must be between dt and 10 s"));
+        }
+        let lookahead_s = if lookahead_s == 0.0 { DEFAULT_LOOKAHEAD_S } else { lookahead_s };
+        if !(lookahead_s.is_finite() && (0.0..=10.0).contains(&lookahead_s)) {
+            return Err(ServerError::invalid("lookahead_s", "must be between 0 and 10 s"));
+        }
+        let max_duration = if max_duration_s == 0.0 { 3.0 * tau } else { max_duration_s };
+        if !(max_duration.is_finite() && max_duration > 0.0) {
+            return Err(ServerError::invalid("max_duration_s", "must be a finite number >= 0"));
+        }
+        if max_duration / dt > self.state.config.limits.max_steps as f64 {
+            return Err(ServerError::ResourceExhausted(format!(
+                "max_duration_s / dt exceeds the limit of {} steps",
+                self.state.config.limits.max_steps
+            )));
+        }
+        let realtime = match v1::Pacing::try_from(pacing) {
+            Ok(v1::Pacing::Realtime) => true,
+            Ok(v1::Pacing::Unspecified | v1::Pacing::AsFastAsRead) => false,
+            Err(_) => return Err(ServerError::invalid("pacing", format!("unknown value {pacing}"))),
+        };
+        let segment_points = (segment_s / dt).round().max(1.0) as usize;
+        Ok((dt, StreamConfig { segment_points, realtime, lookahead: Duration::from_secs_f64(lookahead_s), max_duration }))
+    }
+
+    fn single_runner(&self, r: Resolved, dt: f64) -> Result<Runner, ServerError> {
+        let dim = r.primitive.dim;
+        let member = Member { robot_id: r.robot_id, dims: 0..dim, footprint: r.footprint, footprint_proto: r.footprint_proto };
+        Runner::new(vec![member], r.primitive, r.motion, dt, r.avoidance, history_len(dt))
+    }
+
+    /// Spawns the producer of a stream and returns the receiving end.
+    fn spawn(&self, runner: Runner, cfg: StreamConfig, control: Option<mpsc::Receiver<Control>>) -> Result<mpsc::Receiver<Result<Batch, Status>>, ServerError> {
+        let permit = self.state.stream_permit()?;
+        let (tx, rx) = mpsc::channel(self.state.config.limits.stream_buffer.max(1));
+        let app = self.state.clone();
+        tokio::spawn(async move {
+            run_stream(app, runner, cfg, tx, control).await;
+            drop(permit);
+        });
+        Ok(rx)
+    }
+}
+
+/// Enough history to roll back over a lookahead of up to ten seconds... bounded to one second of steps, which
+/// covers every lookahead the defaults use; older points are never superseded.
+fn history_len(dt: f64) -> usize {
+    ((1.0 / dt).ceil() as usize).clamp(16, 100_000)
+}
+
+fn single(rx: mpsc::Receiver<Result<Batch, Status>>) -> SegmentStream {
+    Box::pin(ReceiverStream::new(rx).map(|r| r.map(|mut b| b.remove(0))))
+}
+
+#[tonic::async_trait]
+impl MotionService for MotionServiceImpl {
+    async fn plan(&self, request: Request<v1::PlanRequest>) -> Result<Response<v1::PlanResponse>, Status> {
+        let req = request.into_inner();
+        let r = self.resolve(req.motion.as_ref(), "motion").await?;
+        let dt = if req.dt == 0.0 { DEFAULT_DT } else { req.dt };
+        if !(dt.is_finite() && dt > 0.0 && dt <= 0.1) {
+            return Err(ServerError::invalid("dt", "must be greater than 0 and at most 0.1 s").into());
+        }
+        let duration = if req.duration == 0.0 { 1.2 * r.motion.tau } else { req.duration };
+        if !(duration.is_finite() && duration > 0.0) {
+            return Err(ServerError::invalid("duration", "must be a finite number greater than zero").into());
+        }
+        let steps_f = (duration / dt).round();
+        if steps_f > self.state.config.limits.max_steps as f64 {
+            return Err(ServerError::ResourceExhausted(format!(
+                "duration / dt = {steps_f} steps, more than the limit of {}",
+                self.state.config.limits.max_steps
+            ))
+            .into());
+        }
+        let steps = (steps_f as usize).max(1);
+        let robot_id = r.robot_id.clone();
+        let mut runner = self.single_runner(r, dt)?;
+        let now = now_unix_s();
+        let snap = self.state.scene.snapshot();
+        runner.apply_scene(&snap, &self.state.scene.other_robots(&robot_id, now, 0.5), now)?;
+        let version = snap.version;
+        let out = tokio::task::spawn_blocking(move || plan_blocking(runner, steps))
+            .await
+            .map_err(|e| Status::internal(e.to_string()))?;
+        let (segment_points, collisions, stalled, goal) = out;
+        let dim = segment_points.dim;
+        let status = if collisions.is_empty() && goal { v1::SegmentStatus::GoalReached } else { v1::SegmentStatus::Running };
+        info!(robot = %robot_id, steps, collisions = collisions.len(), stalled, "planned");
+        Ok(Response::new(v1::PlanResponse {
+            trajectory: Some(v1::Segment {
+                robot_id,
+                sequence: 0,
+                start_time: 0.0,
+                dt,
+                dim: dim as u32,
+                positions: segment_points.x,
+                velocities: segment_points.xd,
+                accelerations: segment_points.xdd,
+                status: status as i32,
+                scene_version: version,
+                start_unix_s: 0.0,
+            }),
+            collisions,
+            stalled,
+        }))
+    }
+
+    type ExecuteStream = SegmentStream;
+
+    async fn execute(&self, request: Request<v1::ExecuteRequest>) -> Result<Response<Self::ExecuteStream>, Status> {
+        let req = request.into_inner();
+        let r = self.resolve(req.motion.as_ref(), "motion").await?;
+        let (dt, cfg) =
+            self.stream_config(req.dt, req.segment_s, req.pacing, req.lookahead_s, req.max_duration_s, r.motion.tau)?;
+        info!(robot = %r.robot_id, realtime = cfg.realtime, "execute");
+        let runner = self.single_runner(r, dt)?;
+        Ok(Response::new(single(self.spawn(runner, cfg, None)?)))
+    }
+
+    type SessionStream = SegmentStream;
+
+    async fn session(&self, request: Request<Streaming<v1::SessionRequest>>) -> Result<Response<Self::SessionStream>, Status> {
+        use v1::session_request::Message as M;
+        let mut inbound = request.into_inner();
+        let first = tokio::time::timeout(Duration::from_secs(10), inbound.message())
+            .await
+            .map_err(|_| Status::deadline_exceeded("no `start` message within 10 s"))??;
+        let Some(v1::SessionRequest { message: Some(M::Start(req)) }) = first else {
+            return Err(ServerError::invalid("message", "the first message of a session must be `start`").into());
+        };
+        let r = self.resolve(req.motion.as_ref(), "start.motion").await?;
+        let (dt, cfg) = self
+            .stream_config(req.dt, req.segment_s, req.pacing, req.lookahead_s, req.max_duration_s, r.motion.tau)
+            .map_err(|e| e.within("start"))?;
+        let robot_id = r.robot_id.clone();
+        let dim = r.primitive.dim;
+        let runner = self.single_runner(r, dt)?;
+        let (ctl_tx, ctl_rx) = mpsc::channel(64);
+        let rx = self.spawn(runner, cfg, Some(ctl_rx))?;
+        let shutdown = self.state.shutdown.clone();
+        // Reads the robot's messages; a bad one is logged and dropped (the stream goes on), the end of the inbound
+        // stream stops nothing (the robot may just have nothing more to say).
+        tokio::spawn(async move {
+            loop {
+                let msg = tokio::select! {
+                    m = inbound.message() => m,
+                    _ = shutdown.cancelled() => break,
+                };
+                let Ok(Some(msg)) = msg else { break };
+                let control = match msg.message {
+                    Some(M::SetGoal(g)) if g.goal.len() == dim && g.goal.iter().all(|v| v.is_finite()) => {
+                        Control::SetGoal(g.goal)
+                    }
+                    Some(M::SetTau(t)) if t.tau.is_finite() && t.tau > 0.0 => Control::SetTau(t.tau),
+                    Some(M::Pause(_)) => Control::Pause,
+                    Some(M::Resume(_)) => Control::Resume,
+                    Some(M::Stop(_)) => Control::Stop,
+                    Some(M::State(mut s)) => {
+                        s.robot_id = robot_id.clone();
+                        Control::State(s)
+                    }
+                    other => {
+                        tracing::warn!(robot = %robot_id, message = ?other, "ignored an invalid session message");
+                        continue;
+                    }
+                };
+                if ctl_tx.send(control).await.is_err() {
+                    break;
+                }
+            }
+        });
+        Ok(Response::new(single(rx)))
+    }
+
+    type ExecuteGroupStream = GroupStream;
+
+    async fn execute_group(&self, request: Request<v1::ExecuteGroupRequest>) -> Result<Response<Self::ExecuteGroupStream>, Status> {
+        let req = request.into_inner();
+        if req.members.len() < 2 {
+            return Err(ServerError::invalid("members", "a group needs at least two members").into());
+        }
+        if req.members.len() > 64 {
+            return Err(ServerError::ResourceExhausted("members: at most 64 robots per group".into()).into());
+        }
+        let mut resolved = Vec::with_capacity(req.members.len());
+        for (i, m) in req.members.iter().enumerate() {
+            let r = self.resolve(m.motion.as_ref(), &format!("members[{i}].motion")).await?;
+            if resolved.iter().any(|p: &Resolved| p.robot_id == r.robot_id) {
+                return Err(ServerError::invalid(format!("members[{i}].motion.robot_id"), "appears twice").into());
+            }
+            resolved.push(r);
+        }
+        let first = &resolved[0];
+        for (i, r) in resolved.iter().enumerate() {
+            if r.primitive.n_basis != first.primitive.n_basis || r.primitive.alpha != first.primitive.alpha {
+                return Err(ServerError::invalid(
+                    format!("members[{i}].motion.primitive"),
+                    "every member's primitive must share N and alpha (they run on one phase)",
+                )
+                .into());
+            }
+            if r.primitive.dim != first.primitive.dim {
+                return Err(ServerError::invalid(
+                    format!("members[{i}].motion.primitive"),
+                    "every member must move in the same number of dimensions",
+                )
+                .into());
+            }
+            if r.footprint.is_none() {
+                return Err(ServerError::invalid(
+                    format!("members[{i}].motion.footprint"),
+                    "is required: the other members avoid it",
+                )
+                .into());
+            }
+        }
+        let tau = if req.tau == 0.0 { resolved.iter().map(|r| r.motion.tau).fold(0.0, f64::max) } else { req.tau };
+        if !(tau.is_finite() && tau > 0.0) {
+            return Err(ServerError::invalid("tau", "must be a finite number greater than zero").into());
+        }
+        let (dt, cfg) = self.stream_config(req.dt, req.segment_s, req.pacing, req.lookahead_s, req.max_duration_s, tau)?;
+        // One DMP: the members' primitives side by side (the paper's 6-D youBot DMP).
+        let mut primitive = first.primitive.clone();
+        primitive.tau = tau;
+        primitive.dim = 0;
+        for f in [&mut primitive.k, &mut primitive.d, &mut primitive.start, &mut primitive.goal] {
+            f.clear();
+        }
+        primitive.weights.clear();
+        let mut motion = Motion { start: Vec::new(), goal: Vec::new(), tau };
+        let mut members = Vec::new();
+        let mut avoidance = first.avoidance.clone();
+        avoidance.extra.clear();
+        for r in &resolved {
+            let p = &r.primitive;
+            let dims = primitive.dim..primitive.dim + p.dim;
+            primitive.dim += p.dim;
+            primitive.k.extend(&p.k);
+            primitive.d.extend(&p.d);
+            primitive.start.extend(&p.start);
+            primitive.goal.extend(&p.goal);
+            primitive.weights.extend(p.weights.iter().cloned());
+            motion.start.extend(&r.motion.start);
+            motion.goal.extend(&r.motion.goal);
+            avoidance.extra.extend(r.avoidance.extra.iter().cloned());
+            members.push(Member {
+                robot_id: r.robot_id.clone(),
+                dims,
+                footprint: r.footprint.clone(),
+                footprint_proto: r.footprint_proto.clone(),
+            });
+        }
+        info!(robots = members.len(), realtime = cfg.realtime, "execute group");
+        let runner = Runner::new(members, primitive, motion, dt, avoidance, history_len(dt))?;
+        let rx = self.spawn(runner, cfg, None)?;
+        let stream = ReceiverStream::new(rx).map(|r| {
+            r.map(|segments| v1::GroupSegment { sequence: segments.first().map(|s| s.sequence).unwrap_or(0), segments })
+        });
+        Ok(Response::new(Box::pin(stream)))
+    }
+}
+
+/// Rolls a runner out for `steps` steps: the points (steps + 1 rows), contacts, stalled, arrived.
+fn plan_blocking(mut runner: Runner, steps: usize) -> (PlanPoints, Vec<String>, bool, bool) {
+    let pts = runner.advance(steps + 1);
+    let dim = runner.state().x.len();
+    let outcome = pts.outcome;
+    let collisions = runner.touched().iter().cloned().collect();
+    let stalled = outcome == Some(crate::executor::runner::Outcome::Stalled);
+    let goal = outcome == Some(crate::executor::runner::Outcome::GoalReached);
+    (PlanPoints { dim, x: pts.x, xd: pts.xd, xdd: pts.xdd }, collisions, stalled, goal)
+}
+
+struct PlanPoints {
+    dim: usize,
+    x: Vec<f64>,
+    xd: Vec<f64>,
+    xdd: Vec<f64>,
+}

@@ -1,0 +1,220 @@
+//! `dmp.v1.SceneService`: put, delete, list and watch obstacles over gRPC, for clients without Zenoh. A gRPC put
+//! changes this server's scene only (it is not republished on Zenoh).
+
+use std::sync::Arc;
+
+use dmp_proto::v1;
+use dmp_proto::v1::scene_service_server::SceneService;
+use tokio::sync::{OwnedSemaphorePermit, mpsc};
+use tokio_stream::wrappers::ReceiverStream;
+use tokio_util::sync::CancellationToken;
+use tonic::{Request, Response, Status};
+use tracing::debug;
+
+use crate::error::ServerError;
+use crate::scene::{SceneSnapshot, SceneState, now_unix_s};
+use crate::state::AppState;
+
+/// The scene service.
+#[derive(Debug, Clone)]
+pub struct SceneServiceImpl {
+    /// What the services share.
+    pub state: Arc<AppState>,
+}
+
+impl SceneServiceImpl {
+    /// The service on the shared state.
+    pub fn new(state: Arc<AppState>) -> Self {
+        Self { state }
+    }
+}
+
+/// The message of a snapshot: obstacles sorted by id, centres moved to `now_unix_s`.
+pub fn snapshot_to_proto(snapshot: &SceneSnapshot, now_unix_s: f64) -> v1::SceneSnapshot {
+    v1::SceneSnapshot {
+        scene_version: snapshot.version,
+        obstacles: snapshot.obstacles.values().map(|o| o.proto_at(now_unix_s)).collect(),
+    }
+}
+
+/// Streams the current snapshot, then the snapshot after every change, into a channel of `buffer` events.
+///
+/// One task per watch holds `permit` until it ends: when the client leaves (a send fails, or the channel closes
+/// while no change comes) or on `shutdown` (a last `Unavailable` status, if there is room). The bound is the
+/// backpressure: a slow reader is sent the latest snapshot when it catches up (versions in between are skipped; each
+/// event is a whole snapshot, so nothing is lost), never a growing queue.
+pub fn watch_stream(
+    scene: &SceneState,
+    buffer: usize,
+    shutdown: CancellationToken,
+    permit: OwnedSemaphorePermit,
+) -> ReceiverStream<Result<v1::SceneEvent, Status>> {
+    let (tx, rx) = mpsc::channel(buffer.max(1));
+    let mut changes = scene.subscribe();
+    tokio::spawn(async move {
+        let _permit = permit;
+        loop {
+            let snapshot = changes.borrow_and_update().clone();
+            let event = v1::SceneEvent { snapshot: Some(snapshot_to_proto(&snapshot, now_unix_s())) };
+            tokio::select! {
+                biased;
+                _ = shutdown.cancelled() => break,
+                sent = tx.send(Ok(event)) => if sent.is_err() { return },
+            }
+            tokio::select! {
+                biased;
+                _ = shutdown.cancelled() => break,
+                _ = tx.closed() => return,
+                changed = changes.changed() => if changed.is_err() { break },
+            }
+        }
+        let _ = tx.try_send(Err(ServerError::ShuttingDown.into()));
+        debug!("scene watch ended");
+    });
+    ReceiverStream::new(rx)
+}
+
+#[tonic::async_trait]
+impl SceneService for SceneServiceImpl {
+    async fn put_obstacle(
+        &self,
+        request: Request<v1::PutObstacleRequest>,
+    ) -> Result<Response<v1::SceneChange>, Status> {
+        let obstacle =
+            request.into_inner().obstacle.ok_or_else(|| ServerError::invalid("obstacle", "is required"))?;
+        let id = obstacle.id.clone();
+        let version = self.state.scene.put(obstacle, now_unix_s())?;
+        debug!(obstacle = %id, version, "obstacle put over gRPC");
+        Ok(Response::new(v1::SceneChange { scene_version: version, changed: true }))
+    }
+
+    async fn delete_obstacle(
+        &self,
+        request: Request<v1::DeleteObstacleRequest>,
+    ) -> Result<Response<v1::SceneChange>, Status> {
+        let id = request.into_inner().id;
+        if id.is_empty() {
+            return Err(ServerError::invalid("id", "must not be empty").into());
+        }
+        let (version, changed) = self.state.scene.delete(&id);
+        debug!(obstacle = %id, version, changed, "obstacle deleted over gRPC");
+        Ok(Response::new(v1::SceneChange { scene_version: version, changed }))
+    }
+
+    async fn list_obstacles(
+        &self,
+        _request: Request<v1::ListObstaclesRequest>,
+    ) -> Result<Response<v1::SceneSnapshot>, Status> {
+        Ok(Response::new(snapshot_to_proto(&self.state.scene.snapshot(), now_unix_s())))
+    }
+
+    type WatchSceneStream = ReceiverStream<Result<v1::SceneEvent, Status>>;
+
+    async fn watch_scene(
+        &self,
+        _request: Request<v1::WatchSceneRequest>,
+    ) -> Result<Response<Self::WatchSceneStream>, Status> {
+        let permit = self.state.stream_permit()?;
+        let s = &self.state;
+        Ok(Response::new(watch_stream(&s.scene, s.config.limits.stream_buffer, s.shutdown.clone(), permit)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::future::IntoFuture;
+    use std::time::Duration;
+    use tokio::sync::Semaphore;
+    use tokio_stream::StreamExt;
+
+    async fn within<F: IntoFuture>(what: &str, f: F) -> F::Output {
+        tokio::time::timeout(Duration::from_secs(10), f).await.unwrap_or_else(|_| panic!("timed out: {what}"))
+    }
+
+    fn moving(id: &str) -> v1::Obstacle {
+        v1::Obstacle {
+            id: id.into(),
+            shape: Some(v1::obstacle::Shape::Superquadric(v1::Superquadric {
+                semi_axes: vec![0.1, 0.2],
+                exponents: vec![],
+            })),
+            center: vec![0.0, 0.0],
+            velocity: vec![1.0, 0.0],
+            ..Default::default()
+        }
+    }
+
+    fn ids(e: &v1::SceneEvent) -> Vec<&str> {
+        e.snapshot.as_ref().unwrap().obstacles.iter().map(|o| o.id.as_str()).collect()
+    }
+
+    #[test]
+    fn snapshots_move_centres_to_now() {
+        let scene = SceneState::new(10);
+        scene.put(moving("b"), 100.0).unwrap();
+        scene.put(moving("a"), 100.0).unwrap();
+        let p = snapshot_to_proto(&scene.snapshot(), 102.5);
+        assert_eq!(p.scene_version, 2);
+        assert_eq!(p.obstacles.iter().map(|o| o.id.as_str()).collect::<Vec<_>>(), ["a", "b"]);
+        assert_eq!(p.obstacles[0].center, vec![2.5, 0.0]);
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn a_watch_sends_the_snapshot_then_changes_and_frees_its_permit() {
+        let scene = SceneState::new(10);
+        scene.put(moving("a"), now_unix_s()).unwrap();
+        let permits = Arc::new(Semaphore::new(1));
+        let shutdown = CancellationToken::new();
+        let permit = permits.clone().try_acquire_owned().unwrap();
+        let mut stream = watch_stream(&scene, 2, shutdown.clone(), permit);
+        let first = within("first", stream.next()).await.unwrap().unwrap();
+        assert_eq!(ids(&first), ["a"]);
+        scene.put(moving("b"), now_unix_s()).unwrap();
+        let second = within("second", stream.next()).await.unwrap().unwrap();
+        assert_eq!(ids(&second), ["a", "b"]);
+        assert_eq!(second.snapshot.unwrap().scene_version, 2);
+        scene.delete("a");
+        assert_eq!(ids(&within("third", stream.next()).await.unwrap().unwrap()), ["b"]);
+        assert_eq!(permits.available_permits(), 0);
+
+        // The client leaves while nothing changes: the task ends and the permit is back.
+        drop(stream);
+        let _freed = within("permit", permits.clone().acquire_owned()).await.unwrap();
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn a_watch_ends_on_shutdown() {
+        let scene = SceneState::new(10);
+        let permits = Arc::new(Semaphore::new(1));
+        let shutdown = CancellationToken::new();
+        let mut stream =
+            watch_stream(&scene, 1, shutdown.clone(), permits.clone().try_acquire_owned().unwrap());
+        assert!(ids(&within("first", stream.next()).await.unwrap().unwrap()).is_empty());
+        shutdown.cancel();
+        let last = within("last", stream.next()).await.unwrap().unwrap_err();
+        assert_eq!(last.code(), tonic::Code::Unavailable);
+        assert!(within("end", stream.next()).await.is_none());
+        let _freed = within("permit", permits.acquire()).await.unwrap();
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn a_slow_reader_gets_the_latest_snapshot() {
+        let scene = SceneState::new(100);
+        let permits = Arc::new(Semaphore::new(1));
+        let mut stream =
+            watch_stream(&scene, 1, CancellationToken::new(), permits.clone().try_acquire_owned().unwrap());
+        for i in 0..50 {
+            scene.put(moving(&format!("o{i:02}")), now_unix_s()).unwrap();
+        }
+        // Whatever was buffered, the events only grow and the last one holds all 50 obstacles.
+        let mut last = 0;
+        while last < 50 {
+            let e = within("event", stream.next()).await.unwrap().unwrap();
+            let version = e.snapshot.unwrap().scene_version;
+            assert!(version >= last);
+            last = version;
+        }
+        assert_eq!(last, 50);
+    }
+}

@@ -1,0 +1,45 @@
+//! What every service shares.
+
+use std::sync::Arc;
+
+use tokio::sync::Semaphore;
+use tokio_util::sync::CancellationToken;
+
+use crate::config::Config;
+use crate::error::ServerError;
+use crate::robots::RobotBus;
+use crate::scene::SceneState;
+use crate::store::Store;
+
+/// The server's shared state: configuration, store, scene, the robots' state bus, stream permits and the shutdown
+/// signal.
+#[derive(Debug)]
+pub struct AppState {
+    /// The effective configuration.
+    pub config: Config,
+    /// The primitives.
+    pub store: Store,
+    /// Obstacles and robot states.
+    pub scene: SceneState,
+    /// Publishes executing robots' states (over Zenoh when it is on).
+    pub robots: RobotBus,
+    /// One permit per open stream, `limits.max_streams` in all.
+    pub streams: Arc<Semaphore>,
+    /// Cancelled when the server shuts down: every stream ends.
+    pub shutdown: CancellationToken,
+}
+
+impl AppState {
+    /// A stream permit, or ResourceExhausted when every one is taken.
+    pub fn stream_permit(&self) -> Result<tokio::sync::OwnedSemaphorePermit, ServerError> {
+        if self.shutdown.is_cancelled() {
+            return Err(ServerError::ShuttingDown);
+        }
+        self.streams.clone().try_acquire_owned().map_err(|_| {
+            ServerError::ResourceExhausted(format!(
+                "{} streams are open (the limit); retry later",
+                self.config.limits.max_streams
+            ))
+        })
+    }
+}

@@ -1,0 +1,484 @@
+//! The embedded, crash-safe store of primitives: one redb file, `<data_dir>/primitives.redb`.
+//!
+//! Every write is one redb transaction committed with [`Durability::Immediate`] (redb's default, set explicitly):
+//! the new commit slot is written with checksums and `fsync`ed before `commit` returns, so a primitive whose
+//! [`Store::put`] returned survives `kill -9` and power loss. After a crash redb opens the newest commit slot whose
+//! checksum is valid.
+//!
+//! Layout (schema version [`SCHEMA_VERSION`]):
+//!
+//! | table | key | value |
+//! | --- | --- | --- |
+//! | `meta` | `"schema_version"` | `u64`, written when the file is created and checked on every open |
+//! | `primitives` | `(robot_id, name, version)` | the protobuf-encoded `v1::PrimitiveRecord` |
+//! | `last_versions` | `(robot_id, name)` | the last version ever given to the name |
+//!
+//! Versions start at 1 and are never reused, even after a delete: `(robot_id, name, version)` always names one
+//! primitive.
+//!
+//! The API is synchronous (redb is): services call it through `tokio::task::spawn_blocking`.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use dmp_proto::v1;
+use prost::Message;
+use redb::{Database, Durability, ReadableDatabase, ReadableTable, TableDefinition, TableHandle};
+
+use crate::convert::primitive_to_proto;
+use crate::error::ServerError;
+
+/// Version of the store's layout. A file of another version is refused on open (never silently reset).
+pub const SCHEMA_VERSION: u64 = 1;
+
+/// Name of the database file inside the data directory.
+pub const FILE_NAME: &str = "primitives.redb";
+
+const META: TableDefinition<'_, &str, u64> = TableDefinition::new("meta");
+const SCHEMA_KEY: &str = "schema_version";
+const PRIMITIVES: TableDefinition<'_, (&str, &str, u64), &[u8]> = TableDefinition::new("primitives");
+const LAST_VERSIONS: TableDefinition<'_, (&str, &str), u64> = TableDefinition::new("last_versions");
+
+/// The primitives of every robot. Cheap to clone; one per data directory (redb locks the file, so a second
+/// server on the same directory fails to open it).
+#[derive(Clone)]
+pub struct Store {
+    db: Arc<Database>,
+    path: Arc<PathBuf>,
+}
+
+impl fmt::Debug for Store {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Store").field("path", &self.path).finish_non_exhaustive()
+    }
+}
+
+/// A storage error naming what failed.
+fn storage(what: impl fmt::Display, e: impl Into<redb::Error>) -> ServerError {
+    ServerError::Storage(format!("{what}: {}", e.into()))
+}
+
+impl Store {
+    /// Opens the store in `dir` (created if missing): a new file gets the current schema version, an existing one
+    /// must have it.
+    pub fn open(dir: impl AsRef<Path>) -> Result<Store, ServerError> {
+        let dir = dir.as_ref();
+        std::fs::create_dir_all(dir).map_err(|e| {
+            ServerError::Storage(format!("cannot create the data directory {}: {e}", dir.display()))
+        })?;
+        let path = dir.join(FILE_NAME);
+        let shown = path.display();
+        let db = Database::builder()
+            // The file is small (kilobytes per primitive): verifying every page on open turns a file damaged
+            // outside redb into an error instead of a panic.
+            .set_check_integrity_on_open(true)
+            .create(&path)
+            .map_err(|e| match e {
+                redb::DatabaseError::DatabaseAlreadyOpen => ServerError::Storage(format!(
+                    "cannot open {shown}: it is already open (is another dmp-server using this data directory?)"
+                )),
+                e => storage(format_args!("cannot open {shown}"), e),
+            })?;
+        let store = Store { db: Arc::new(db), path: Arc::new(path.clone()) };
+        store.check_or_initialise()?;
+        Ok(store)
+    }
+
+    /// The database file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Writes the schema version into an empty file, or checks the one found.
+    fn check_or_initialise(&self) -> Result<(), ServerError> {
+        let shown = self.path.display();
+        let read = self.db.begin_read().map_err(|e| storage("begin read", e))?;
+        let tables: Vec<String> = read
+            .list_tables()
+            .map_err(|e| storage("list tables", e))?
+            .map(|t| t.name().to_string())
+            .collect();
+        if tables.is_empty() {
+            drop(read);
+            let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
+            tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
+            {
+                let mut meta = tx.open_table(META).map_err(|e| storage("create table meta", e))?;
+                meta.insert(SCHEMA_KEY, SCHEMA_VERSION).map_err(|e| storage("write meta", e))?;
+                tx.open_table(PRIMITIVES).map_err(|e| storage("create table primitives", e))?;
+                tx.open_table(LAST_VERSIONS).map_err(|e| storage("create table last_versions", e))?;
+            }
+            tx.commit().map_err(|e| storage("commit", e))?;
+            return Ok(());
+        }
+        if !tables.iter().any(|t| t == META.name()) {
+            return Err(ServerError::Storage(format!(
+                "{shown} is not a dmp-server store (no `meta` table; tables: {tables:?})"
+            )));
+        }
+        let meta = read.open_table(META).map_err(|e| storage("open meta", e))?;
+        let found = meta.get(SCHEMA_KEY).map_err(|e| storage("read meta", e))?.map(|v| v.value());
+        match found {
+            Some(SCHEMA_VERSION) => Ok(()),
+            Some(v) => Err(ServerError::Storage(format!(
+                "{shown} has schema version {v}, this server reads version {SCHEMA_VERSION}; \
+                 use a matching server or migrate the file (it was left untouched)"
+            ))),
+            None => Err(ServerError::Storage(format!("{shown} has a `meta` table without `{SCHEMA_KEY}`"))),
+        }
+    }
+
+    /// Stores `primitive` as the next version of `(robot_id, name)`; durable when it returns.
+    pub fn put(
+        &self,
+        robot_id: &str,
+        name: &str,
+        primitive: &dmp::Primitive,
+        now_unix_ms: i64,
+    ) -> Result<v1::PrimitiveRecord, ServerError> {
+        primitive.validate()?;
+        let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
+        tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
+        let record = {
+            let mut last = tx.open_table(LAST_VERSIONS).map_err(|e| storage("open last_versions", e))?;
+            let version = last
+                .get((robot_id, name))
+                .map_err(|e| storage("read last_versions", e))?
+                .map_or(0, |v| v.value())
+                + 1;
+            last.insert((robot_id, name), version).map_err(|e| storage("write last_versions", e))?;
+            let record = v1::PrimitiveRecord {
+                robot_id: robot_id.into(),
+                name: name.into(),
+                version,
+                created_unix_ms: now_unix_ms,
+                primitive: Some(primitive_to_proto(primitive)),
+            };
+            let mut prims = tx.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
+            prims
+                .insert((robot_id, name, version), record.encode_to_vec().as_slice())
+                .map_err(|e| storage("write primitive", e))?;
+            record
+        };
+        tx.commit().map_err(|e| storage("commit", e))?;
+        Ok(record)
+    }
+
+    /// One version of `(robot_id, name)`; `version` 0 means the latest.
+    pub fn get(&self, robot_id: &str, name: &str, version: u64) -> Result<v1::PrimitiveRecord, ServerError> {
+        let read = self.db.begin_read().map_err(|e| storage("begin read", e))?;
+        let prims = read.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
+        let found = if version == 0 {
+            let mut range = prims
+                .range((robot_id, name, 0)..=(robot_id, name, u64::MAX))
+                .map_err(|e| storage("read primitives", e))?;
+            range.next_back().transpose().map_err(|e| storage("read primitives", e))?.map(|(_, v)| v)
+        } else {
+            prims.get((robot_id, name, version)).map_err(|e| storage("read primitives", e))?
+        };
+        match found {
+            Some(bytes) => decode(bytes.value()),
+            None if version == 0 => {
+                Err(ServerError::NotFound(format!("robot `{robot_id}` has no primitive named `{name}`")))
+            }
+            None => Err(ServerError::NotFound(format!(
+                "robot `{robot_id}` has no version {version} of primitive `{name}`"
+            ))),
+        }
+    }
+
+    /// The latest version of each primitive of `robot_id`, sorted by name (empty when the robot has none).
+    pub fn list(&self, robot_id: &str) -> Result<Vec<v1::PrimitiveRecord>, ServerError> {
+        let read = self.db.begin_read().map_err(|e| storage("begin read", e))?;
+        let prims = read.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
+        let range = prims.range((robot_id, "", 0)..).map_err(|e| storage("read primitives", e))?;
+        // Keys are sorted by (robot, name, version): the last entry of each name is its latest version.
+        let mut out: Vec<v1::PrimitiveRecord> = Vec::new();
+        let mut pending: Option<(String, Vec<u8>)> = None;
+        for entry in range {
+            let (key, value) = entry.map_err(|e| storage("read primitives", e))?;
+            let (robot, name, _) = key.value();
+            if robot != robot_id {
+                break;
+            }
+            if let Some((n, bytes)) = pending.take_if(|(n, _)| n != name) {
+                debug_assert!(n.as_str() < name);
+                out.push(decode(&bytes)?);
+            }
+            pending = Some((name.to_string(), value.value().to_vec()));
+        }
+        if let Some((_, bytes)) = pending {
+            out.push(decode(&bytes)?);
+        }
+        Ok(out)
+    }
+
+    /// Deletes every version of `(robot_id, name)`; returns how many were removed (NotFound when none).
+    pub fn delete(&self, robot_id: &str, name: &str) -> Result<u64, ServerError> {
+        let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
+        tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
+        let removed = {
+            let mut prims = tx.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
+            let versions: Vec<u64> = prims
+                .range((robot_id, name, 0)..=(robot_id, name, u64::MAX))
+                .map_err(|e| storage("read primitives", e))?
+                .map(|entry| entry.map(|(k, _)| k.value().2))
+                .collect::<Result<_, _>>()
+                .map_err(|e| storage("read primitives", e))?;
+            for v in &versions {
+                prims.remove((robot_id, name, *v)).map_err(|e| storage("delete primitive", e))?;
+            }
+            versions.len() as u64
+        };
+        if removed == 0 {
+            // Dropping the transaction aborts it: nothing was written.
+            return Err(ServerError::NotFound(format!("robot `{robot_id}` has no primitive named `{name}`")));
+        }
+        tx.commit().map_err(|e| storage("commit", e))?;
+        Ok(removed)
+    }
+}
+
+fn decode(bytes: &[u8]) -> Result<v1::PrimitiveRecord, ServerError> {
+    v1::PrimitiveRecord::decode(bytes)
+        .map_err(|e| ServerError::Storage(format!("a stored record is corrupt: {e}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+
+    use super::*;
+    use crate::config::Limits;
+    use crate::convert::primitive_from_proto;
+
+    fn primitive(seed: f64) -> dmp::Primitive {
+        let mut p = dmp::Primitive::straight_line(
+            5,
+            4.0,
+            vec![1050.0, 900.0],
+            None,
+            1.0 + seed,
+            vec![0.0, 0.1 * seed],
+            vec![1.0, -2.0],
+        )
+        .unwrap();
+        // Values without a short decimal form, to catch any lossy step.
+        for (p, row) in p.weights.iter_mut().enumerate() {
+            for (i, w) in row.iter_mut().enumerate() {
+                *w = (seed + 1.0) * std::f64::consts::PI.powi(i as i32) / (3.0 + p as f64) - 1e-300;
+            }
+        }
+        p
+    }
+
+    #[test]
+    fn store_versions_increase_and_are_never_reused() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        assert_eq!(store.put("r1", "reach", &primitive(0.0), 10).unwrap().version, 1);
+        assert_eq!(store.put("r1", "reach", &primitive(1.0), 20).unwrap().version, 2);
+        assert_eq!(store.put("r1", "wave", &primitive(2.0), 30).unwrap().version, 1);
+        assert_eq!(store.put("r2", "reach", &primitive(3.0), 40).unwrap().version, 1);
+        let latest = store.get("r1", "reach", 0).unwrap();
+        assert_eq!((latest.version, latest.created_unix_ms), (2, 20));
+        assert_eq!(store.get("r1", "reach", 1).unwrap().created_unix_ms, 10);
+        let e = store.get("r1", "reach", 3).unwrap_err();
+        assert!(matches!(e, ServerError::NotFound(_)) && e.to_string().contains("version 3"), "{e}");
+        let e = store.get("r1", "nope", 0).unwrap_err();
+        assert!(matches!(e, ServerError::NotFound(_)) && e.to_string().contains("`nope`"), "{e}");
+
+        let list = store.list("r1").unwrap();
+        let got: Vec<_> = list.iter().map(|r| (r.name.as_str(), r.version)).collect();
+        assert_eq!(got, [("reach", 2), ("wave", 1)]);
+        assert!(store.list("r0").unwrap().is_empty());
+        assert_eq!(store.list("r2").unwrap().len(), 1);
+
+        // A name deleted and learned again does not reuse its old versions.
+        assert_eq!(store.delete("r1", "reach").unwrap(), 2);
+        assert_eq!(store.put("r1", "reach", &primitive(4.0), 50).unwrap().version, 3);
+    }
+
+    #[test]
+    fn store_keeps_everything_after_reopen() {
+        let dir = tempfile::tempdir().unwrap();
+        let data = dir.path().join("nested/data");
+        {
+            let store = Store::open(&data).unwrap();
+            store.put("r1", "a", &primitive(0.0), 1).unwrap();
+            store.put("r1", "a", &primitive(1.0), 2).unwrap();
+            store.put("r1", "b", &primitive(2.0), 3).unwrap();
+        }
+        let store = Store::open(&data).unwrap();
+        let list = store.list("r1").unwrap();
+        assert_eq!(
+            list.iter().map(|r| (r.name.as_str(), r.version)).collect::<Vec<_>>(),
+            [("a", 2), ("b", 1)]
+        );
+        assert_eq!(store.get("r1", "a", 1).unwrap().created_unix_ms, 1);
+        assert_eq!(store.put("r1", "a", &primitive(3.0), 4).unwrap().version, 3);
+    }
+
+    #[test]
+    fn store_delete_removes_every_version() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        for i in 0..3 {
+            store.put("r1", "a", &primitive(i as f64), i).unwrap();
+        }
+        store.put("r1", "ab", &primitive(9.0), 9).unwrap();
+        store.put("r1", "a.b", &primitive(9.0), 9).unwrap();
+        assert_eq!(store.delete("r1", "a").unwrap(), 3);
+        for v in 0..=3 {
+            assert!(matches!(store.get("r1", "a", v), Err(ServerError::NotFound(_))));
+        }
+        let names: Vec<_> = store.list("r1").unwrap().into_iter().map(|r| r.name).collect();
+        assert_eq!(names, ["a.b", "ab"], "neighbouring names are untouched");
+        let e = store.delete("r1", "a").unwrap_err();
+        assert!(matches!(e, ServerError::NotFound(_)), "{e}");
+        drop(store);
+        let store = Store::open(dir.path()).unwrap();
+        assert!(store.get("r1", "a", 0).is_err(), "the delete is durable");
+    }
+
+    #[test]
+    fn store_refuses_another_schema_version() {
+        let dir = tempfile::tempdir().unwrap();
+        {
+            let store = Store::open(dir.path()).unwrap();
+            store.put("r1", "a", &primitive(0.0), 1).unwrap();
+            let tx = store.db.begin_write().unwrap();
+            tx.open_table(META).unwrap().insert(SCHEMA_KEY, SCHEMA_VERSION + 1).unwrap();
+            tx.commit().unwrap();
+        }
+        let e = Store::open(dir.path()).unwrap_err();
+        let msg = e.to_string();
+        assert!(matches!(e, ServerError::Storage(_)), "{e}");
+        assert!(msg.contains("schema version 2") && msg.contains("reads version 1"), "{msg}");
+
+        // A redb file of someone else is refused too, and not modified.
+        let other = tempfile::tempdir().unwrap();
+        {
+            let db = Database::create(other.path().join(FILE_NAME)).unwrap();
+            let tx = db.begin_write().unwrap();
+            let t: TableDefinition<'_, u64, u64> = TableDefinition::new("theirs");
+            tx.open_table(t).unwrap().insert(1, 2).unwrap();
+            tx.commit().unwrap();
+        }
+        let e = Store::open(other.path()).unwrap_err();
+        assert!(e.to_string().contains("not a dmp-server store"), "{e}");
+
+        // So is a file that is not a database at all.
+        let junk = tempfile::tempdir().unwrap();
+        std::fs::write(junk.path().join(FILE_NAME), b"not a database, just some bytes").unwrap();
+        assert!(matches!(Store::open(junk.path()), Err(ServerError::Storage(_))));
+    }
+
+    #[test]
+    fn store_round_trips_a_primitive_bit_for_bit() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = primitive(0.123_456_789_012_345_67);
+        {
+            Store::open(dir.path()).unwrap().put("r1", "a", &p, 7).unwrap();
+        }
+        let rec = Store::open(dir.path()).unwrap().get("r1", "a", 1).unwrap();
+        assert_eq!(
+            (rec.robot_id.as_str(), rec.name.as_str(), rec.version, rec.created_unix_ms),
+            ("r1", "a", 1, 7)
+        );
+        let back = primitive_from_proto(rec.primitive.as_ref().unwrap(), &Limits::default()).unwrap();
+        assert_eq!(back, p);
+        let bits = |p: &dmp::Primitive| p.weights.iter().flatten().map(|w| w.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&back), bits(&p));
+    }
+
+    #[test]
+    fn store_refuses_an_invalid_primitive() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        let mut p = primitive(0.0);
+        p.tau = f64::NAN;
+        assert!(matches!(store.put("r1", "a", &p, 1), Err(ServerError::InvalidArgument { .. })));
+        assert!(store.list("r1").unwrap().is_empty());
+    }
+
+    #[test]
+    fn store_second_open_of_the_same_directory_fails() {
+        let dir = tempfile::tempdir().unwrap();
+        let _store = Store::open(dir.path()).unwrap();
+        let e = Store::open(dir.path()).unwrap_err();
+        assert!(e.to_string().contains("already open"), "{e}");
+    }
+
+    /// Set in the child process of [`store_survives_kill_9`]: the data directory it writes to.
+    const KILL_CHILD_DIR: &str = "DMP_SERVER_STORE_KILL_CHILD_DIR";
+    /// Primitives the child tries to store.
+    const KILL_N: u64 = 100_000;
+    /// Lines the parent reads before it kills the child.
+    const KILL_AFTER: usize = 20;
+
+    /// The child of [`store_survives_kill_9`]; does nothing in a normal test run.
+    #[test]
+    fn store_kill_9_child() {
+        let Some(dir) = std::env::var_os(KILL_CHILD_DIR) else { return };
+        let store = Store::open(dir).unwrap();
+        let p = primitive(1.0);
+        for i in 0..KILL_N {
+            let rec = store.put("robot", &format!("p{i:04}"), &p, i as i64).unwrap();
+            // Printed only once `put` has returned: each line is a promise that the record is durable.
+            println!("stored p{i:04} {}", rec.version);
+        }
+        loop {
+            std::thread::sleep(std::time::Duration::from_secs(1));
+        }
+    }
+
+    /// Every primitive whose `put` returned is in the store after the writing process is killed with SIGKILL in the
+    /// middle of its writes.
+    #[test]
+    fn store_survives_kill_9() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut child = Command::new(std::env::current_exe().unwrap())
+            .args(["store::tests::store_kill_9_child", "--exact", "--nocapture", "--test-threads=1"])
+            .env(KILL_CHILD_DIR, dir.path())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+        let mut stored = Vec::new();
+        while stored.len() < KILL_AFTER {
+            let line = lines.next().expect("the child ended early").unwrap();
+            if let Some(rest) = line.strip_prefix("stored ") {
+                stored.push(rest.split(' ').next().unwrap().to_string());
+            }
+        }
+        child.kill().unwrap(); // SIGKILL on Unix: no destructor, no flush, no redb shutdown.
+        child.wait().unwrap();
+        // Lines printed before the kill were promises too.
+        for line in lines {
+            if let Some(rest) = line.unwrap().strip_prefix("stored ") {
+                stored.push(rest.split(' ').next().unwrap().to_string());
+            }
+        }
+        assert!(
+            stored.len() < KILL_N as usize,
+            "the child finished before the kill: the test proves nothing"
+        );
+
+        let store = Store::open(dir.path()).expect("the store opens after a kill -9");
+        let names: Vec<String> = store.list("robot").unwrap().into_iter().map(|r| r.name).collect();
+        for name in &stored {
+            assert!(names.contains(name), "{name} was acknowledged but is missing after kill -9");
+            let rec = store.get("robot", name, 1).unwrap();
+            assert_eq!(
+                primitive_from_proto(rec.primitive.as_ref().unwrap(), &Limits::default()).unwrap(),
+                primitive(1.0)
+            );
+        }
+        // At most the one put in flight at the kill may have committed without being acknowledged.
+        assert!(names.len() <= stored.len() + 1, "{} stored, {} acknowledged", names.len(), stored.len());
+    }
+}

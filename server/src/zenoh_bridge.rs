@@ -1,0 +1,605 @@
+//! The server's Zenoh side: opening the session from [`ZenohConfig`], and the bridge that feeds the scene.
+//!
+//! | key | payload | effect |
+//! | --- | --- | --- |
+//! | `dmp/<cell>/obstacles/<obstacle-id>` put | `dmp.v1.Obstacle` (encoding `application/protobuf`) or the JSON obstacle of the scenario format, plus `ttl_s` and `margin` | adds or replaces the obstacle |
+//! | `dmp/<cell>/obstacles/<obstacle-id>` delete | | removes it |
+//! | `dmp/<cell>/robots/<robot-id>/state` put | `dmp.v1.RobotState` (protobuf) | records the robot, a moving obstacle for the others |
+//! | `dmp/<cell>/robots/<robot-id>/state` delete | | forgets the robot |
+//!
+//! A payload that cannot be decoded or validated is logged at warn with its key and the reason, counted
+//! ([`ZenohBridge::malformed_payloads`]) and changes nothing else. Samples are handled in Zenoh's callbacks: decoding
+//! and validating one obstacle or robot state takes microseconds and never awaits.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
+
+use dmp_proto::{codec, v1};
+use tokio::task::JoinHandle;
+use tokio_util::sync::{CancellationToken, DropGuard};
+use tracing::{debug, info, warn};
+use zenoh::bytes::Encoding;
+use zenoh::config::EndPoint;
+use zenoh::pubsub::Subscriber;
+use zenoh::sample::{Locality, Sample, SampleKind};
+use zenoh::{Session, Wait};
+
+use crate::config::ZenohConfig;
+use crate::convert::{check_name, obstacle_from_json};
+use crate::error::ServerError;
+use crate::robots::check_robot_state;
+use crate::scene::{SceneState, now_unix_s};
+
+/// How long opening a session waits for the `connect` endpoints before it fails (only when some are given).
+pub const CONNECT_TIMEOUT_MS: u64 = 2000;
+
+/// Period of the reaper that removes obstacles whose time to live has passed.
+pub const REAP_PERIOD: Duration = Duration::from_millis(100);
+
+/// Largest obstacle or robot-state payload accepted (larger ones are refused as malformed).
+pub const MAX_PAYLOAD_BYTES: usize = 1 << 20;
+
+/// The key of one obstacle: `dmp/<cell>/obstacles/<obstacle-id>`.
+pub fn obstacle_key(cell: &str, obstacle_id: &str) -> String {
+    format!("dmp/{cell}/obstacles/{obstacle_id}")
+}
+
+/// The key of one robot's state: `dmp/<cell>/robots/<robot-id>/state`.
+pub fn robot_state_key(cell: &str, robot_id: &str) -> String {
+    format!("dmp/{cell}/robots/{robot_id}/state")
+}
+
+/// The Zenoh configuration of [`ZenohConfig`]: mode, listen and connect endpoints, scouting.
+///
+/// Gossip scouting follows the multicast switch: with it off the session talks only to the endpoints it is given
+/// (and to those that connect to it). With `connect` endpoints, opening waits at most [`CONNECT_TIMEOUT_MS`] for
+/// them and fails if they cannot be reached, instead of retrying forever in the background; without, Zenoh's
+/// defaults apply.
+pub fn session_config(cfg: &ZenohConfig) -> Result<zenoh::Config, ServerError> {
+    if !matches!(cfg.mode.as_str(), "peer" | "client") {
+        return Err(ServerError::invalid(
+            "zenoh.mode",
+            format!("must be `peer` or `client`, found `{}`", cfg.mode),
+        ));
+    }
+    let endpoints = |field: &str, list: &[String]| -> Result<String, ServerError> {
+        for (i, e) in list.iter().enumerate() {
+            e.parse::<EndPoint>()
+                .map_err(|err| ServerError::invalid(format!("zenoh.{field}[{i}]"), err.to_string()))?;
+        }
+        Ok(serde_json::to_string(list).expect("a list of strings is JSON"))
+    };
+    let mut c = zenoh::Config::default();
+    let mut set = |key: &str, value: String| -> Result<(), ServerError> {
+        c.insert_json5(key, &value)
+            .map_err(|e| ServerError::invalid(format!("zenoh config {key}"), e.to_string()))
+    };
+    set("mode", serde_json::to_string(&cfg.mode).expect("a string is JSON"))?;
+    if !cfg.listen.is_empty() {
+        set("listen/endpoints", endpoints("listen", &cfg.listen)?)?;
+    }
+    if !cfg.connect.is_empty() {
+        set("connect/endpoints", endpoints("connect", &cfg.connect)?)?;
+        set("connect/timeout_ms", CONNECT_TIMEOUT_MS.to_string())?;
+        set("connect/exit_on_failure", "true".into())?;
+    }
+    set("scouting/multicast/enabled", cfg.multicast_scouting.to_string())?;
+    set("scouting/gossip/enabled", cfg.multicast_scouting.to_string())?;
+    Ok(c)
+}
+
+/// Opens the Zenoh session of [`ZenohConfig`] (see [`session_config`]). Fails fast when a `connect` endpoint
+/// cannot be reached.
+pub async fn open_session(cfg: &ZenohConfig) -> Result<Session, ServerError> {
+    let config = session_config(cfg)?;
+    let session = zenoh::open(config)
+        .await
+        .map_err(|e| ServerError::FailedPrecondition(format!("zenoh: cannot open the session: {e}")))?;
+    info!(
+        zid = %session.zid(),
+        mode = %cfg.mode,
+        locators = ?locators(&session).await,
+        connect = ?cfg.connect,
+        multicast_scouting = cfg.multicast_scouting,
+        "zenoh session open"
+    );
+    Ok(session)
+}
+
+/// The endpoints the session really listens on (`tcp/127.0.0.1:0` resolved to its port), for peers to connect to.
+pub async fn locators(session: &Session) -> Vec<String> {
+    session.info().locators().await.into_iter().map(|l| l.to_string()).collect()
+}
+
+/// Decodes an obstacle payload whose key names `id_from_key`.
+///
+/// Encoding `application/protobuf`: a `dmp.v1.Obstacle`; a JSON encoding: the JSON obstacle
+/// ([`obstacle_from_json`]); any other (or none): JSON, then protobuf, except that a payload starting with `{` is
+/// only JSON (so that bad JSON is reported as such). An id in the payload must equal the key's.
+pub fn decode_obstacle(
+    encoding: &Encoding,
+    bytes: &[u8],
+    id_from_key: &str,
+) -> Result<v1::Obstacle, ServerError> {
+    check_size(bytes)?;
+    let protobuf = |bytes: &[u8]| {
+        codec::decode::<v1::Obstacle>(bytes)
+            .map_err(|e| ServerError::invalid("payload", format!("not a protobuf dmp.v1.Obstacle: {e}")))
+    };
+    // The encoding's name without its schema (`application/protobuf;dmp.v1.Obstacle`).
+    let name = std::borrow::Cow::<'static, str>::from(encoding);
+    let mut o = match name.split(';').next().unwrap_or_default() {
+        codec::PROTOBUF_ENCODING => protobuf(bytes)?,
+        "application/json" | "text/json" => obstacle_from_json(bytes, id_from_key)?,
+        _ => match obstacle_from_json(bytes, id_from_key) {
+            Ok(o) => o,
+            Err(e) if bytes.trim_ascii_start().starts_with(b"{") => return Err(e),
+            Err(json) => codec::decode::<v1::Obstacle>(bytes).map_err(|pb| {
+                ServerError::invalid(
+                    "payload",
+                    format!("neither a JSON obstacle ({json}) nor a protobuf dmp.v1.Obstacle ({pb})"),
+                )
+            })?,
+        },
+    };
+    if o.id.is_empty() {
+        o.id = id_from_key.to_owned();
+    } else if o.id != id_from_key {
+        return Err(ServerError::invalid("id", format!("`{}` differs from the key's `{id_from_key}`", o.id)));
+    }
+    Ok(o)
+}
+
+/// Decodes a robot-state payload (protobuf `dmp.v1.RobotState`) whose key names `id_from_key`, and validates it
+/// ([`check_robot_state`]); returns it with its footprint. An empty `robot_id` takes the key's.
+pub fn decode_robot_state(
+    bytes: &[u8],
+    id_from_key: &str,
+) -> Result<(v1::RobotState, Option<dmp::Shape>), ServerError> {
+    check_size(bytes)?;
+    let mut state = codec::decode::<v1::RobotState>(bytes)
+        .map_err(|e| ServerError::invalid("payload", format!("not a protobuf dmp.v1.RobotState: {e}")))?;
+    if state.robot_id.is_empty() {
+        state.robot_id = id_from_key.to_owned();
+    } else if state.robot_id != id_from_key {
+        return Err(ServerError::invalid(
+            "robot_id",
+            format!("`{}` differs from the key's `{id_from_key}`", state.robot_id),
+        ));
+    }
+    let footprint = check_robot_state(&state)?;
+    Ok((state, footprint))
+}
+
+fn check_size(bytes: &[u8]) -> Result<(), ServerError> {
+    if bytes.len() > MAX_PAYLOAD_BYTES {
+        return Err(ServerError::invalid(
+            "payload",
+            format!("{} bytes, more than the limit of {MAX_PAYLOAD_BYTES}", bytes.len()),
+        ));
+    }
+    Ok(())
+}
+
+/// Spawns the task that removes expired obstacles every [`REAP_PERIOD`] until `stop` is cancelled. The bridge
+/// starts one; without Zenoh, start one for the time to live of gRPC puts.
+pub fn spawn_reaper(scene: SceneState, stop: CancellationToken) -> JoinHandle<()> {
+    tokio::spawn(async move {
+        let mut tick = tokio::time::interval(REAP_PERIOD);
+        tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        loop {
+            tokio::select! {
+                _ = stop.cancelled() => break,
+                _ = tick.tick() => {
+                    let n = scene.expire(now_unix_s());
+                    if n > 0 {
+                        debug!(expired = n, version = scene.snapshot().version, "obstacles expired");
+                    }
+                }
+            }
+        }
+    })
+}
+
+/// What the callbacks share: the scene and the counter of refused payloads.
+#[derive(Debug, Clone)]
+struct Ingest {
+    scene: SceneState,
+    malformed: Arc<AtomicU64>,
+}
+
+impl Ingest {
+    fn obstacle(&self, sample: &Sample) {
+        if let Err(e) = self.try_obstacle(sample) {
+            self.refuse(sample, e);
+        }
+    }
+
+    fn try_obstacle(&self, sample: &Sample) -> Result<(), ServerError> {
+        let key = sample.key_expr().as_str();
+        let id = key.rsplit('/').next().unwrap_or_default();
+        match sample.kind() {
+            SampleKind::Delete => {
+                let (version, existed) = self.scene.delete(id);
+                debug!(key, existed, version, "obstacle deleted over zenoh");
+            }
+            SampleKind::Put => {
+                let bytes = sample.payload().to_bytes();
+                let o = decode_obstacle(sample.encoding(), &bytes, id)?;
+                let version = self.scene.put(o, now_unix_s())?;
+                debug!(key, version, "obstacle put over zenoh");
+            }
+        }
+        Ok(())
+    }
+
+    fn robot(&self, sample: &Sample) {
+        if let Err(e) = self.try_robot(sample) {
+            self.refuse(sample, e);
+        }
+    }
+
+    fn try_robot(&self, sample: &Sample) -> Result<(), ServerError> {
+        let key = sample.key_expr().as_str();
+        let id = key.strip_suffix("/state").and_then(|k| k.rsplit('/').next()).unwrap_or_default();
+        match sample.kind() {
+            SampleKind::Delete => {
+                self.scene.remove_robot(id);
+                debug!(key, "robot retired over zenoh");
+            }
+            SampleKind::Put => {
+                let (state, footprint) = decode_robot_state(&sample.payload().to_bytes(), id)?;
+                self.scene.update_robot(state, footprint);
+            }
+        }
+        Ok(())
+    }
+
+    fn refuse(&self, sample: &Sample, reason: ServerError) {
+        let count = self.malformed.fetch_add(1, Ordering::Relaxed) + 1;
+        warn!(key = %sample.key_expr(), %reason, malformed_payloads = count, "zenoh payload refused");
+    }
+}
+
+/// The subscribers that feed the scene from Zenoh, and the time-to-live reaper.
+#[derive(Debug)]
+pub struct ZenohBridge {
+    obstacles: Subscriber<()>,
+    robots: Subscriber<()>,
+    reaper: JoinHandle<()>,
+    /// Cancels the reaper when the bridge is closed or dropped (it also stops on the server's shutdown).
+    stop: DropGuard,
+    malformed: Arc<AtomicU64>,
+}
+
+impl ZenohBridge {
+    /// Subscribes to the obstacles and robot states of `cell` on `session` and starts the reaper, which stops on
+    /// `shutdown` or [`ZenohBridge::close`]. The robot states this session publishes itself ([`crate::robots`]) are
+    /// not received back: the publisher records them locally.
+    pub async fn start(
+        session: Session,
+        cell: impl AsRef<str>,
+        scene: SceneState,
+        shutdown: CancellationToken,
+    ) -> Result<Self, ServerError> {
+        let cell = cell.as_ref();
+        check_name("cell", cell)?;
+        let malformed = Arc::new(AtomicU64::new(0));
+        let ingest = Ingest { scene: scene.clone(), malformed: malformed.clone() };
+        let zenoh_err = |e: zenoh::Error| ServerError::Internal(format!("zenoh: cannot subscribe: {e}"));
+
+        let obstacles_key = obstacle_key(cell, "*");
+        let i = ingest.clone();
+        let obstacles = session
+            .declare_subscriber(&obstacles_key)
+            .callback(move |sample| i.obstacle(&sample))
+            .await
+            .map_err(zenoh_err)?;
+        let robots_key = robot_state_key(cell, "*");
+        let robots = session
+            .declare_subscriber(&robots_key)
+            .callback(move |sample| ingest.robot(&sample))
+            .allowed_origin(Locality::Remote)
+            .await
+            .map_err(zenoh_err)?;
+
+        let stop = shutdown.child_token();
+        let reaper = spawn_reaper(scene, stop.clone());
+        info!(obstacles = %obstacles_key, robots = %robots_key, "zenoh bridge subscribed");
+        Ok(Self { obstacles, robots, reaper, stop: stop.drop_guard(), malformed })
+    }
+
+    /// How many payloads were refused so far (malformed, invalid, or over a limit).
+    pub fn malformed_payloads(&self) -> u64 {
+        self.malformed.load(Ordering::Relaxed)
+    }
+
+    /// The counter behind [`ZenohBridge::malformed_payloads`], to read after the bridge is gone.
+    pub fn malformed_counter(&self) -> Arc<AtomicU64> {
+        self.malformed.clone()
+    }
+
+    /// Undeclares the subscribers (waiting for running callbacks, so the scene changes no more) and stops the
+    /// reaper. The session can be closed afterwards.
+    pub async fn close(self) {
+        let Self { obstacles, robots, reaper, stop, malformed: _ } = self;
+        drop(stop);
+        let undeclared = tokio::task::spawn_blocking(move || {
+            for s in [obstacles, robots] {
+                let key = s.key_expr().to_string();
+                if let Err(e) = s.undeclare().wait_callbacks().wait() {
+                    debug!(key, error = %e, "zenoh subscriber undeclare failed (session closed?)");
+                }
+            }
+        })
+        .await;
+        if let Err(e) = undeclared {
+            warn!(error = %e, "zenoh subscriber undeclare task failed");
+        }
+        if let Err(e) = reaper.await {
+            warn!(error = %e, "ttl reaper task failed");
+        }
+        debug!("zenoh bridge closed");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::future::IntoFuture;
+    use tokio::sync::watch;
+    use zenoh::pubsub::Publisher;
+
+    const T: Duration = Duration::from_secs(10);
+
+    async fn within<F: IntoFuture>(what: &str, f: F) -> F::Output {
+        tokio::time::timeout(T, f).await.unwrap_or_else(|_| panic!("timed out: {what}"))
+    }
+
+    fn loopback(connect: Vec<String>) -> ZenohConfig {
+        ZenohConfig {
+            disabled: false,
+            mode: "peer".into(),
+            listen: vec!["tcp/127.0.0.1:0".into()],
+            connect,
+            multicast_scouting: false,
+        }
+    }
+
+    /// A bridge on its own session, and a second session connected to it.
+    struct Pair {
+        server: Session,
+        client: Session,
+        scene: SceneState,
+        bridge: ZenohBridge,
+        shutdown: CancellationToken,
+    }
+
+    async fn pair(cell: &str) -> Pair {
+        let server = within("open server", open_session(&loopback(vec![]))).await.unwrap();
+        let scene = SceneState::new(100);
+        let shutdown = CancellationToken::new();
+        let bridge =
+            within("bridge", ZenohBridge::start(server.clone(), cell, scene.clone(), shutdown.clone()))
+                .await
+                .unwrap();
+        let client = within("open client", open_session(&loopback(locators(&server).await))).await.unwrap();
+        Pair { server, client, scene, bridge, shutdown }
+    }
+
+    impl Pair {
+        async fn close(self) {
+            self.shutdown.cancel();
+            within("bridge close", self.bridge.close()).await;
+            within("client close", self.client.close()).await.unwrap();
+            within("server close", self.server.close()).await.unwrap();
+        }
+    }
+
+    /// Declares a publisher and waits until it knows a subscriber (a put sent before is lost).
+    async fn matched_publisher(session: &Session, key: String) -> Publisher<'static> {
+        let p = within("declare publisher", session.declare_publisher(key)).await.unwrap();
+        let listener = within("matching listener", p.matching_listener()).await.unwrap();
+        if !within("matching status", p.matching_status()).await.unwrap().matching() {
+            while !within("matching", listener.recv_async()).await.unwrap().matching() {}
+        }
+        p
+    }
+
+    /// Waits for the next scene version.
+    async fn next(
+        rx: &mut watch::Receiver<Arc<crate::scene::SceneSnapshot>>,
+    ) -> Arc<crate::scene::SceneSnapshot> {
+        within("scene change", rx.changed()).await.unwrap();
+        rx.borrow_and_update().clone()
+    }
+
+    fn ball(id: &str, center: [f64; 3]) -> v1::Obstacle {
+        v1::Obstacle {
+            id: id.into(),
+            shape: Some(v1::obstacle::Shape::Solid(v1::SolidPrimitive { r#type: 2, dimensions: vec![0.1] })),
+            center: center.to_vec(),
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn config_is_built_and_checked() {
+        let c = session_config(&loopback(vec!["tcp/127.0.0.1:7447".into()])).unwrap();
+        let json = format!("{c}");
+        assert!(json.contains("tcp/127.0.0.1:7447"), "{json}");
+        let mut bad = loopback(vec![]);
+        bad.mode = "router".into();
+        assert!(session_config(&bad).unwrap_err().to_string().starts_with("zenoh.mode"));
+        let bad = loopback(vec!["tcp/127.0.0.1:1".into(), "not an endpoint".into()]);
+        assert!(session_config(&bad).unwrap_err().to_string().starts_with("zenoh.connect[1]"));
+    }
+
+    #[test]
+    fn payloads_are_decoded_by_encoding() {
+        let json = br#"{"center": [0, 0], "semi_axes": [0.2, 0.1], "ttl_s": 1}"#;
+        let o = decode_obstacle(&Encoding::APPLICATION_JSON, json, "a").unwrap();
+        assert_eq!((o.id.as_str(), o.ttl_s), ("a", 1.0));
+        let o = decode_obstacle(&Encoding::default(), json, "a").unwrap();
+        assert_eq!(o.id, "a");
+        let pb = codec::encode(&ball("b", [0.0; 3]));
+        assert_eq!(decode_obstacle(&Encoding::APPLICATION_PROTOBUF, &pb, "b").unwrap().id, "b");
+        assert_eq!(decode_obstacle(&Encoding::default(), &pb, "b").unwrap().id, "b");
+        let e = decode_obstacle(&Encoding::APPLICATION_PROTOBUF, &pb, "c").unwrap_err();
+        assert!(e.to_string().starts_with("id:"), "{e}");
+        let e = decode_obstacle(&Encoding::default(), b"{\"center\": [0,", "a").unwrap_err();
+        assert!(e.to_string().contains("EOF"), "bad JSON is reported as JSON: {e}");
+        assert!(decode_obstacle(&Encoding::APPLICATION_PROTOBUF, json, "a").is_err());
+        assert!(decode_obstacle(&Encoding::default(), &vec![b' '; MAX_PAYLOAD_BYTES + 1], "a").is_err());
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn a_bad_connect_endpoint_fails_fast() {
+        // Port 1 on loopback: nothing listens there.
+        let t0 = std::time::Instant::now();
+        let e = within("open", open_session(&loopback(vec!["tcp/127.0.0.1:1".into()]))).await.unwrap_err();
+        assert!(matches!(e, ServerError::FailedPrecondition(_)), "{e}");
+        assert!(t0.elapsed() < Duration::from_millis(CONNECT_TIMEOUT_MS + 2000), "{:?}", t0.elapsed());
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn zenoh_obstacles_are_put_replaced_deleted_and_expire() {
+        let p = pair("cell1").await;
+        let mut rx = p.scene.subscribe();
+
+        let json = matched_publisher(&p.client, obstacle_key("cell1", "box1")).await;
+        let body = r#"{"center": [0.5, 0.5, 0.0], "semi_axes": [0.1, 0.2, 0.3], "exponents": [2, 2, 2]}"#;
+        within("put", json.put(body).encoding(Encoding::APPLICATION_JSON)).await.unwrap();
+        let s = next(&mut rx).await;
+        assert_eq!(s.obstacles["box1"].proto.center, vec![0.5, 0.5, 0.0]);
+
+        // The JSON of an unset encoding, a protobuf replacement, then a protobuf of another obstacle.
+        within("put", json.put(body.replace("0.5, 0.5", "0.7, 0.5"))).await.unwrap();
+        let s = next(&mut rx).await;
+        assert_eq!(s.obstacles["box1"].proto.center, vec![0.7, 0.5, 0.0]);
+        let pb = codec::encode(&ball("", [1.0, 2.0, 3.0]));
+        within("put", json.put(pb).encoding(Encoding::APPLICATION_PROTOBUF)).await.unwrap();
+        let s = next(&mut rx).await;
+        assert_eq!(s.obstacles["box1"].proto.center, vec![1.0, 2.0, 3.0]);
+        assert!(matches!(s.obstacles["box1"].proto.shape, Some(v1::obstacle::Shape::Solid(_))));
+        let key = obstacle_key("cell1", "ball");
+        let pb = codec::encode(&ball("ball", [0.0; 3]));
+        within("put", p.client.put(&key, pb).encoding(Encoding::APPLICATION_PROTOBUF)).await.unwrap();
+        let s = next(&mut rx).await;
+        assert_eq!(s.obstacles.keys().collect::<Vec<_>>(), ["ball", "box1"]);
+
+        within("delete", json.delete()).await.unwrap();
+        let s = next(&mut rx).await;
+        assert_eq!(s.obstacles.keys().collect::<Vec<_>>(), ["ball"]);
+
+        // A time to live: the put, then the reaper's removal.
+        let ttl = r#"{"center": [0, 0, 0], "semi_axes": [0.1, 0.1, 0.1], "ttl_s": 0.2, "margin": 0.05}"#;
+        within("put", p.client.put(obstacle_key("cell1", "brief"), ttl)).await.unwrap();
+        let s = next(&mut rx).await;
+        assert!(s.obstacles.contains_key("brief"));
+        let s = next(&mut rx).await;
+        assert_eq!(s.obstacles.keys().collect::<Vec<_>>(), ["ball"], "expired");
+        assert_eq!(p.bridge.malformed_payloads(), 0);
+        p.close().await;
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn malformed_payloads_are_counted_and_change_nothing() {
+        // `cargo test malformed -- --nocapture` shows each refusal and its reason.
+        let _ = tracing_subscriber::fmt().with_test_writer().with_env_filter("dmp_server=warn").try_init();
+        let p = pair("cell2").await;
+        let mut rx = p.scene.subscribe();
+        let publisher = matched_publisher(&p.client, obstacle_key("cell2", "x")).await;
+        let good = r#"{"center": [0, 0], "semi_axes": [0.1, 0.1]}"#;
+        within("put", publisher.put(good)).await.unwrap();
+        let before = next(&mut rx).await;
+
+        let bad: [(&str, &[u8], Encoding); 8] = [
+            ("x", b"{\"center\": [0, 0], \"semi_axes\": [0.1,", Encoding::default()),
+            ("x", br#"{"center": [0, 0], "semi_axes": [-0.1, 0.1]}"#, Encoding::APPLICATION_JSON),
+            ("x", br#"{"center": [1e999, 0], "semi_axes": [0.1, 0.1]}"#, Encoding::default()),
+            ("x", br#"{"center": [0, 0, 0], "semi_axes": [0.1, 0.1]}"#, Encoding::default()),
+            ("x", br#"{"id": "y", "center": [0, 0], "semi_axes": [0.1, 0.1]}"#, Encoding::default()),
+            ("x", b"\xff\xff\xff\xff garbage", Encoding::APPLICATION_PROTOBUF),
+            ("x", b"\x08\x96\x01", Encoding::default()),
+            ("z", b"not json", Encoding::TEXT_PLAIN),
+        ];
+        for (id, payload, encoding) in bad.clone() {
+            let key = obstacle_key("cell2", id);
+            within("put", p.client.put(key, payload).encoding(encoding)).await.unwrap();
+        }
+        let mut nan = ball("x", [f64::NAN, 0.0, 0.0]);
+        within("put", publisher.put(codec::encode(&nan)).encoding(Encoding::APPLICATION_PROTOBUF))
+            .await
+            .unwrap();
+        nan.center = vec![0.0; 3];
+        nan.margin = f64::INFINITY;
+        within("put", publisher.put(codec::encode(&nan)).encoding(Encoding::APPLICATION_PROTOBUF))
+            .await
+            .unwrap();
+        let robot = v1::RobotState { robot_id: "r1".into(), position: vec![f64::NAN], ..Default::default() };
+        within("put", p.client.put(robot_state_key("cell2", "r1"), codec::encode(&robot))).await.unwrap();
+        within("put", p.client.put(robot_state_key("cell2", "r2"), "garbage")).await.unwrap();
+
+        // A sentinel sent after them on the same session: when it arrives, every one before it was handled.
+        within("put", p.client.put(obstacle_key("cell2", "sentinel"), good)).await.unwrap();
+        let after = next(&mut rx).await;
+        assert_eq!(p.bridge.malformed_payloads(), bad.len() as u64 + 4);
+        assert_eq!(after.version, before.version + 1, "only the sentinel changed the scene");
+        assert_eq!(after.obstacles.keys().collect::<Vec<_>>(), ["sentinel", "x"]);
+        assert_eq!(after.obstacles["x"].proto, before.obstacles["x"].proto);
+        assert!(p.scene.other_robots("", now_unix_s(), 1e9).is_empty());
+        p.close().await;
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn robot_states_arrive_and_leave() {
+        let p = pair("cell3").await;
+        let mut rx = p.scene.subscribe();
+        let publisher = matched_publisher(&p.client, robot_state_key("cell3", "r1")).await;
+        let state = v1::RobotState {
+            robot_id: "r1".into(),
+            stamp_unix_s: now_unix_s(),
+            position: vec![0.1, 0.2, 0.3],
+            velocity: vec![1.0, 0.0, 0.0],
+            footprint: Some(v1::Superquadric { semi_axes: vec![0.1; 3], exponents: vec![] }),
+        };
+        within("put", publisher.put(codec::encode(&state)).encoding(Encoding::APPLICATION_PROTOBUF))
+            .await
+            .unwrap();
+        // An id-less state takes the key's.
+        let r2 = v1::RobotState { robot_id: String::new(), position: vec![0.0; 3], ..state.clone() };
+        within("put", p.client.put(robot_state_key("cell3", "r2"), codec::encode(&r2))).await.unwrap();
+        // Robot states do not wake the scene's readers: a sentinel obstacle sent after them does.
+        let sentinel = r#"{"center": [0, 0], "semi_axes": [0.1, 0.1]}"#;
+        within("put", p.client.put(obstacle_key("cell3", "s"), sentinel)).await.unwrap();
+        next(&mut rx).await;
+        let others = p.scene.other_robots("r2", now_unix_s(), 60.0);
+        assert_eq!(others.len(), 1);
+        assert_eq!(others[0].state, state);
+        assert!(others[0].footprint.is_some());
+        assert_eq!(p.scene.other_robots("r1", now_unix_s(), 60.0)[0].state.robot_id, "r2");
+
+        within("delete", publisher.delete()).await.unwrap();
+        within("delete", p.client.delete(obstacle_key("cell3", "s"))).await.unwrap();
+        next(&mut rx).await;
+        let others = p.scene.other_robots("", now_unix_s(), 60.0);
+        assert_eq!(others.iter().map(|r| r.state.robot_id.as_str()).collect::<Vec<_>>(), ["r2"]);
+        assert_eq!(p.bridge.malformed_payloads(), 0);
+        p.close().await;
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn the_reaper_stops_on_shutdown() {
+        let p = pair("cell4").await;
+        p.shutdown.cancel();
+        within("reaper", async {
+            while !p.bridge.reaper.is_finished() {
+                tokio::task::yield_now().await;
+            }
+        })
+        .await;
+        p.close().await;
+    }
+}
