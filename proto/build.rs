@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use prost::Message;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let files = ["dmp/v1/types.proto", "dmp/v1/primitives.proto", "dmp/v1/scene.proto", "dmp/v1/motion.proto"];
+    let files =
+        ["dmp/v1/types.proto", "dmp/v1/primitives.proto", "dmp/v1/scene.proto", "dmp/v1/motion.proto"];
     for f in &files {
         println!("cargo:rerun-if-changed={f}");
     }

@@ -329,14 +329,18 @@ pub async fn run_async(cli: Cli) -> Result<String, ClientError> {
         Command::Scenario(ScenarioCommand::Bench { file, repeat }) => bench(file, *repeat),
         Command::Learn(a) => remote::learn(&connect().await?, a).await,
         Command::List { robot } => remote::list(&connect().await?, robot).await,
-        Command::Show { robot, name, version } => remote::show(&connect().await?, robot, name, *version).await,
+        Command::Show { robot, name, version } => {
+            remote::show(&connect().await?, robot, name, *version).await
+        }
         Command::Delete { robot, name } => remote::delete(&connect().await?, robot, name).await,
         Command::Plan(a) => remote::plan(&connect().await?, a).await,
         Command::Stream(a) => remote::stream(&connect().await?, a).await,
         Command::Scene(SceneCommand::Put { file, via, ttl }) => {
             remote::scene_put(&server, &zenoh, file, *via, *ttl).await
         }
-        Command::Scene(SceneCommand::Delete { id, via }) => remote::scene_delete(&server, &zenoh, id, *via).await,
+        Command::Scene(SceneCommand::Delete { id, via }) => {
+            remote::scene_delete(&server, &zenoh, id, *via).await
+        }
         Command::Scene(SceneCommand::List) => remote::scene_list(&connect().await?).await,
     }
 }
@@ -402,7 +406,19 @@ mod tests {
 
     #[test]
     fn learn_takes_exactly_one_source() {
-        let c = parse(&["learn", "--robot", "r", "--name", "p", "--csv", "d.csv", "--k", "100,200", "--n-basis", "20"]);
+        let c = parse(&[
+            "learn",
+            "--robot",
+            "r",
+            "--name",
+            "p",
+            "--csv",
+            "d.csv",
+            "--k",
+            "100,200",
+            "--n-basis",
+            "20",
+        ]);
         let Command::Learn(a) = c.command else { panic!() };
         assert_eq!(a.source.csv.as_deref(), Some(Path::new("d.csv")));
         assert_eq!(a.k, Some(Vector(vec![100.0, 200.0])));
@@ -413,13 +429,18 @@ mod tests {
         refused(&["learn", "--robot", "r", "--name", "p"]);
         refused(&["learn", "--robot", "r", "--name", "p", "--csv", "a", "--scenario", "b"]);
         assert!(refused(&["learn", "--name", "p", "--csv", "a"]).contains("--robot"));
-        assert!(refused(&["learn", "--robot", "r", "--name", "p", "--csv", "a", "--alpha", "-1"]).contains("--alpha"));
+        assert!(
+            refused(&["learn", "--robot", "r", "--name", "p", "--csv", "a", "--alpha", "-1"])
+                .contains("--alpha")
+        );
     }
 
     #[test]
     fn list_show_delete() {
         assert!(matches!(parse(&["list", "--robot", "r"]).command, Command::List { .. }));
-        let Command::Show { version, .. } = parse(&["show", "--robot", "r", "--name", "p"]).command else { panic!() };
+        let Command::Show { version, .. } = parse(&["show", "--robot", "r", "--name", "p"]).command else {
+            panic!()
+        };
         assert_eq!(version, 0);
         let Command::Show { version, .. } =
             parse(&["show", "--robot", "r", "--name", "p", "--version", "3"]).command
@@ -435,8 +456,26 @@ mod tests {
     #[test]
     fn plan_parses_vectors_with_negative_entries_and_avoidance() {
         let c = parse(&[
-            "plan", "--robot", "r", "--name", "p", "--goal", "-1,0.5", "--start", "0,0", "--tau", "2", "--duration",
-            "3", "--dt", "0.002", "--out", "o", "--avoidance", "none", "--ignore-scene",
+            "plan",
+            "--robot",
+            "r",
+            "--name",
+            "p",
+            "--goal",
+            "-1,0.5",
+            "--start",
+            "0,0",
+            "--tau",
+            "2",
+            "--duration",
+            "3",
+            "--dt",
+            "0.002",
+            "--out",
+            "o",
+            "--avoidance",
+            "none",
+            "--ignore-scene",
         ]);
         let Command::Plan(a) = c.command else { panic!() };
         assert_eq!(a.motion.goal, Some(Vector(vec![-1.0, 0.5])));
@@ -449,7 +488,14 @@ mod tests {
         assert!(spec.avoidance.is_some());
 
         let c = parse(&[
-            "plan", "--robot", "r", "--name", "p", "--out", "o", "--avoidance",
+            "plan",
+            "--robot",
+            "r",
+            "--name",
+            "p",
+            "--out",
+            "o",
+            "--avoidance",
             r#"{"method": "static_volumetric", "A": 10, "eta": 1}"#,
         ]);
         let Command::Plan(a) = c.command else { panic!() };
@@ -459,8 +505,13 @@ mod tests {
 
         let e = refused(&["plan", "--robot", "r", "--name", "p", "--goal", "1,x", "--out", "o"]);
         assert!(e.contains("--goal") && e.contains("entry 2"), "{e}");
-        assert!(refused(&["plan", "--robot", "r", "--name", "p", "--goal", "1,NaN", "--out", "o"]).contains("--goal"));
-        assert!(refused(&["plan", "--robot", "r", "--name", "p", "--tau", "0", "--out", "o"]).contains("--tau"));
+        assert!(
+            refused(&["plan", "--robot", "r", "--name", "p", "--goal", "1,NaN", "--out", "o"])
+                .contains("--goal")
+        );
+        assert!(
+            refused(&["plan", "--robot", "r", "--name", "p", "--tau", "0", "--out", "o"]).contains("--tau")
+        );
         assert!(refused(&["plan", "--robot", "r", "--name", "p"]).contains("--out"));
         let e = refused(&["plan", "--robot", "r", "--name", "p", "--out", "o", "--avoidance", "magic"]);
         assert!(e.contains("--avoidance") && e.contains("magic"), "{e}");
@@ -469,13 +520,30 @@ mod tests {
     #[test]
     fn stream_options() {
         let c = parse(&[
-            "stream", "--robot", "r", "--name", "p", "--realtime", "--goal", "1,1", "--tau", "0.5", "--segment",
-            "0.02", "--lookahead", "0.1", "--max-duration", "4", "--out", "o",
+            "stream",
+            "--robot",
+            "r",
+            "--name",
+            "p",
+            "--realtime",
+            "--goal",
+            "1,1",
+            "--tau",
+            "0.5",
+            "--segment",
+            "0.02",
+            "--lookahead",
+            "0.1",
+            "--max-duration",
+            "4",
+            "--out",
+            "o",
         ]);
         let Command::Stream(a) = c.command else { panic!() };
         assert!(a.realtime);
         assert_eq!((a.segment, a.lookahead, a.max_duration), (Some(0.02), Some(0.1), Some(4.0)));
-        let Command::Stream(a) = parse(&["stream", "--robot", "r", "--name", "p", "--out", "o"]).command else {
+        let Command::Stream(a) = parse(&["stream", "--robot", "r", "--name", "p", "--out", "o"]).command
+        else {
             panic!()
         };
         assert!(!a.realtime && a.motion.goal.is_none());
@@ -483,11 +551,22 @@ mod tests {
 
     #[test]
     fn scene_commands() {
-        let Command::Scene(SceneCommand::Put { via, ttl, .. }) = parse(&["scene", "put", "o.json"]).command else {
+        let Command::Scene(SceneCommand::Put { via, ttl, .. }) = parse(&["scene", "put", "o.json"]).command
+        else {
             panic!()
         };
         assert_eq!((via, ttl), (Via::Grpc, None));
-        let c = parse(&["scene", "put", "o.json", "--via", "zenoh", "--ttl", "2.5", "--zenoh-connect", "tcp/h:7447"]);
+        let c = parse(&[
+            "scene",
+            "put",
+            "o.json",
+            "--via",
+            "zenoh",
+            "--ttl",
+            "2.5",
+            "--zenoh-connect",
+            "tcp/h:7447",
+        ]);
         let Command::Scene(SceneCommand::Put { via, ttl, .. }) = c.command else { panic!() };
         assert_eq!((via, ttl), (Via::Zenoh, Some(2.5)));
         assert_eq!(c.zenoh_connect, vec!["tcp/h:7447"]);
@@ -533,12 +612,19 @@ mod tests {
             .join("\n");
         std::fs::write(d("demo.csv"), csv).unwrap();
 
-        let out = run_at(&url, &["learn", "--robot", "r", "--name", "p", "--csv", &d("demo.csv"), "--n-basis", "15"])
-            .await
-            .unwrap();
+        let out = run_at(
+            &url,
+            &["learn", "--robot", "r", "--name", "p", "--csv", &d("demo.csv"), "--n-basis", "15"],
+        )
+        .await
+        .unwrap();
         let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-        assert_eq!((v["version"].as_u64(), v["dim"].as_u64(), v["n_basis"].as_u64()), (Some(1), Some(2), Some(15)));
-        let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/none.json");
+        assert_eq!(
+            (v["version"].as_u64(), v["dim"].as_u64(), v["n_basis"].as_u64()),
+            (Some(1), Some(2), Some(15))
+        );
+        let scenario =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/none.json");
         run_at(&url, &["learn", "--robot", "r", "--name", "paper", "--scenario", scenario.to_str().unwrap()])
             .await
             .unwrap();
@@ -546,12 +632,29 @@ mod tests {
         assert!(listed.starts_with("p\tv1\tdim 2\tN 15") && listed.contains("\npaper\tv1"), "{listed}");
 
         let shown: serde_json::Value =
-            serde_json::from_str(&run_at(&url, &["show", "--robot", "r", "--name", "p"]).await.unwrap()).unwrap();
+            serde_json::from_str(&run_at(&url, &["show", "--robot", "r", "--name", "p"]).await.unwrap())
+                .unwrap();
         let p: dmp::Primitive = serde_json::from_value(shown["primitive"].clone()).unwrap();
         assert_eq!(p.n_basis, 15);
 
-        let said = run_at(&url, &["plan", "--robot", "r", "--name", "p", "--goal", "2,-1", "--duration", "1.5",
-            "--out", &d("plan")]).await.unwrap();
+        let said = run_at(
+            &url,
+            &[
+                "plan",
+                "--robot",
+                "r",
+                "--name",
+                "p",
+                "--goal",
+                "2,-1",
+                "--duration",
+                "1.5",
+                "--out",
+                &d("plan"),
+            ],
+        )
+        .await
+        .unwrap();
         assert!(said.contains("1501 points"), "{said}");
         let plan = std::fs::read_to_string(dir.path().join("plan/trajectory.csv")).unwrap();
         assert_eq!(plan.lines().next(), Some("t,x1,x2,xd1,xd2,a1,a2"));
@@ -559,22 +662,46 @@ mod tests {
         let last: Vec<f64> = plan.lines().last().unwrap().split(',').map(|c| c.parse().unwrap()).collect();
         assert!((last[1] - 2.0).abs() < 0.05 && (last[2] + 1.0).abs() < 0.05, "{last:?}");
 
-        let said = run_at(&url, &["stream", "--robot", "r", "--name", "p", "--goal", "2,-1", "--max-duration", "1.5",
-            "--out", &d("stream")]).await.unwrap();
+        let said = run_at(
+            &url,
+            &[
+                "stream",
+                "--robot",
+                "r",
+                "--name",
+                "p",
+                "--goal",
+                "2,-1",
+                "--max-duration",
+                "1.5",
+                "--out",
+                &d("stream"),
+            ],
+        )
+        .await
+        .unwrap();
         assert!(said.contains("151 segments") && said.contains("GOAL_REACHED"), "{said}");
         let streamed = std::fs::read_to_string(dir.path().join("stream/trajectory.csv")).unwrap();
         assert_eq!(streamed.lines().count(), plan.lines().count());
 
-        let run = run_at(&url, &["scenario", "run", scenario.to_str().unwrap(), "--out", &d("scenario")]).await.unwrap();
+        let run = run_at(&url, &["scenario", "run", scenario.to_str().unwrap(), "--out", &d("scenario")])
+            .await
+            .unwrap();
         assert!(run.contains("through http://"), "{run}");
         assert!(dir.path().join("scenario/metrics.json").exists());
 
-        assert_eq!(run_at(&url, &["delete", "--robot", "r", "--name", "p"]).await.unwrap(), "deleted 1 version of r/p");
+        assert_eq!(
+            run_at(&url, &["delete", "--robot", "r", "--name", "p"]).await.unwrap(),
+            "deleted 1 version of r/p"
+        );
         let e = run_at(&url, &["show", "--robot", "r", "--name", "p"]).await.unwrap_err();
         assert!(e.is_bad_input() && e.to_string().contains("NotFound"), "{e}");
-        let e = run_at(&url, &["plan", "--robot", "r", "--name", "nothing", "--out", &d("x")]).await.unwrap_err();
+        let e =
+            run_at(&url, &["plan", "--robot", "r", "--name", "nothing", "--out", &d("x")]).await.unwrap_err();
         assert!(e.is_bad_input(), "{e}");
-        let e = run_at(&url, &["learn", "--robot", "r", "--name", "p", "--csv", &d("missing.csv")]).await.unwrap_err();
+        let e = run_at(&url, &["learn", "--robot", "r", "--name", "p", "--csv", &d("missing.csv")])
+            .await
+            .unwrap_err();
         assert!(!e.is_bad_input() && e.to_string().contains("missing.csv"), "{e}");
     }
 }

@@ -77,11 +77,15 @@ pub fn avoidance_to_proto(a: &Avoidance, point_samples: usize) -> v1::Avoidance 
     let method = match a.method {
         Method::None => pa::Method::None(pa::None {}),
         Method::StaticPoint(p) => pa::Method::StaticPoint(pa::StaticPoint { eta: p.eta, p0: p.p0 }),
-        Method::DynamicPoint(p) => pa::Method::DynamicPoint(pa::DynamicPoint { lambda: p.lambda, beta: p.beta }),
+        Method::DynamicPoint(p) => {
+            pa::Method::DynamicPoint(pa::DynamicPoint { lambda: p.lambda, beta: p.beta })
+        }
         Method::SteeringAngle(p) => {
             pa::Method::SteeringAngle(pa::SteeringAngle { gamma: p.gamma, beta: p.beta })
         }
-        Method::StaticVolumetric(p) => pa::Method::StaticVolumetric(pa::StaticVolumetric { a: p.a, eta: p.eta }),
+        Method::StaticVolumetric(p) => {
+            pa::Method::StaticVolumetric(pa::StaticVolumetric { a: p.a, eta: p.eta })
+        }
         Method::DynamicVolumetric(p) => pa::Method::DynamicVolumetric(pa::DynamicVolumetric {
             lambda: p.lambda,
             beta: p.beta,
@@ -177,7 +181,9 @@ impl JsonObstacle {
         let shape = match s.nested {
             Some(n) => {
                 if s.exponents.is_some() {
-                    return Err(InvalidInput::new("nested", "give either `exponents` or `nested`, not both").into());
+                    return Err(
+                        InvalidInput::new("nested", "give either `exponents` or `nested`, not both").into()
+                    );
                 }
                 let a: [f64; 3] = s.semi_axes.as_slice().try_into().map_err(|_| {
                     InvalidInput::new(
@@ -202,10 +208,16 @@ impl JsonObstacle {
 pub fn obstacle_from_json(value: &Value, field: &str) -> Result<JsonObstacle, ClientError> {
     let at = |name: &str| if field.is_empty() { name.to_string() } else { format!("{field}.{name}") };
     let Value::Object(obj) = value else {
-        return Err(ClientError::argument(if field.is_empty() { "(obstacle)" } else { field }, "must be a JSON object"));
+        return Err(ClientError::argument(
+            if field.is_empty() { "(obstacle)" } else { field },
+            "must be a JSON object",
+        ));
     };
     if let Some(k) = obj.keys().find(|k| !JSON_OBSTACLE_KEYS.contains(&k.as_str())) {
-        return Err(ClientError::argument(at(k), format!("unknown field, expected one of {JSON_OBSTACLE_KEYS:?}")));
+        return Err(ClientError::argument(
+            at(k),
+            format!("unknown field, expected one of {JSON_OBSTACLE_KEYS:?}"),
+        ));
     }
     let number = |key: &str| -> Result<f64, ClientError> {
         match obj.get(key) {
@@ -214,8 +226,11 @@ pub fn obstacle_from_json(value: &Value, field: &str) -> Result<JsonObstacle, Cl
         }
     };
     let (margin, ttl_s) = (number("margin")?, number("ttl_s")?);
-    let rest: Map<String, Value> =
-        obj.iter().filter(|(k, _)| !matches!(k.as_str(), "margin" | "ttl_s")).map(|(k, v)| (k.clone(), v.clone())).collect();
+    let rest: Map<String, Value> = obj
+        .iter()
+        .filter(|(k, _)| !matches!(k.as_str(), "margin" | "ttl_s"))
+        .map(|(k, v)| (k.clone(), v.clone()))
+        .collect();
     let spec: ObstacleSpec = serde_path_to_error::deserialize(Value::Object(rest)).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.into_inner().to_string();
@@ -268,8 +283,10 @@ pub fn obstacle_json(o: &v1::Obstacle) -> Value {
 
 /// The JSON of a stored record: identity, and the primitive in the engine's serde form (which round-trips).
 pub fn record_json(r: &v1::PrimitiveRecord) -> Result<Value, ClientError> {
-    let p = r.primitive.as_ref().ok_or_else(|| ClientError::Protocol("a record without its primitive".into()))?;
-    let prim = primitive_from_proto(p).map_err(|e| ClientError::Protocol(format!("record primitive: {e}")))?;
+    let p =
+        r.primitive.as_ref().ok_or_else(|| ClientError::Protocol("a record without its primitive".into()))?;
+    let prim =
+        primitive_from_proto(p).map_err(|e| ClientError::Protocol(format!("record primitive: {e}")))?;
     Ok(json!({
         "robot_id": r.robot_id,
         "name": r.name,
@@ -331,20 +348,25 @@ mod tests {
         assert_eq!(obstacle_from_json(&o.to_json(), "").unwrap(), o);
         assert_eq!(obstacle_from_json(&obstacle_json(&m), "").unwrap(), o);
 
-        let e = obstacle_from_json(&json!({"id": "e", "center": [0], "semi_axes": [1], "bogus": 1}), "obstacles[1]")
-            .unwrap_err();
+        let e = obstacle_from_json(
+            &json!({"id": "e", "center": [0], "semi_axes": [1], "bogus": 1}),
+            "obstacles[1]",
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("obstacles[1].bogus") && e.is_bad_input(), "{e}");
         let e = obstacle_from_json(&json!({"id": "e", "center": [0, 0]}), "").unwrap_err();
         assert!(e.to_string().contains("semi_axes"), "{e}");
-        let bad = obstacle_from_json(&json!({"id": "e", "center": [0, 0], "semi_axes": [-1, 1]}), "").unwrap();
+        let bad =
+            obstacle_from_json(&json!({"id": "e", "center": [0, 0], "semi_axes": [-1, 1]}), "").unwrap();
         assert!(bad.validate().unwrap_err().to_string().contains("semi_axes[0]"));
     }
 
     #[test]
     fn avoidance_maps_every_method() {
-        let a: Avoidance =
-            serde_json::from_value(json!({"method": "dynamic_volumetric", "lambda": 10, "beta": 2, "eta": 0.5}))
-                .unwrap();
+        let a: Avoidance = serde_json::from_value(
+            json!({"method": "dynamic_volumetric", "lambda": 10, "beta": 2, "eta": 0.5}),
+        )
+        .unwrap();
         let m = avoidance_to_proto(&a, 50);
         assert_eq!(
             m.method,

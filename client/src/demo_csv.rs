@@ -20,7 +20,8 @@ pub struct CsvDemonstration {
 
 /// Parses CSV text; `path` only names the source in errors, which give the line and column (from 1).
 pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstration, ClientError> {
-    let err = |field: String, message: String| ClientError::Parse { path: path.to_path_buf(), field, message };
+    let err =
+        |field: String, message: String| ClientError::Parse { path: path.to_path_buf(), field, message };
     let mut lines = text
         .lines()
         .enumerate()
@@ -35,11 +36,15 @@ pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstrati
         if cells[0].parse::<f64>().is_err() {
             lines.next();
             if cells.len() < 2 {
-                return Err(err(format!("line {n}"), "the header needs a time column and at least one position".into()));
+                return Err(err(
+                    format!("line {n}"),
+                    "the header needs a time column and at least one position".into(),
+                ));
             }
             // Columns named x1, x2, ... (in that order of names, wherever they sit), else all after the time.
-            let xs: Vec<usize> =
-                (1..).map_while(|j| cells[1..].iter().position(|c| *c == format!("x{j}")).map(|i| i + 1)).collect();
+            let xs: Vec<usize> = (1..)
+                .map_while(|j| cells[1..].iter().position(|c| *c == format!("x{j}")).map(|i| i + 1))
+                .collect();
             columns = Some(if xs.is_empty() { (1..cells.len()).collect() } else { xs });
             width = Some(cells.len());
         }
@@ -56,9 +61,9 @@ pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstrati
         }
         let mut values = Vec::with_capacity(w);
         for (c, cell) in cells.iter().enumerate() {
-            let v: f64 = cell
-                .parse()
-                .map_err(|_| err(format!("line {n}, column {}", c + 1), format!("`{cell}` is not a number")))?;
+            let v: f64 = cell.parse().map_err(|_| {
+                err(format!("line {n}, column {}", c + 1), format!("`{cell}` is not a number"))
+            })?;
             if !v.is_finite() {
                 return Err(err(format!("line {n}, column {}", c + 1), "must be a finite number".into()));
             }
@@ -76,7 +81,8 @@ pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstrati
 
 /// Reads and parses a CSV demonstration.
 pub fn load_demonstration_csv(path: &Path) -> Result<CsvDemonstration, ClientError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ClientError::Io { path: path.to_path_buf(), source })?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| ClientError::Io { path: path.to_path_buf(), source })?;
     parse_demonstration_csv(&text, path)
 }
 

@@ -78,7 +78,9 @@ impl ClientError {
     pub fn is_bad_input(&self) -> bool {
         match self {
             ClientError::Parse { .. } | ClientError::Invalid { .. } | ClientError::Argument { .. } => true,
-            ClientError::Status { code, .. } => matches!(code, tonic::Code::InvalidArgument | tonic::Code::NotFound),
+            ClientError::Status { code, .. } => {
+                matches!(code, tonic::Code::InvalidArgument | tonic::Code::NotFound)
+            }
             _ => false,
         }
     }

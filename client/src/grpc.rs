@@ -81,7 +81,9 @@ fn missing(what: &str) -> ClientError {
     ClientError::Protocol(format!("the answer has no `{what}`"))
 }
 
-fn boxed<T: Send + 'static>(s: tonic::Streaming<T>) -> Pin<Box<dyn Stream<Item = Result<T, ClientError>> + Send>> {
+fn boxed<T: Send + 'static>(
+    s: tonic::Streaming<T>,
+) -> Pin<Box<dyn Stream<Item = Result<T, ClientError>> + Send>> {
     Box::pin(s.map(|r| r.map_err(ClientError::from)))
 }
 
@@ -94,13 +96,18 @@ impl DmpClient {
 
     /// Connects to `url`, waiting at most `timeout`. A server that refuses or does not answer gives
     /// [`ClientError::Connect`]; an address that does not parse gives [`ClientError::Argument`].
-    pub async fn connect_with_timeout(url: impl Into<String>, timeout: Duration) -> Result<Self, ClientError> {
+    pub async fn connect_with_timeout(
+        url: impl Into<String>,
+        timeout: Duration,
+    ) -> Result<Self, ClientError> {
         let mut url = url.into();
         if !url.contains("://") {
             url = format!("http://{url}");
         }
         let endpoint = Endpoint::from_shared(url.clone())
-            .map_err(|e| ClientError::argument("server", format!("`{url}` is not a valid address: {}", chain(&e))))?
+            .map_err(|e| {
+                ClientError::argument("server", format!("`{url}` is not a valid address: {}", chain(&e)))
+            })?
             .connect_timeout(timeout)
             .tcp_nodelay(true);
         let channel = match tokio::time::timeout(timeout, endpoint.connect()).await {
@@ -121,8 +128,12 @@ impl DmpClient {
             primitives: PrimitiveServiceClient::new(channel.clone())
                 .max_decoding_message_size(n)
                 .max_encoding_message_size(n),
-            scene: SceneServiceClient::new(channel.clone()).max_decoding_message_size(n).max_encoding_message_size(n),
-            motion: MotionServiceClient::new(channel).max_decoding_message_size(n).max_encoding_message_size(n),
+            scene: SceneServiceClient::new(channel.clone())
+                .max_decoding_message_size(n)
+                .max_encoding_message_size(n),
+            motion: MotionServiceClient::new(channel)
+                .max_decoding_message_size(n)
+                .max_encoding_message_size(n),
         }
     }
 
@@ -156,8 +167,11 @@ impl DmpClient {
                 format!("has {} coordinates, expected {dim} like the first row", rows[i].len()),
             ));
         }
-        let demonstration =
-            v1::Demonstration { t: t.to_vec(), positions: rows.iter().flatten().copied().collect(), dim: dim as u32 };
+        let demonstration = v1::Demonstration {
+            t: t.to_vec(),
+            positions: rows.iter().flatten().copied().collect(),
+            dim: dim as u32,
+        };
         let request = v1::LearnRequest {
             robot_id: robot.into(),
             name: name.into(),
@@ -185,7 +199,12 @@ impl DmpClient {
     }
 
     /// One primitive: `version` 0 is the latest.
-    pub async fn get(&self, robot: &str, name: &str, version: u64) -> Result<v1::PrimitiveRecord, ClientError> {
+    pub async fn get(
+        &self,
+        robot: &str,
+        name: &str,
+        version: u64,
+    ) -> Result<v1::PrimitiveRecord, ClientError> {
         let request = v1::GetPrimitiveRequest { robot_id: robot.into(), name: name.into(), version };
         Ok(self.primitives.clone().get(request).await?.into_inner())
     }
@@ -252,7 +271,9 @@ impl DmpClient {
     /// The current scene, then the scene after every change.
     pub async fn watch_scene(&self) -> Result<SceneStream, ClientError> {
         let events = self.scene.clone().watch_scene(v1::WatchSceneRequest {}).await?.into_inner();
-        Ok(Box::pin(events.map(|r| r.map_err(ClientError::from)?.snapshot.ok_or_else(|| missing("snapshot")))))
+        Ok(Box::pin(
+            events.map(|r| r.map_err(ClientError::from)?.snapshot.ok_or_else(|| missing("snapshot"))),
+        ))
     }
 }
 
@@ -417,7 +438,10 @@ mod tests {
     async fn primitives_learn_get_list_put_delete() {
         let c = client().await;
         let (t, x) = demo();
-        let r = c.learn("r1", "wave", &t, &x, v1::LearnParameters { n_basis: 20, ..Default::default() }).await.unwrap();
+        let r = c
+            .learn("r1", "wave", &t, &x, v1::LearnParameters { n_basis: 20, ..Default::default() })
+            .await
+            .unwrap();
         assert_eq!((r.version, r.robot_id.as_str(), r.name.as_str()), (1, "r1", "wave"));
         let p = record_primitive(&r).unwrap();
         assert_eq!((p.dim, p.n_basis), (2, 20));
@@ -445,14 +469,17 @@ mod tests {
         let (t, x) = demo();
         c.learn("r", "p", &t, &x, Default::default()).await.unwrap();
         let motion = v1::MotionSpec { robot_id: "r".into(), primitive: "p".into(), ..Default::default() };
-        let plan = c
-            .plan(v1::PlanRequest { motion: Some(motion.clone()), dt: 0.002, duration: 0.5 })
-            .await
-            .unwrap();
+        let plan =
+            c.plan(v1::PlanRequest { motion: Some(motion.clone()), dt: 0.002, duration: 0.5 }).await.unwrap();
         let planned = crate::setpoints::segments_to_trajectory(plan.trajectory.as_ref()).unwrap();
         assert_eq!(planned.len(), 251);
         let stream = c
-            .execute(v1::ExecuteRequest { motion: Some(motion), dt: 0.002, max_duration_s: 0.5, ..Default::default() })
+            .execute(v1::ExecuteRequest {
+                motion: Some(motion),
+                dt: 0.002,
+                max_duration_s: 0.5,
+                ..Default::default()
+            })
             .await
             .unwrap();
         let mut seen = 0;
@@ -470,7 +497,11 @@ mod tests {
         let (t, x) = demo();
         c.learn("r", "p", &t, &x, Default::default()).await.unwrap();
         let start = v1::ExecuteRequest {
-            motion: Some(v1::MotionSpec { robot_id: "r".into(), primitive: "p".into(), ..Default::default() }),
+            motion: Some(v1::MotionSpec {
+                robot_id: "r".into(),
+                primitive: "p".into(),
+                ..Default::default()
+            }),
             ..Default::default()
         };
         let mut session = c.session(start).await.unwrap();

@@ -49,11 +49,14 @@ impl Primitives {
 
     fn get(&self, robot: &str, name: &str, version: u64) -> Result<v1::PrimitiveRecord, Status> {
         let s = self.store.lock().unwrap();
-        let versions = s
-            .get(&(robot.to_string(), name.to_string()))
-            .ok_or_else(|| Status::not_found(format!("robot_id/name: no primitive `{name}` for robot `{robot}`")))?;
+        let versions = s.get(&(robot.to_string(), name.to_string())).ok_or_else(|| {
+            Status::not_found(format!("robot_id/name: no primitive `{name}` for robot `{robot}`"))
+        })?;
         let v = if version == 0 { versions.len() } else { version as usize };
-        versions.get(v.wrapping_sub(1)).cloned().ok_or_else(|| Status::not_found(format!("version: no version {v}")))
+        versions
+            .get(v.wrapping_sub(1))
+            .cloned()
+            .ok_or_else(|| Status::not_found(format!("version: no version {v}")))
     }
 }
 
@@ -93,7 +96,10 @@ impl PrimitiveService for Primitives {
         Ok(Response::new(self.store(r.robot_id, r.name, &p)))
     }
 
-    async fn get(&self, r: Request<v1::GetPrimitiveRequest>) -> Result<Response<v1::PrimitiveRecord>, Status> {
+    async fn get(
+        &self,
+        r: Request<v1::GetPrimitiveRequest>,
+    ) -> Result<Response<v1::PrimitiveRecord>, Status> {
         let r = r.into_inner();
         Ok(Response::new(Primitives::get(self, &r.robot_id, &r.name, r.version)?))
     }
@@ -203,7 +209,8 @@ impl Motions {
             start.extend(if m.start.is_empty() { p.start.clone() } else { m.start.clone() });
             goal.extend(if m.goal.is_empty() { p.goal.clone() } else { m.goal.clone() });
             let fp = m.footprint.as_ref().unwrap();
-            let n = if fp.exponents.is_empty() { vec![1.0; fp.semi_axes.len()] } else { fp.exponents.clone() };
+            let n =
+                if fp.exponents.is_empty() { vec![1.0; fp.semi_axes.len()] } else { fp.exponents.clone() };
             let footprint = dmp::Superquadric::new(fp.semi_axes.clone(), n).map_err(invalid)?;
             agents.push(Agent {
                 id: format!("m{i}"),
@@ -229,7 +236,13 @@ impl Motions {
         let m0 = r.members[0].motion.as_ref().unwrap();
         let (avoidance, point_samples) = avoidance_from(m0.avoidance.as_ref());
         let (robot_avoidance, _) = avoidance_from(m0.robot_avoidance.as_ref());
-        let scene = Scene { obstacles: obstacles(&m0.extra_obstacles)?, avoidance, agents, robot_avoidance, point_samples };
+        let scene = Scene {
+            obstacles: obstacles(&m0.extra_obstacles)?,
+            avoidance,
+            agents,
+            robot_avoidance,
+            point_samples,
+        };
         let motion = Motion { start, goal, tau: if r.tau == 0.0 { p.tau } else { r.tau } };
         let mut field = RepulsiveField::new(scene, p.dim).map_err(invalid)?;
         let steps = ((r.max_duration_s / r.dt).round() as usize).max(1);
@@ -280,7 +293,8 @@ impl MotionService for Motions {
     ) -> Result<Response<Self::SessionStream>, Status> {
         use v1::session_request::Message;
         let mut incoming = r.into_inner();
-        let Some(Ok(v1::SessionRequest { message: Some(Message::Start(start)) })) = incoming.next().await else {
+        let Some(Ok(v1::SessionRequest { message: Some(Message::Start(start)) })) = incoming.next().await
+        else {
             return Err(invalid("message: the first message must be `start`"));
         };
         let m = start.motion.unwrap_or_default();
@@ -346,7 +360,12 @@ impl MotionService for Motions {
                 let mut part = Trajectory::with_capacity(d, rows.len());
                 for row in rows.clone() {
                     let o = offset..offset + d;
-                    part.push(t.t[row], &t.position(row)[o.clone()], &t.velocity(row)[o.clone()], &t.acceleration(row)[o]);
+                    part.push(
+                        t.t[row],
+                        &t.position(row)[o.clone()],
+                        &t.velocity(row)[o.clone()],
+                        &t.acceleration(row)[o],
+                    );
                 }
                 segments.push(segment(&format!("m{member}"), i as u64, &part, 0..part.len(), r.dt));
                 offset += d;

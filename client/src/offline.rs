@@ -49,8 +49,11 @@ pub fn write_outputs(
     let svg = render_svg(&PlotInput {
         title: &p.name,
         demonstration: p.demonstration.positions(),
+        // Drawn from the start of the rollouts on (the plot shifts them to start there, at 0).
+        demonstration_t: Some(p.demonstration.times()),
         free,
         adapted,
+        goal: Some(&p.motion.goal),
         obstacles: &p.scene.obstacles,
         robots: &p.scene.agents,
         obstacle_time: 0.0,

@@ -1,7 +1,7 @@
 //! The server half of `dmpctl`: each command talks to the server (gRPC, or Zenoh for `scene --via zenoh`) and
 //! returns what to print on standard output. Argument types are in [`crate::cli`].
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 
 use dmp_proto::v1;
@@ -77,7 +77,10 @@ pub async fn list(client: &DmpClient, robot: &str) -> Result<String, ClientError
         .iter()
         .map(|r| {
             let (dim, n, tau) = r.primitive.as_ref().map_or((0, 0, 0.0), |p| (p.dim, p.n_basis, p.tau));
-            format!("{}\tv{}\tdim {dim}\tN {n}\ttau {tau} s\tcreated_unix_ms {}", r.name, r.version, r.created_unix_ms)
+            format!(
+                "{}\tv{}\tdim {dim}\tN {n}\ttau {tau} s\tcreated_unix_ms {}",
+                r.name, r.version, r.created_unix_ms
+            )
         })
         .collect();
     Ok(lines.join("\n"))
@@ -212,10 +215,14 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Client
 /// the field.
 pub fn read_obstacles(path: &Path, ttl_s: Option<f64>) -> Result<Vec<JsonObstacle>, ClientError> {
     let text = std::fs::read_to_string(path).map_err(io(path))?;
-    let at_file = |field: String, message: String| ClientError::Parse { path: path.to_path_buf(), field, message };
-    let value: Value = serde_json::from_str(&text).map_err(|e| at_file("(document)".into(), e.to_string()))?;
+    let at_file =
+        |field: String, message: String| ClientError::Parse { path: path.to_path_buf(), field, message };
+    let value: Value =
+        serde_json::from_str(&text).map_err(|e| at_file("(document)".into(), e.to_string()))?;
     let items: Vec<(String, &Value)> = match value.get("obstacles") {
-        Some(Value::Array(list)) => list.iter().enumerate().map(|(i, v)| (format!("obstacles[{i}]"), v)).collect(),
+        Some(Value::Array(list)) => {
+            list.iter().enumerate().map(|(i, v)| (format!("obstacles[{i}]"), v)).collect()
+        }
         Some(_) => return Err(at_file("obstacles".into(), "must be an array".into())),
         None => vec![(String::new(), &value)],
     };
@@ -262,7 +269,7 @@ async fn publisher(z: &ZenohArgs) -> Result<ObstaclePublisher, ClientError> {
 pub async fn scene_put(
     server: &str,
     z: &ZenohArgs,
-    file: &PathBuf,
+    file: &Path,
     via: Via,
     ttl_s: Option<f64>,
 ) -> Result<String, ClientError> {
@@ -319,7 +326,7 @@ pub async fn scene_list(client: &DmpClient) -> Result<String, ClientError> {
 mod tests {
     use super::*;
 
-    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
         let p = dir.join(name);
         std::fs::write(&p, text).unwrap();
         p
@@ -328,11 +335,16 @@ mod tests {
     #[test]
     fn obstacle_files_hold_one_obstacle_or_a_list() {
         let dir = tempfile::tempdir().unwrap();
-        let one = write(dir.path(), "one.json", r#"{"id": "a", "center": [0, 0], "semi_axes": [1, 1], "ttl_s": 3}"#);
+        let one = write(
+            dir.path(),
+            "one.json",
+            r#"{"id": "a", "center": [0, 0], "semi_axes": [1, 1], "ttl_s": 3}"#,
+        );
         let o = read_obstacles(&one, None).unwrap();
         assert_eq!((o.len(), o[0].ttl_s), (1, 3.0));
         assert_eq!(read_obstacles(&one, Some(0.5)).unwrap()[0].ttl_s, 0.5);
-        let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/static_point.json");
+        let scenario =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/static_point.json");
         let o = read_obstacles(&scenario, None).unwrap();
         assert!(!o.is_empty());
 
@@ -344,7 +356,8 @@ mod tests {
         );
         let e = read_obstacles(&bad, None).unwrap_err();
         assert!(e.is_bad_input() && e.to_string().contains("obstacles[1].semi_axes[1]"), "{e}");
-        let bad = write(dir.path(), "bad2.json", r#"{"id": "a", "center": [0, 0], "semi_axes": [1, 1], "ttl": 1}"#);
+        let bad =
+            write(dir.path(), "bad2.json", r#"{"id": "a", "center": [0, 0], "semi_axes": [1, 1], "ttl": 1}"#);
         let e = read_obstacles(&bad, None).unwrap_err();
         assert!(e.is_bad_input() && e.to_string().contains("ttl"), "{e}");
         let e = read_obstacles(&one, Some(-1.0)).unwrap_err();

@@ -12,9 +12,13 @@
 //!   `scenario-<id>`), and the two runs are `ExecuteGroup` streams paced as fast as read, one member per robot,
 //!   `max_duration_s` = the scenario's duration; the members' setpoints are put back together in the scenario's
 //!   dimension order. Learning is per dimension, so each robot's primitive is the rows of the whole one; the
-//!   metrics equal the offline run's when the server's group integration is the engine's multi-robot rollout and
-//!   its stream has the same rows (`steps + 1`, from `t = 0`). When the two runs differ in length both are cut to
-//!   the shorter, and a note says so.
+//!   metrics equal the offline run's only if the server's group execution is the engine's joint multi-robot
+//!   rollout. Measured with this repository's server on `youbots-three-dynamic.json`: it is not (the positions
+//!   differ from the first step, ~2e-6 relative; `eps_max` 0.750 against 0.694 offline, no collision either way).
+//!   Rows past the scenario's duration (streams end on segment boundaries) are cut; a shorter run is cut to the
+//!   shorter length, and a note says so.
+//!
+//! Every run learns a new version of its primitives on the server (nothing is deleted afterwards).
 //!
 //! Contacts are not needed by the metrics; stalls are: they are detected again here, with the engine's detector on
 //! the server's trajectory, exactly as the rollout does.
@@ -50,7 +54,11 @@ pub fn sanitize(name: &str) -> String {
 }
 
 /// Runs the scenario at `path` through the server and writes the three files of the offline run into `out`.
-pub async fn run_scenario_remote(client: &DmpClient, path: &Path, out: &Path) -> Result<RunSummary, ClientError> {
+pub async fn run_scenario_remote(
+    client: &DmpClient,
+    path: &Path,
+    out: &Path,
+) -> Result<RunSummary, ClientError> {
     let started = Instant::now();
     let scenario = load_scenario(path)?;
     let p = dmp::scenario::prepare(&scenario)
@@ -137,8 +145,9 @@ async fn single(
     notes: &mut Vec<String>,
 ) -> Result<(Trajectory, Trajectory), ClientError> {
     let name = sanitize(&s.name);
-    let record =
-        client.learn(SCENARIO_ROBOT, &name, &s.demonstration.t, &s.demonstration.x, learn_parameters(&s.dmp)).await?;
+    let record = client
+        .learn(SCENARIO_ROBOT, &name, &s.demonstration.t, &s.demonstration.x, learn_parameters(&s.dmp))
+        .await?;
     compare_primitive(&record, &p.primitive, &format!("{SCENARIO_ROBOT}/{name}"), notes)?;
     let motion = |avoidance: &Avoidance, obstacles: Vec<v1::Obstacle>| v1::MotionSpec {
         robot_id: SCENARIO_ROBOT.into(),
@@ -180,7 +189,8 @@ async fn group(
     let mut members = Vec::with_capacity(s.robots.len());
     for r in &s.robots {
         let robot = sanitize(&format!("scenario-{}", r.id));
-        let x: Vec<Vec<f64>> = s.demonstration.x.iter().map(|row| r.dims.iter().map(|&i| row[i]).collect()).collect();
+        let x: Vec<Vec<f64>> =
+            s.demonstration.x.iter().map(|row| r.dims.iter().map(|&i| row[i]).collect()).collect();
         let params = v1::LearnParameters {
             k: pick(whole.k.clone(), &r.dims),
             d: pick(whole.d.clone(), &r.dims),
@@ -205,11 +215,8 @@ async fn group(
             .map(|(robot, version, r)| {
                 let sub = |v: &[f64]| r.dims.iter().map(|&i| v[i]).collect::<Vec<f64>>();
                 let none = Avoidance::NONE;
-                let (avoidance, robot_avoidance) = if free {
-                    (none, none)
-                } else {
-                    (s.avoidance, s.robot_avoidance.unwrap_or(none))
-                };
+                let (avoidance, robot_avoidance) =
+                    if free { (none, none) } else { (s.avoidance, s.robot_avoidance.unwrap_or(none)) };
                 v1::GroupMember {
                     motion: Some(v1::MotionSpec {
                         robot_id: robot.clone(),
@@ -238,11 +245,13 @@ async fn group(
     let (adapted, free) =
         tokio::join!(run_group(client, request(false), &dims, p), run_group(client, request(true), &dims, p));
     let (mut adapted, mut free) = (adapted?, free?);
-    let rows = adapted.len().min(free.len());
+    // Streams stop on segment boundaries: rows past the scenario's duration are cut, so that the metrics are over
+    // the same span as offline (`final_goal_distance` at T). A shorter stream is noted.
+    let rows = adapted.len().min(free.len()).min(p.steps + 1);
     if rows == 0 {
         return Err(ClientError::Protocol("a group stream carried no points".into()));
     }
-    if adapted.len() != p.steps + 1 || free.len() != p.steps + 1 {
+    if rows < p.steps + 1 {
         notes.push(format!(
             "the group streams have {} (adapted) and {} (obstacle-free) rows, the offline run {}: metrics are over \
              the first {rows}",
@@ -250,9 +259,9 @@ async fn group(
             free.len(),
             p.steps + 1
         ));
-        truncate(&mut adapted, rows);
-        truncate(&mut free, rows);
     }
+    truncate(&mut adapted, rows);
+    truncate(&mut free, rows);
     Ok((free, adapted))
 }
 
@@ -329,7 +338,8 @@ mod tests {
 
     #[test]
     fn stalls_are_found_again_on_a_trajectory() {
-        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/dynamic_volumetric.json");
+        let file = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../scenarios/paper-one-obstacle/dynamic_volumetric.json");
         let p = dmp::scenario::prepare(&load_scenario(&file).unwrap()).unwrap();
         let out = dmp::scenario::run(&p).unwrap();
         let stalls = detect_stalls(&p, &out.adapted.trajectory).unwrap();
@@ -394,7 +404,14 @@ mod through_a_mock_server {
 
     #[tokio::test(flavor = "multi_thread")]
     async fn single_robot_scenarios_give_the_offline_metrics() {
-        for m in ["none", "static_point", "dynamic_point", "steering_angle", "static_volumetric", "dynamic_volumetric"] {
+        for m in [
+            "none",
+            "static_point",
+            "dynamic_point",
+            "steering_angle",
+            "static_volumetric",
+            "dynamic_volumetric",
+        ] {
             let notes = same_metrics(&format!("paper-one-obstacle/{m}.json")).await;
             assert!(notes.is_empty(), "{notes:?}");
         }

@@ -40,9 +40,17 @@ impl Setpoints {
             return Err(bad("dim is 0 but it has points".into()));
         }
         let rows = seg.positions.len() / d;
-        for (name, v) in [("positions", &seg.positions), ("velocities", &seg.velocities), ("accelerations", &seg.accelerations)] {
-            if v.len() != rows * d || seg.positions.len() % d != 0 {
-                return Err(bad(format!("{name} has {} values, expected points x dim = {} x {d}", v.len(), rows)));
+        for (name, v) in [
+            ("positions", &seg.positions),
+            ("velocities", &seg.velocities),
+            ("accelerations", &seg.accelerations),
+        ] {
+            if v.len() != rows * d || !seg.positions.len().is_multiple_of(d) {
+                return Err(bad(format!(
+                    "{name} has {} values, expected points x dim = {} x {d}",
+                    v.len(),
+                    rows
+                )));
             }
         }
         if let Some(t) = &self.traj
@@ -55,7 +63,10 @@ impl Setpoints {
             return Ok(());
         }
         if !(seg.dt.is_finite() && seg.dt > 0.0 && seg.start_time.is_finite()) {
-            return Err(bad(format!("start_time {} and dt {} must be finite, dt > 0", seg.start_time, seg.dt)));
+            return Err(bad(format!(
+                "start_time {} and dt {} must be finite, dt > 0",
+                seg.start_time, seg.dt
+            )));
         }
         let traj = self.traj.get_or_insert_with(|| Trajectory::with_capacity(d, rows));
         let cut = seg.start_time - SAME_TIME * seg.dt;

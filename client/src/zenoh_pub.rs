@@ -51,7 +51,8 @@ pub fn peer_config(connect: &[String], listen: &[String]) -> Result<zenoh::Confi
     let mut c = zenoh::Config::default();
     let json = |v: &[String]| serde_json::to_string(v).unwrap_or_else(|_| "[]".into());
     let mut set = |key: &str, value: String| {
-        c.insert_json5(key, &value).map_err(|e| ClientError::argument("zenoh", format!("{key} = {value}: {e}")))
+        c.insert_json5(key, &value)
+            .map_err(|e| ClientError::argument("zenoh", format!("{key} = {value}: {e}")))
     };
     set("mode", "\"peer\"".into())?;
     if !connect.is_empty() {
@@ -77,7 +78,10 @@ pub struct ObstaclePublisher {
 
 impl fmt::Debug for ObstaclePublisher {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("ObstaclePublisher").field("cell", &self.cell).field("zid", &self.session.zid()).finish()
+        f.debug_struct("ObstaclePublisher")
+            .field("cell", &self.cell)
+            .field("zid", &self.session.zid())
+            .finish()
     }
 }
 
@@ -135,7 +139,8 @@ impl ObstaclePublisher {
     /// Puts a JSON obstacle under `id` (its own `id`, if any, should be the same).
     pub async fn put_json(&self, id: &str, obstacle: &serde_json::Value) -> Result<(), ClientError> {
         check_chunk("id", id)?;
-        let bytes = serde_json::to_vec(obstacle).map_err(|e| ClientError::argument("obstacle", e.to_string()))?;
+        let bytes =
+            serde_json::to_vec(obstacle).map_err(|e| ClientError::argument("obstacle", e.to_string()))?;
         self.session
             .put(obstacle_key(&self.cell, id), bytes)
             .encoding(Encoding::APPLICATION_JSON)
@@ -208,9 +213,10 @@ mod tests {
         let publisher = ObstaclePublisher::open("cellA", &[locator], &[]).await.unwrap();
         publisher.wait_for_subscriber(WAIT).await.unwrap();
 
-        let spec: ObstacleSpec =
-            serde_json::from_value(serde_json::json!({"id": "box1", "center": [0.5, 0.5], "semi_axes": [0.2, 0.1]}))
-                .unwrap();
+        let spec: ObstacleSpec = serde_json::from_value(
+            serde_json::json!({"id": "box1", "center": [0.5, 0.5], "semi_axes": [0.2, 0.1]}),
+        )
+        .unwrap();
         publisher.put_spec(&spec, 2.5).await.unwrap();
         let proto = JsonObstacle { spec: spec.clone(), margin: 0.05, ttl_s: 0.0 }.to_proto();
         publisher.put_proto(&v1::Obstacle { id: "box2".into(), ..proto.clone() }).await.unwrap();

@@ -183,7 +183,8 @@ fn server_commands_exit_1_when_the_server_is_unreachable_and_2_on_bad_arguments(
     let file = dir.path().join("o.json");
     std::fs::write(&file, r#"{"id": "a", "center": [0, 0], "semi_axes": [0.1, -1]}"#).unwrap();
     for via in ["grpc", "zenoh"] {
-        let o = dmpctl(&["scene", "put", file.to_str().unwrap(), "--via", via, "--server", "http://127.0.0.1:1"]);
+        let o =
+            dmpctl(&["scene", "put", file.to_str().unwrap(), "--via", via, "--server", "http://127.0.0.1:1"]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{err}");
         assert!(err.contains("semi_axes[1]"), "{err}");

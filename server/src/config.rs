@@ -54,7 +54,13 @@ pub struct ZenohConfig {
 
 impl Default for ZenohConfig {
     fn default() -> Self {
-        Self { disabled: false, mode: "peer".into(), listen: Vec::new(), connect: Vec::new(), multicast_scouting: true }
+        Self {
+            disabled: false,
+            mode: "peer".into(),
+            listen: Vec::new(),
+            connect: Vec::new(),
+            multicast_scouting: true,
+        }
     }
 }
 

@@ -19,7 +19,10 @@ pub fn check_name(field: &str, s: &str) -> Result<(), ServerError> {
         return Err(ServerError::invalid(field, "must have 1 to 128 characters"));
     }
     if let Some(c) = s.chars().find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))) {
-        return Err(ServerError::invalid(field, format!("has `{c}`: only letters, digits, `_`, `-` and `.` are allowed")));
+        return Err(ServerError::invalid(
+            field,
+            format!("has `{c}`: only letters, digits, `_`, `-` and `.` are allowed"),
+        ));
     }
     Ok(())
 }
@@ -46,7 +49,10 @@ pub fn solid_to_shape(s: &v1::SolidPrimitive) -> Result<Shape, ServerError> {
     finite("dimensions", &s.dimensions)?;
     let want = |n: usize| -> Result<(), ServerError> {
         if s.dimensions.len() != n {
-            return Err(ServerError::invalid("dimensions", format!("must have {n} entries, found {}", s.dimensions.len())));
+            return Err(ServerError::invalid(
+                "dimensions",
+                format!("must have {n} entries, found {}", s.dimensions.len()),
+            ));
         }
         if let Some(i) = s.dimensions.iter().position(|d| *d <= 0.0) {
             return Err(ServerError::invalid(format!("dimensions[{i}]"), "must be greater than zero"));
@@ -87,9 +93,14 @@ pub fn obstacle_to_engine(o: &v1::Obstacle) -> Result<dmp::Obstacle, ServerError
         Some(S::Superquadric(s)) => superquadric_to_shape(s).map_err(|e| e.within("superquadric"))?,
         Some(S::Nested(n)) => {
             let a: [f64; 3] = n.semi_axes.as_slice().try_into().map_err(|_| {
-                ServerError::invalid("nested.semi_axes", format!("must have 3 entries, found {}", n.semi_axes.len()))
+                ServerError::invalid(
+                    "nested.semi_axes",
+                    format!("must have 3 entries, found {}", n.semi_axes.len()),
+                )
             })?;
-            Shape::Nested(NestedSuperquadric::new(a, n.n, n.m).map_err(|e| ServerError::from(e).within("nested"))?)
+            Shape::Nested(
+                NestedSuperquadric::new(a, n.n, n.m).map_err(|e| ServerError::from(e).within("nested"))?,
+            )
         }
         Some(S::Solid(s)) => solid_to_shape(s).map_err(|e| e.within("solid"))?,
     };
@@ -105,7 +116,10 @@ pub fn obstacle_to_engine(o: &v1::Obstacle) -> Result<dmp::Obstacle, ServerError
         None
     } else {
         if o.rotation.len() != d * d {
-            return Err(ServerError::invalid("rotation", format!("must have {} entries (d x d, row-major)", d * d)));
+            return Err(ServerError::invalid(
+                "rotation",
+                format!("must have {} entries (d x d, row-major)", d * d),
+            ));
         }
         Some(o.rotation.chunks(d).map(<[f64]>::to_vec).collect())
     };
@@ -125,7 +139,10 @@ pub fn obstacle_from_json(bytes: &[u8], id_from_key: &str) -> Result<v1::Obstacl
         return Err(ServerError::invalid("payload", "must be a JSON object"));
     };
     if let Some(k) = obj.keys().find(|k| !JSON_OBSTACLE_KEYS.contains(&k.as_str())) {
-        return Err(ServerError::invalid(k.clone(), format!("unknown field, expected one of {JSON_OBSTACLE_KEYS:?}")));
+        return Err(ServerError::invalid(
+            k.clone(),
+            format!("unknown field, expected one of {JSON_OBSTACLE_KEYS:?}"),
+        ));
     }
     let mut number = |key: &str| -> Result<f64, ServerError> {
         match obj.remove(key) {
@@ -138,7 +155,9 @@ pub fn obstacle_from_json(bytes: &[u8], id_from_key: &str) -> Result<v1::Obstacl
     let s: dmp::scenario::ObstacleSpec = serde_json::from_value(serde_json::Value::Object(obj))
         .map_err(|e| ServerError::invalid("payload", e.to_string()))?;
     let shape = match s.nested {
-        Some(n) => v1::obstacle::Shape::Nested(v1::NestedSuperquadric { semi_axes: s.semi_axes, n: n.n, m: n.m }),
+        Some(n) => {
+            v1::obstacle::Shape::Nested(v1::NestedSuperquadric { semi_axes: s.semi_axes, n: n.n, m: n.m })
+        }
         None => v1::obstacle::Shape::Superquadric(v1::Superquadric {
             semi_axes: s.semi_axes,
             exponents: s.exponents.unwrap_or_default(),
@@ -181,7 +200,10 @@ pub fn primitive_from_proto(p: &v1::Primitive, limits: &Limits) -> Result<dmp::P
         return Err(ServerError::invalid("n_basis", format!("must be between 1 and {}", limits.max_basis)));
     }
     if p.weights.len() != dim * (n + 1) {
-        return Err(ServerError::invalid("weights", format!("must have dim x (n_basis + 1) = {} entries", dim * (n + 1))));
+        return Err(ServerError::invalid(
+            "weights",
+            format!("must have dim x (n_basis + 1) = {} entries", dim * (n + 1)),
+        ));
     }
     let prim = dmp::Primitive {
         format_version: p.format_version,
@@ -200,10 +222,16 @@ pub fn primitive_from_proto(p: &v1::Primitive, limits: &Limits) -> Result<dmp::P
 }
 
 /// The engine's demonstration of a message, within the limits.
-pub fn demonstration_from_proto(d: &v1::Demonstration, limits: &Limits) -> Result<dmp::Demonstration, ServerError> {
+pub fn demonstration_from_proto(
+    d: &v1::Demonstration,
+    limits: &Limits,
+) -> Result<dmp::Demonstration, ServerError> {
     let dim = d.dim as usize;
     if dim == 0 || dim > limits.max_dim {
-        return Err(ServerError::invalid("demonstration.dim", format!("must be between 1 and {}", limits.max_dim)));
+        return Err(ServerError::invalid(
+            "demonstration.dim",
+            format!("must be between 1 and {}", limits.max_dim),
+        ));
     }
     if d.t.len() > limits.max_samples {
         return Err(ServerError::ResourceExhausted(format!(
@@ -223,11 +251,17 @@ pub fn demonstration_from_proto(d: &v1::Demonstration, limits: &Limits) -> Resul
 }
 
 /// The learning configuration of a message, with the documented defaults.
-pub fn learn_config_from_proto(p: Option<&v1::LearnParameters>, limits: &Limits) -> Result<dmp::LearnConfig, ServerError> {
+pub fn learn_config_from_proto(
+    p: Option<&v1::LearnParameters>,
+    limits: &Limits,
+) -> Result<dmp::LearnConfig, ServerError> {
     let mut c = dmp::LearnConfig::paper();
     if let Some(p) = p {
         if p.n_basis as usize > limits.max_basis {
-            return Err(ServerError::invalid("parameters.n_basis", format!("must be at most {}", limits.max_basis)));
+            return Err(ServerError::invalid(
+                "parameters.n_basis",
+                format!("must be at most {}", limits.max_basis),
+            ));
         }
         if p.n_basis > 0 {
             c.n_basis = p.n_basis as usize;
@@ -246,7 +280,10 @@ pub fn learn_config_from_proto(p: Option<&v1::LearnParameters>, limits: &Limits)
 }
 
 /// The engine's avoidance of a message; an unset method takes `default`. Returns the boundary sample count too.
-pub fn avoidance_from_proto(a: Option<&v1::Avoidance>, default: Avoidance) -> Result<(Avoidance, usize), ServerError> {
+pub fn avoidance_from_proto(
+    a: Option<&v1::Avoidance>,
+    default: Avoidance,
+) -> Result<(Avoidance, usize), ServerError> {
     use v1::avoidance::Method as M;
     let Some(a) = a else { return Ok((default, DEFAULT_POINT_SAMPLES)) };
     let method = match &a.method {
@@ -264,7 +301,8 @@ pub fn avoidance_from_proto(a: Option<&v1::Avoidance>, default: Avoidance) -> Re
     if samples > 10_000 {
         return Err(ServerError::invalid("point_samples", "must be at most 10000"));
     }
-    let relative_velocity = if a.method.is_none() { default.relative_velocity } else { !a.ignore_obstacle_velocity };
+    let relative_velocity =
+        if a.method.is_none() { default.relative_velocity } else { !a.ignore_obstacle_velocity };
     Ok((Avoidance { method, relative_velocity }, samples))
 }
 

@@ -232,7 +232,7 @@ impl Store {
             versions.len() as u64
         };
         if removed == 0 {
-            // Dropping the transaction aborts it: nothing was written.
+            tx.abort().map_err(|e| storage("abort", e))?;
             return Err(ServerError::NotFound(format!("robot `{robot_id}` has no primitive named `{name}`")));
         }
         tx.commit().map_err(|e| storage("commit", e))?;

@@ -591,6 +591,22 @@ mod tests {
     }
 
     #[tokio::test(flavor = "multi_thread")]
+    async fn a_client_mode_session_reaches_the_bridge() {
+        let p = pair("cell5").await;
+        let mut cfg = loopback(locators(&p.server).await);
+        cfg.mode = "client".into();
+        cfg.listen.clear();
+        let client = within("open client mode", open_session(&cfg)).await.unwrap();
+        let mut rx = p.scene.subscribe();
+        let publisher = matched_publisher(&client, obstacle_key("cell5", "c")).await;
+        within("put", publisher.put(r#"{"center": [0], "semi_axes": [1]}"#)).await.unwrap();
+        assert!(next(&mut rx).await.obstacles.contains_key("c"));
+        drop(publisher);
+        within("client mode close", client.close()).await.unwrap();
+        p.close().await;
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
     async fn the_reaper_stops_on_shutdown() {
         let p = pair("cell4").await;
         p.shutdown.cancel();

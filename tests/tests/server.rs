@@ -20,9 +20,11 @@ async fn within<F: Future>(what: &str, f: F) -> F::Output {
 }
 
 fn config(dir: &Path) -> Config {
-    let mut c = Config::default();
-    c.grpc_addr = "127.0.0.1:0".parse().unwrap();
-    c.data_dir = dir.to_path_buf();
+    let mut c = Config {
+        grpc_addr: "127.0.0.1:0".parse().unwrap(),
+        data_dir: dir.to_path_buf(),
+        ..Default::default()
+    };
     c.zenoh.listen = vec!["tcp/127.0.0.1:0".into()];
     c.zenoh.multicast_scouting = false;
     c
@@ -30,7 +32,9 @@ fn config(dir: &Path) -> Config {
 
 async fn serve(dir: &Path) -> (ServerHandle, DmpClient) {
     let handle = within("server start", start(config(dir))).await.expect("server starts");
-    let client = within("connect", DmpClient::connect(format!("http://{}", handle.grpc_addr))).await.expect("connects");
+    let client = within("connect", DmpClient::connect(format!("http://{}", handle.grpc_addr)))
+        .await
+        .expect("connects");
     (handle, client)
 }
 
@@ -46,7 +50,10 @@ async fn until(what: &str, mut cond: impl FnMut() -> bool) {
 
 fn paper_curve() -> (Vec<f64>, Vec<Vec<f64>>) {
     let t: Vec<f64> = (0..=1000).map(|i| i as f64 * 1e-3).collect();
-    let x = t.iter().map(|t| vec![t * (std::f64::consts::PI * t).cos(), t * (std::f64::consts::PI * t).sin()]).collect();
+    let x = t
+        .iter()
+        .map(|t| vec![t * (std::f64::consts::PI * t).cos(), t * (std::f64::consts::PI * t).sin()])
+        .collect();
     (t, x)
 }
 
@@ -62,7 +69,10 @@ fn spec(robot: &str, name: &str) -> v1::MotionSpec {
 fn ellipse(id: &str, center: Vec<f64>, axes: Vec<f64>) -> v1::Obstacle {
     v1::Obstacle {
         id: id.into(),
-        shape: Some(v1::obstacle::Shape::Superquadric(v1::Superquadric { semi_axes: axes, exponents: vec![] })),
+        shape: Some(v1::obstacle::Shape::Superquadric(v1::Superquadric {
+            semi_axes: axes,
+            exponents: vec![],
+        })),
         center,
         ..Default::default()
     }
@@ -70,7 +80,11 @@ fn ellipse(id: &str, center: Vec<f64>, axes: Vec<f64>) -> v1::Obstacle {
 
 fn dynamic_volumetric(lambda: f64, beta: f64, eta: f64) -> v1::Avoidance {
     v1::Avoidance {
-        method: Some(v1::avoidance::Method::DynamicVolumetric(v1::avoidance::DynamicVolumetric { lambda, beta, eta })),
+        method: Some(v1::avoidance::Method::DynamicVolumetric(v1::avoidance::DynamicVolumetric {
+            lambda,
+            beta,
+            eta,
+        })),
         ..Default::default()
     }
 }
@@ -87,9 +101,14 @@ async fn primitives_survive_a_restart_and_a_plan_equals_the_engine() {
     let r1 = within("learn", client.learn("panda", "curve", &t, &x, Default::default())).await.unwrap();
     let r2 = within("learn again", client.learn("panda", "curve", &t, &x, Default::default())).await.unwrap();
     assert_eq!((r1.version, r2.version), (1, 2));
-    within("put", client.put_primitive("panda", "line", &line(vec![0.0; 2], vec![1.0, 0.0], 1.0))).await.unwrap();
+    within("put", client.put_primitive("panda", "line", &line(vec![0.0; 2], vec![1.0, 0.0], 1.0)))
+        .await
+        .unwrap();
     let before = within("list", client.list("panda")).await.unwrap();
-    assert_eq!(before.iter().map(|r| (r.name.as_str(), r.version)).collect::<Vec<_>>(), [("curve", 2), ("line", 1)]);
+    assert_eq!(
+        before.iter().map(|r| (r.name.as_str(), r.version)).collect::<Vec<_>>(),
+        [("curve", 2), ("line", 1)]
+    );
     within("shutdown", handle.shutdown()).await.unwrap();
 
     let (handle, client) = serve(dir.path()).await;
@@ -106,7 +125,9 @@ async fn primitives_survive_a_restart_and_a_plan_equals_the_engine() {
     motion.avoidance = Some(dynamic_volumetric(10.0, 2.0, 0.5));
     motion.extra_obstacles = vec![ellipse("ellipse", vec![-0.5, 0.7], vec![0.3, 0.2])];
     motion.ignore_scene = true;
-    let plan = within("plan", client.plan(v1::PlanRequest { motion: Some(motion), dt: 1e-3, duration: 1.0 })).await.unwrap();
+    let plan = within("plan", client.plan(v1::PlanRequest { motion: Some(motion), dt: 1e-3, duration: 1.0 }))
+        .await
+        .unwrap();
     assert!(plan.collisions.is_empty() && !plan.stalled);
     let seg = plan.trajectory.unwrap();
     let shape = dmp::Shape::Superquadric(dmp::Superquadric::ellipsoid(vec![0.3, 0.2]).unwrap());
@@ -116,8 +137,10 @@ async fn primitives_survive_a_restart_and_a_plan_equals_the_engine() {
         beta: 2.0,
         eta: 0.5,
     }));
-    let mut field = dmp::RepulsiveField::new(dmp::Scene::with_obstacles(vec![obstacle], avoidance, 50), 2).unwrap();
-    let reference = dmp::rollout(&offline, &dmp::Motion::of(&offline), &mut field, 1e-3, 1000).unwrap().trajectory;
+    let mut field =
+        dmp::RepulsiveField::new(dmp::Scene::with_obstacles(vec![obstacle], avoidance, 50), 2).unwrap();
+    let reference =
+        dmp::rollout(&offline, &dmp::Motion::of(&offline), &mut field, 1e-3, 1000).unwrap().trajectory;
     assert_eq!(seg.positions.len(), reference.x.len());
     let worst = seg.positions.iter().zip(&reference.x).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     assert!(worst <= 1e-9, "plan differs from the engine by {worst}");
@@ -130,8 +153,11 @@ async fn primitives_survive_a_restart_and_a_plan_equals_the_engine() {
 async fn an_obstacle_published_over_zenoh_changes_the_stream_and_is_cleared() {
     let dir = tempfile::tempdir().unwrap();
     let (handle, client) = serve(dir.path()).await;
-    within("put", client.put_primitive("youbot", "corridor", &line(vec![0.0, 0.0], vec![1.0, 0.0], 1.0))).await.unwrap();
-    let perception = within("zenoh open", ObstaclePublisher::open("default", &handle.zenoh_locators, &[])).await.unwrap();
+    within("put", client.put_primitive("youbot", "corridor", &line(vec![0.0, 0.0], vec![1.0, 0.0], 1.0)))
+        .await
+        .unwrap();
+    let perception =
+        within("zenoh open", ObstaclePublisher::open("default", &handle.zenoh_locators, &[])).await.unwrap();
     within("subscriber", perception.wait_for_subscriber(T)).await.unwrap();
 
     // A real-time robot: segments arrive 50 ms ahead of the wall clock.
@@ -157,11 +183,20 @@ async fn an_obstacle_published_over_zenoh_changes_the_stream_and_is_cleared() {
     }
     let last = segments.last().unwrap();
     assert_eq!(last.status, v1::SegmentStatus::GoalReached as i32, "ended with {:?}", last.status);
-    let first_new = segments.iter().position(|s| s.scene_version >= 1).expect("a segment accounts for the obstacle");
+    let first_new =
+        segments.iter().position(|s| s.scene_version >= 1).expect("a segment accounts for the obstacle");
     // It supersedes what was sent ahead: it starts before the last segment sent with the old scene ended.
     let old_end = segments[first_new - 1].start_time + 0.01;
-    assert!(segments[first_new].start_time < old_end, "no supersession: {} >= {old_end}", segments[first_new].start_time);
-    assert!(segments[first_new].start_time < put_at + 0.2, "applied late: {}", segments[first_new].start_time);
+    assert!(
+        segments[first_new].start_time < old_end,
+        "no supersession: {} >= {old_end}",
+        segments[first_new].start_time
+    );
+    assert!(
+        segments[first_new].start_time < put_at + 0.2,
+        "applied late: {}",
+        segments[first_new].start_time
+    );
     // The current setpoints (later segments supersede earlier ones) clear the true shape and bend around it.
     let mut setpoints = dmp_client::setpoints::Setpoints::new();
     for s in &segments {
@@ -185,7 +220,9 @@ async fn an_obstacle_published_over_zenoh_changes_the_stream_and_is_cleared() {
 async fn a_goal_change_mid_session_converges_with_continuous_motion() {
     let dir = tempfile::tempdir().unwrap();
     let (handle, client) = serve(dir.path()).await;
-    within("put", client.put_primitive("psm1", "reach", &line(vec![0.0; 3], vec![0.1, 0.0, 0.0], 1.0))).await.unwrap();
+    within("put", client.put_primitive("psm1", "reach", &line(vec![0.0; 3], vec![0.1, 0.0, 0.0], 1.0)))
+        .await
+        .unwrap();
     let mut motion = spec("psm1", "reach");
     motion.ignore_scene = true;
     let start = v1::ExecuteRequest { motion: Some(motion), max_duration_s: 4.0, ..Default::default() };
@@ -218,7 +255,11 @@ async fn a_goal_change_mid_session_converges_with_continuous_motion() {
         let (xb, vb) = (rows(b, &b.positions)[0].clone(), rows(b, &b.velocities)[0].clone());
         assert!((b.start_time - (a.start_time + a.dt * (a.positions.len() / 3) as f64)).abs() < 1e-9);
         for i in 0..3 {
-            assert!((xb[i] - xa[i] - va[i] * a.dt).abs() <= max_acc * a.dt * a.dt, "position jump at {}", b.start_time);
+            assert!(
+                (xb[i] - xa[i] - va[i] * a.dt).abs() <= max_acc * a.dt * a.dt,
+                "position jump at {}",
+                b.start_time
+            );
             assert!((vb[i] - va[i]).abs() <= max_acc * a.dt * 1.01, "velocity jump at {}", b.start_time);
         }
     }
@@ -255,7 +296,11 @@ async fn three_robots_on_a_shared_phase_do_not_collide() {
         last = Some(g);
     }
     let last = last.unwrap();
-    assert!(last.segments.iter().all(|s| s.status == v1::SegmentStatus::GoalReached as i32), "{:?}", last.segments[0].status);
+    assert!(
+        last.segments.iter().all(|s| s.status == v1::SegmentStatus::GoalReached as i32),
+        "{:?}",
+        last.segments[0].status
+    );
     let fp = dmp::Superquadric::ellipsoid(vec![0.58, 0.38]).unwrap();
     for a in 0..3 {
         for b in 0..3 {
@@ -263,7 +308,10 @@ async fn three_robots_on_a_shared_phase_do_not_collide() {
                 continue;
             }
             for (pa, pb) in paths[a].iter().zip(&paths[b]) {
-                assert!(fp.value(&[pa[0] - pb[0], pa[1] - pb[1]]) > 0.0, "robot {a} inside robot {b}'s footprint");
+                assert!(
+                    fp.value(&[pa[0] - pb[0], pa[1] - pb[1]]) > 0.0,
+                    "robot {a} inside robot {b}'s footprint"
+                );
             }
         }
         let end = paths[a].last().unwrap();
@@ -276,14 +324,17 @@ async fn three_robots_on_a_shared_phase_do_not_collide() {
 async fn a_hundred_concurrent_streams_complete_and_a_leaving_client_frees_its_stream() {
     let dir = tempfile::tempdir().unwrap();
     let (handle, client) = serve(dir.path()).await;
-    within("put", client.put_primitive("fleet", "hop", &line(vec![0.0, 0.0], vec![0.5, 0.0], 0.5))).await.unwrap();
+    within("put", client.put_primitive("fleet", "hop", &line(vec![0.0, 0.0], vec![0.5, 0.0], 0.5)))
+        .await
+        .unwrap();
     let mut tasks = Vec::new();
     for _ in 0..100 {
         let client = client.clone();
         tasks.push(tokio::spawn(async move {
             let mut motion = spec("fleet", "hop");
             motion.ignore_scene = true;
-            let request = v1::ExecuteRequest { motion: Some(motion), max_duration_s: 2.0, ..Default::default() };
+            let request =
+                v1::ExecuteRequest { motion: Some(motion), max_duration_s: 2.0, ..Default::default() };
             let mut stream = client.execute(request).await.unwrap();
             let mut last = None;
             while let Some(s) = stream.next().await {
@@ -324,16 +375,21 @@ async fn bad_input_gets_a_clear_status_and_the_server_keeps_serving() {
     let e = within("learn NaN", client.learn("r", "bad", &t, &x, Default::default())).await.unwrap_err();
     assert_eq!(e.code(), Some(tonic::Code::InvalidArgument), "{e}");
     assert!(e.to_string().contains("demonstration.positions[3][1]"), "{e}");
-    let e = within("learn bad id", client.learn("a/b", "x", &t[..3], &x[..3], Default::default())).await.unwrap_err();
+    let e = within("learn bad id", client.learn("a/b", "x", &t[..3], &x[..3], Default::default()))
+        .await
+        .unwrap_err();
     assert!(e.to_string().contains("robot_id"), "{e}");
     let e = within("get missing", client.get("r", "nothing", 0)).await.unwrap_err();
     assert_eq!(e.code(), Some(tonic::Code::NotFound), "{e}");
-    within("put", client.put_primitive("r", "line", &line(vec![0.0, 0.0], vec![1.0, 0.0], 1.0))).await.unwrap();
+    within("put", client.put_primitive("r", "line", &line(vec![0.0, 0.0], vec![1.0, 0.0], 1.0)))
+        .await
+        .unwrap();
     let mut motion = spec("r", "line");
     motion.goal = vec![1.0, 2.0, 3.0];
-    let e = within("plan bad goal", client.plan(v1::PlanRequest { motion: Some(motion), ..Default::default() }))
-        .await
-        .unwrap_err();
+    let e =
+        within("plan bad goal", client.plan(v1::PlanRequest { motion: Some(motion), ..Default::default() }))
+            .await
+            .unwrap_err();
     assert!(e.to_string().contains("motion.goal"), "{e}");
     let request = v1::ExecuteRequest { motion: Some(spec("r", "line")), dt: -1.0, ..Default::default() };
     let e = within("execute bad dt", client.execute(request)).await.err().expect("refused");
@@ -345,10 +401,14 @@ async fn bad_input_gets_a_clear_status_and_the_server_keeps_serving() {
     assert!(within("put shapeless", client.put_obstacle(bad)).await.is_err());
 
     // Malformed Zenoh payloads are counted and change nothing.
-    let perception = within("zenoh open", ObstaclePublisher::open("default", &handle.zenoh_locators, &[])).await.unwrap();
+    let perception =
+        within("zenoh open", ObstaclePublisher::open("default", &handle.zenoh_locators, &[])).await.unwrap();
     within("subscriber", perception.wait_for_subscriber(T)).await.unwrap();
     let session = perception.session();
-    within("garbage", async { session.put("dmp/default/obstacles/junk", vec![0xff, 0x00, 0x13]).await.unwrap() }).await;
+    within("garbage", async {
+        session.put("dmp/default/obstacles/junk", vec![0xff, 0x00, 0x13]).await.unwrap()
+    })
+    .await;
     within("bad json", async {
         session.put("dmp/default/obstacles/neg", r#"{"center": [0, 0], "semi_axes": [-1, 1]}"#).await.unwrap()
     })
@@ -357,13 +417,18 @@ async fn bad_input_gets_a_clear_status_and_the_server_keeps_serving() {
     let snap = within("list obstacles", client.list_obstacles()).await.unwrap();
     assert!(snap.obstacles.is_empty(), "{:?}", snap.obstacles);
     within("list", client.list("r")).await.unwrap();
-    let channel = tonic::transport::Channel::from_shared(format!("http://{}", handle.grpc_addr)).unwrap().connect().await.unwrap();
-    let mut health = tonic_health::pb::health_client::HealthClient::new(channel);
-    let status = within("health", health.check(tonic_health::pb::HealthCheckRequest { service: String::new() }))
-        .await
+    let channel = tonic::transport::Channel::from_shared(format!("http://{}", handle.grpc_addr))
         .unwrap()
-        .into_inner()
-        .status;
+        .connect()
+        .await
+        .unwrap();
+    let mut health = tonic_health::pb::health_client::HealthClient::new(channel);
+    let status =
+        within("health", health.check(tonic_health::pb::HealthCheckRequest { service: String::new() }))
+            .await
+            .unwrap()
+            .into_inner()
+            .status;
     assert_eq!(status, tonic_health::pb::health_check_response::ServingStatus::Serving as i32);
     within("shutdown", handle.shutdown()).await.unwrap();
 }

@@ -89,7 +89,7 @@ fn shutdown_signal() -> std::io::Result<impl Future<Output = ()> + Send + 'stati
             _ = interrupt.recv() => "SIGINT",
             _ = terminate.recv() => "SIGTERM",
         };
-        info!(signal = name, "shutting down: draining streams (send the signal again to exit at once)");
+        info!(signal = name, "signal received: stopping (send it again to exit at once)");
         tokio::spawn(async move {
             let name = tokio::select! {
                 _ = interrupt.recv() => "SIGINT",

@@ -186,7 +186,12 @@ impl Runner {
 
     /// Rebuilds the field from the scene (obstacles as they are at wall time `now_unix_s`, which is the run's
     /// current time) and the cell's other robots.
-    pub fn apply_scene(&mut self, snap: &SceneSnapshot, remote: &[RemoteRobot], now_unix_s: f64) -> Result<(), ServerError> {
+    pub fn apply_scene(
+        &mut self,
+        snap: &SceneSnapshot,
+        remote: &[RemoteRobot],
+        now_unix_s: f64,
+    ) -> Result<(), ServerError> {
         let t = self.state.t;
         let sub = self.field.agent_dim();
         let mut obstacles = Vec::new();
@@ -218,13 +223,18 @@ impl Runner {
                 continue;
             }
             let Some(fp) = &r.footprint else { continue };
-            if r.state.position.len() != sub || r.state.velocity.len() != sub || dmp::Isopotential::dim(fp) != sub {
+            if r.state.position.len() != sub
+                || r.state.velocity.len() != sub
+                || dmp::Isopotential::dim(fp) != sub
+            {
                 continue;
             }
             let age = now_unix_s - r.state.stamp_unix_s;
             let c0: Vec<f64> =
                 r.state.position.iter().zip(&r.state.velocity).map(|(p, v)| p + v * age - v * t).collect();
-            if let Ok(o) = Obstacle::new(r.state.robot_id.clone(), fp.clone(), c0, None, Some(r.state.velocity.clone())) {
+            if let Ok(o) =
+                Obstacle::new(r.state.robot_id.clone(), fp.clone(), c0, None, Some(r.state.velocity.clone()))
+            {
                 obstacles.push(o);
             }
         }
@@ -282,7 +292,8 @@ impl Runner {
     /// Current speed of the slowest-to-stop member, and whether every member is at its goal.
     pub fn arrived(&self) -> bool {
         self.members.iter().all(|m| {
-            let dist: f64 = m.dims.clone().map(|i| (self.state.x[i] - self.motion.goal[i]).powi(2)).sum::<f64>().sqrt();
+            let dist: f64 =
+                m.dims.clone().map(|i| (self.state.x[i] - self.motion.goal[i]).powi(2)).sum::<f64>().sqrt();
             let speed: f64 = m.dims.clone().map(|i| self.state.xd[i].powi(2)).sum::<f64>().sqrt();
             dist <= ARRIVED_DISTANCE && speed <= ARRIVED_SPEED
         })
@@ -317,6 +328,8 @@ impl Runner {
                 let mut both = Both(&mut self.field, &mut self.remote);
                 self.integrator.step(&self.motion, &mut both, &mut self.state, self.dt, &mut self.acc);
             }
+            // Times are whole multiples of dt, not a drifting sum.
+            self.state.t = (self.state.t / self.dt).round() * self.dt;
             p.xdd.extend_from_slice(&self.acc);
             self.contacts.clear();
             let (t, x) = (self.state.t, &self.state.x);
@@ -370,12 +383,21 @@ impl Runner {
 fn agents(members: &[Member]) -> Vec<Agent> {
     members
         .iter()
-        .map(|m| Agent { id: m.robot_id.clone(), dims: m.dims.clone().collect(), footprint: m.footprint.clone() })
+        .map(|m| Agent {
+            id: m.robot_id.clone(),
+            dims: m.dims.clone().collect(),
+            footprint: m.footprint.clone(),
+        })
         .collect()
 }
 
 /// Obstacles with the obstacle method, and the group's robots with the robot method.
-fn build_field(agents: &[Agent], a: &AvoidanceSpec, mut obstacles: Vec<Obstacle>, dim: usize) -> Result<RepulsiveField, ServerError> {
+fn build_field(
+    agents: &[Agent],
+    a: &AvoidanceSpec,
+    mut obstacles: Vec<Obstacle>,
+    dim: usize,
+) -> Result<RepulsiveField, ServerError> {
     obstacles.extend(a.extra.iter().cloned());
     let group = agents.len() > 1;
     let scene = Scene {
@@ -389,7 +411,12 @@ fn build_field(agents: &[Agent], a: &AvoidanceSpec, mut obstacles: Vec<Obstacle>
 }
 
 /// The cell's other robots, as moving obstacles with the robot method.
-fn build_remote(agents: &[Agent], a: &AvoidanceSpec, obstacles: Vec<Obstacle>, dim: usize) -> Result<RepulsiveField, ServerError> {
+fn build_remote(
+    agents: &[Agent],
+    a: &AvoidanceSpec,
+    obstacles: Vec<Obstacle>,
+    dim: usize,
+) -> Result<RepulsiveField, ServerError> {
     let scene = Scene {
         obstacles,
         avoidance: a.robots.0,

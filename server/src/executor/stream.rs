@@ -85,7 +85,11 @@ async fn produce(
     let mut scene_rx = app.scene.subscribe();
     let first_robot = runner.members()[0].robot_id.clone();
     let snap = scene_rx.borrow_and_update().clone();
-    runner.apply_scene(&snap, &app.scene.other_robots(&first_robot, now_unix_s(), REMOTE_MAX_AGE_S), now_unix_s())?;
+    runner.apply_scene(
+        &snap,
+        &app.scene.other_robots(&first_robot, now_unix_s(), REMOTE_MAX_AGE_S),
+        now_unix_s(),
+    )?;
     let start = Instant::now();
     let start_unix = now_unix_s();
     let dt = runner.dt();
@@ -150,7 +154,11 @@ async fn produce(
                     runner.set_holding(true);
                 }
                 Control::State(s) => {
-                    let fp = runner.members().iter().find(|m| m.robot_id == s.robot_id).and_then(|m| m.footprint.clone());
+                    let fp = runner
+                        .members()
+                        .iter()
+                        .find(|m| m.robot_id == s.robot_id)
+                        .and_then(|m| m.footprint.clone());
                     app.robots.publish(s, fp).await;
                 }
             }
@@ -196,14 +204,22 @@ async fn recv(control: &mut Option<mpsc::Receiver<Control>>) -> Option<Control> 
 }
 
 /// One segment per member out of the run's points.
-fn split(runner: &Runner, p: &super::runner::Points, seq: u64, status: v1::SegmentStatus, start_unix: Option<f64>) -> Batch {
+fn split(
+    runner: &Runner,
+    p: &super::runner::Points,
+    seq: u64,
+    status: v1::SegmentStatus,
+    start_unix: Option<f64>,
+) -> Batch {
     let d = runner.state().x.len();
     let n = p.x.len() / d;
     runner
         .members()
         .iter()
         .map(|m| {
-            let pick = |v: &[f64]| -> Vec<f64> { (0..n).flat_map(|k| v[k * d + m.dims.start..k * d + m.dims.end].iter().copied()).collect() };
+            let pick = |v: &[f64]| -> Vec<f64> {
+                (0..n).flat_map(|k| v[k * d + m.dims.start..k * d + m.dims.end].iter().copied()).collect()
+            };
             v1::Segment {
                 robot_id: m.robot_id.clone(),
                 sequence: seq,

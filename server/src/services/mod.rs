@@ -1,5 +1,5 @@
 //! The gRPC services, one file each.
 
+pub mod motion;
 pub mod primitives;
 pub mod scene;
-pub mod motion;

@@ -13,7 +13,9 @@ use tokio_stream::{Stream, StreamExt};
 use tonic::{Request, Response, Status, Streaming};
 use tracing::info;
 
-use crate::convert::{avoidance_from_proto, check_name, obstacle_to_engine, primitive_from_proto, superquadric_to_shape, vector};
+use crate::convert::{
+    avoidance_from_proto, check_name, obstacle_to_engine, primitive_from_proto, superquadric_to_shape, vector,
+};
 use crate::error::ServerError;
 use crate::executor::runner::{AvoidanceSpec, Member, Runner};
 use crate::executor::stream::{Batch, Control, StreamConfig, run_stream};
@@ -63,7 +65,9 @@ impl MotionServiceImpl {
         let record = tokio::task::spawn_blocking(move || store.get(&robot, &name, version))
             .await
             .map_err(|e| ServerError::Internal(e.to_string()))??;
-        let proto = record.primitive.ok_or_else(|| ServerError::Internal("stored record without primitive".into()))?;
+        let proto = record
+            .primitive
+            .ok_or_else(|| ServerError::Internal("stored record without primitive".into()))?;
         let primitive = primitive_from_proto(&proto, &self.state.config.limits)?;
         let d = primitive.dim;
         let pick = |field: &str, v: &[f64], default: &[f64]| -> Result<Vec<f64>, ServerError> {
@@ -78,7 +82,10 @@ impl MotionServiceImpl {
         let goal = pick("goal", &spec.goal, &primitive.goal)?;
         let tau = if spec.tau == 0.0 { primitive.tau } else { spec.tau };
         if !(tau.is_finite() && tau > 0.0) {
-            return Err(ServerError::invalid(format!("{prefix}.tau"), "must be a finite number greater than zero"));
+            return Err(ServerError::invalid(
+                format!("{prefix}.tau"),
+                "must be a finite number greater than zero",
+            ));
         }
         let defaults = &self.state.config.defaults;
         let obstacles = avoidance_from_proto(spec.avoidance.as_ref(), defaults.avoidance)
@@ -93,7 +100,9 @@ impl MotionServiceImpl {
         }
         let mut extra = Vec::with_capacity(spec.extra_obstacles.len());
         for (i, o) in spec.extra_obstacles.iter().enumerate() {
-            extra.push(obstacle_to_engine(o).map_err(|e| e.within(&format!("{prefix}.extra_obstacles[{i}]")))?);
+            extra.push(
+                obstacle_to_engine(o).map_err(|e| e.within(&format!("{prefix}.extra_obstacles[{i}]")))?,
+            );
         }
         let footprint = spec
             .footprint
@@ -148,17 +157,35 @@ impl MotionServiceImpl {
             Err(_) => return Err(ServerError::invalid("pacing", format!("unknown value {pacing}"))),
         };
         let segment_points = (segment_s / dt).round().max(1.0) as usize;
-        Ok((dt, StreamConfig { segment_points, realtime, lookahead: Duration::from_secs_f64(lookahead_s), max_duration }))
+        Ok((
+            dt,
+            StreamConfig {
+                segment_points,
+                realtime,
+                lookahead: Duration::from_secs_f64(lookahead_s),
+                max_duration,
+            },
+        ))
     }
 
     fn single_runner(&self, r: Resolved, dt: f64) -> Result<Runner, ServerError> {
         let dim = r.primitive.dim;
-        let member = Member { robot_id: r.robot_id, dims: 0..dim, footprint: r.footprint, footprint_proto: r.footprint_proto };
+        let member = Member {
+            robot_id: r.robot_id,
+            dims: 0..dim,
+            footprint: r.footprint,
+            footprint_proto: r.footprint_proto,
+        };
         Runner::new(vec![member], r.primitive, r.motion, dt, r.avoidance, history_len(dt))
     }
 
     /// Spawns the producer of a stream and returns the receiving end.
-    fn spawn(&self, runner: Runner, cfg: StreamConfig, control: Option<mpsc::Receiver<Control>>) -> Result<mpsc::Receiver<Result<Batch, Status>>, ServerError> {
+    fn spawn(
+        &self,
+        runner: Runner,
+        cfg: StreamConfig,
+        control: Option<mpsc::Receiver<Control>>,
+    ) -> Result<mpsc::Receiver<Result<Batch, Status>>, ServerError> {
         let permit = self.state.stream_permit()?;
         let (tx, rx) = mpsc::channel(self.state.config.limits.stream_buffer.max(1));
         let app = self.state.clone();
@@ -213,7 +240,11 @@ impl MotionService for MotionServiceImpl {
             .map_err(|e| Status::internal(e.to_string()))?;
         let (segment_points, collisions, stalled, goal) = out;
         let dim = segment_points.dim;
-        let status = if collisions.is_empty() && goal { v1::SegmentStatus::GoalReached } else { v1::SegmentStatus::Running };
+        let status = if collisions.is_empty() && goal {
+            v1::SegmentStatus::GoalReached
+        } else {
+            v1::SegmentStatus::Running
+        };
         info!(robot = %robot_id, steps, collisions = collisions.len(), stalled, "planned");
         Ok(Response::new(v1::PlanResponse {
             trajectory: Some(v1::Segment {
@@ -236,11 +267,20 @@ impl MotionService for MotionServiceImpl {
 
     type ExecuteStream = SegmentStream;
 
-    async fn execute(&self, request: Request<v1::ExecuteRequest>) -> Result<Response<Self::ExecuteStream>, Status> {
+    async fn execute(
+        &self,
+        request: Request<v1::ExecuteRequest>,
+    ) -> Result<Response<Self::ExecuteStream>, Status> {
         let req = request.into_inner();
         let r = self.resolve(req.motion.as_ref(), "motion").await?;
-        let (dt, cfg) =
-            self.stream_config(req.dt, req.segment_s, req.pacing, req.lookahead_s, req.max_duration_s, r.motion.tau)?;
+        let (dt, cfg) = self.stream_config(
+            req.dt,
+            req.segment_s,
+            req.pacing,
+            req.lookahead_s,
+            req.max_duration_s,
+            r.motion.tau,
+        )?;
         info!(robot = %r.robot_id, realtime = cfg.realtime, "execute");
         let runner = self.single_runner(r, dt)?;
         Ok(Response::new(single(self.spawn(runner, cfg, None)?)))
@@ -248,18 +288,30 @@ impl MotionService for MotionServiceImpl {
 
     type SessionStream = SegmentStream;
 
-    async fn session(&self, request: Request<Streaming<v1::SessionRequest>>) -> Result<Response<Self::SessionStream>, Status> {
+    async fn session(
+        &self,
+        request: Request<Streaming<v1::SessionRequest>>,
+    ) -> Result<Response<Self::SessionStream>, Status> {
         use v1::session_request::Message as M;
         let mut inbound = request.into_inner();
         let first = tokio::time::timeout(Duration::from_secs(10), inbound.message())
             .await
             .map_err(|_| Status::deadline_exceeded("no `start` message within 10 s"))??;
         let Some(v1::SessionRequest { message: Some(M::Start(req)) }) = first else {
-            return Err(ServerError::invalid("message", "the first message of a session must be `start`").into());
+            return Err(
+                ServerError::invalid("message", "the first message of a session must be `start`").into()
+            );
         };
         let r = self.resolve(req.motion.as_ref(), "start.motion").await?;
         let (dt, cfg) = self
-            .stream_config(req.dt, req.segment_s, req.pacing, req.lookahead_s, req.max_duration_s, r.motion.tau)
+            .stream_config(
+                req.dt,
+                req.segment_s,
+                req.pacing,
+                req.lookahead_s,
+                req.max_duration_s,
+                r.motion.tau,
+            )
             .map_err(|e| e.within("start"))?;
         let robot_id = r.robot_id.clone();
         let dim = r.primitive.dim;
@@ -303,7 +355,10 @@ impl MotionService for MotionServiceImpl {
 
     type ExecuteGroupStream = GroupStream;
 
-    async fn execute_group(&self, request: Request<v1::ExecuteGroupRequest>) -> Result<Response<Self::ExecuteGroupStream>, Status> {
+    async fn execute_group(
+        &self,
+        request: Request<v1::ExecuteGroupRequest>,
+    ) -> Result<Response<Self::ExecuteGroupStream>, Status> {
         let req = request.into_inner();
         if req.members.len() < 2 {
             return Err(ServerError::invalid("members", "a group needs at least two members").into());
@@ -315,7 +370,9 @@ impl MotionService for MotionServiceImpl {
         for (i, m) in req.members.iter().enumerate() {
             let r = self.resolve(m.motion.as_ref(), &format!("members[{i}].motion")).await?;
             if resolved.iter().any(|p: &Resolved| p.robot_id == r.robot_id) {
-                return Err(ServerError::invalid(format!("members[{i}].motion.robot_id"), "appears twice").into());
+                return Err(
+                    ServerError::invalid(format!("members[{i}].motion.robot_id"), "appears twice").into()
+                );
             }
             resolved.push(r);
         }
@@ -343,11 +400,13 @@ impl MotionService for MotionServiceImpl {
                 .into());
             }
         }
-        let tau = if req.tau == 0.0 { resolved.iter().map(|r| r.motion.tau).fold(0.0, f64::max) } else { req.tau };
+        let tau =
+            if req.tau == 0.0 { resolved.iter().map(|r| r.motion.tau).fold(0.0, f64::max) } else { req.tau };
         if !(tau.is_finite() && tau > 0.0) {
             return Err(ServerError::invalid("tau", "must be a finite number greater than zero").into());
         }
-        let (dt, cfg) = self.stream_config(req.dt, req.segment_s, req.pacing, req.lookahead_s, req.max_duration_s, tau)?;
+        let (dt, cfg) =
+            self.stream_config(req.dt, req.segment_s, req.pacing, req.lookahead_s, req.max_duration_s, tau)?;
         // One DMP: the members' primitives side by side (the paper's 6-D youBot DMP).
         let mut primitive = first.primitive.clone();
         primitive.tau = tau;
@@ -383,7 +442,10 @@ impl MotionService for MotionServiceImpl {
         let runner = Runner::new(members, primitive, motion, dt, avoidance, history_len(dt))?;
         let rx = self.spawn(runner, cfg, None)?;
         let stream = ReceiverStream::new(rx).map(|r| {
-            r.map(|segments| v1::GroupSegment { sequence: segments.first().map(|s| s.sequence).unwrap_or(0), segments })
+            r.map(|segments| v1::GroupSegment {
+                sequence: segments.first().map(|s| s.sequence).unwrap_or(0),
+                segments,
+            })
         });
         Ok(Response::new(Box::pin(stream)))
     }

@@ -1,0 +1,378 @@
+//! The figures of typical runs, checked for well-formed SVG, labels, proportions and size; with
+//! `DMP_PLOT_DUMP=<dir>` set, each test also writes its figure there.
+
+use dmp::{Agent, Obstacle, Shape, Superquadric, Trajectory};
+
+use super::bounds::fit_equal_aspect;
+use super::decimate::decimated;
+use super::projection::convex_hull;
+use super::style::fmt_num;
+use super::{MAX_POINTS, MAX_TIME_PANELS, OUTLINE_SAMPLES_2D, PlotError, PlotInput, render_svg};
+
+fn ellipse(id: &str, center: Vec<f64>, axes: Vec<f64>, velocity: Option<Vec<f64>>) -> Obstacle {
+    let n = axes.len();
+    Obstacle::new(
+        id,
+        Shape::Superquadric(Superquadric::new(axes, vec![1.0; n]).unwrap()),
+        center,
+        None,
+        velocity,
+    )
+    .unwrap()
+}
+
+/// A trajectory of `rows` rows over `[0, 1]` from `f(s)`.
+fn traj(d: usize, rows: usize, f: impl Fn(f64) -> Vec<f64>) -> Trajectory {
+    let mut tr = Trajectory::with_capacity(d, rows);
+    let zero = vec![0.0; d];
+    for k in 0..rows {
+        let s = k as f64 / (rows - 1) as f64;
+        tr.push(s, &f(s), &zero, &zero);
+    }
+    tr
+}
+
+fn bump(s: f64) -> f64 {
+    (std::f64::consts::PI * s).sin()
+}
+
+/// A small well-formedness check of plotters' output: every tag closed in order, attribute values quoted.
+fn assert_well_formed(svg: &str) {
+    let svg = svg.trim();
+    assert!(svg.starts_with("<svg") || svg.starts_with("<?xml"), "{}", &svg[..svg.len().min(80)]);
+    assert!(svg.ends_with("</svg>"));
+    let mut stack: Vec<String> = Vec::new();
+    let mut rest = svg;
+    while let Some(start) = rest.find('<') {
+        let end = start + rest[start..].find('>').expect("unterminated tag");
+        let tag = &rest[start + 1..end];
+        assert_eq!(tag.matches('"').count() % 2, 0, "unbalanced quotes in <{tag}>");
+        if let Some(name) = tag.strip_prefix('/') {
+            assert_eq!(stack.pop().as_deref(), Some(name.trim()), "mismatched </{name}>");
+        } else if !tag.starts_with('?') && !tag.ends_with('/') {
+            stack.push(tag.split_whitespace().next().unwrap().to_string());
+        }
+        rest = &rest[end + 1..];
+    }
+    assert!(stack.is_empty(), "unclosed: {stack:?}");
+}
+
+fn texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .map(|t| t[t.find('>').unwrap() + 1..t.find("</text>").unwrap()].trim().to_string())
+        .collect()
+}
+
+fn count_text(svg: &str, s: &str) -> usize {
+    texts(svg).iter().filter(|t| t.as_str() == s).count()
+}
+
+/// Vertices of every `<polygon>`, in pixels.
+fn polygons(svg: &str) -> Vec<Vec<(f64, f64)>> {
+    svg.split("<polygon")
+        .skip(1)
+        .map(|p| {
+            let pts = &p[p.find("points=\"").unwrap() + 8..];
+            pts[..pts.find('"').unwrap()]
+                .split_whitespace()
+                .map(|xy| {
+                    let (x, y) = xy.split_once(',').unwrap();
+                    (x.parse().unwrap(), y.parse().unwrap())
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// With `DMP_PLOT_DUMP=dir` set, tests write their figures there (to look at them).
+fn dump(name: &str, svg: &str) {
+    if let Some(dir) = std::env::var_os("DMP_PLOT_DUMP") {
+        std::fs::write(std::path::Path::new(&dir).join(format!("{name}.svg")), svg).unwrap();
+    }
+}
+
+fn check_common(svg: &str) {
+    assert_well_formed(svg);
+    assert!(!svg.contains("NaN") && !svg.contains("inf"), "non-finite number in the SVG");
+    assert!(svg.contains("<text"), "no text at all");
+}
+
+struct Case2d {
+    demo: Vec<Vec<f64>>,
+    free: Trajectory,
+    adapted: Trajectory,
+    obstacles: Vec<Obstacle>,
+}
+
+fn case_2d() -> Case2d {
+    Case2d {
+        demo: (0..=200)
+            .map(|k| {
+                let s = k as f64 / 200.0;
+                vec![s, s + 0.05 * bump(s)]
+            })
+            .collect(),
+        free: traj(2, 1001, |s| vec![s, s]),
+        adapted: traj(2, 1001, |s| vec![s + 0.25 * bump(s), s - 0.25 * bump(s)]),
+        obstacles: vec![ellipse("ellipse", vec![0.5, 0.5], vec![0.3, 0.1], None)],
+    }
+}
+
+fn input_2d(c: &Case2d) -> PlotInput<'_> {
+    PlotInput {
+        title: "2-D: one ellipse",
+        demonstration: &c.demo,
+        demonstration_t: None,
+        free: &c.free,
+        adapted: &c.adapted,
+        goal: None,
+        obstacles: &c.obstacles,
+        robots: &[],
+        obstacle_time: 0.0,
+    }
+}
+
+#[test]
+fn plot_2d_one_ellipse() {
+    let c = case_2d();
+    let svg = render_svg(&input_2d(&c)).unwrap();
+    dump("plot_2d_one_ellipse", &svg);
+    check_common(&svg);
+    for label in
+        ["2-D: one ellipse", "x1", "x2", "demonstration", "DMP without obstacles", "DMP with avoidance"]
+    {
+        assert_eq!(count_text(&svg, label), 1, "text {label:?}");
+    }
+    assert!(svg.contains("#D62728") && svg.contains("#1F77B4"), "adapted / free colours");
+    // One obstacle in one panel; its outline has the ellipse's 3:1 shape on screen (equal aspect ratio).
+    let polys = polygons(&svg);
+    assert_eq!(polys.len(), 1);
+    let xs = polys[0].iter().map(|p| p.0);
+    let ys = polys[0].iter().map(|p| p.1);
+    let w = xs.clone().fold(f64::MIN, f64::max) - xs.fold(f64::MAX, f64::min);
+    let h = ys.clone().fold(f64::MIN, f64::max) - ys.fold(f64::MAX, f64::min);
+    assert!((w / h - 3.0).abs() < 0.1, "ellipse drawn {w} x {h} px");
+    assert_eq!(polys[0].len(), OUTLINE_SAMPLES_2D);
+    assert!(svg.len() < 300_000, "{} bytes", svg.len());
+    // Deterministic.
+    assert_eq!(svg, render_svg(&input_2d(&c)).unwrap());
+}
+
+#[test]
+fn plot_3d_three_projections() {
+    let demo: Vec<Vec<f64>> = (0..=100).map(|k| vec![k as f64 / 100.0; 3]).collect();
+    let free = traj(3, 801, |s| vec![s, s, s]);
+    let adapted = traj(3, 801, |s| vec![s + 0.2 * bump(s), s - 0.1 * bump(s), s]);
+    let obstacles = vec![ellipse("ellipsoid", vec![0.5, 0.5, 0.5], vec![0.2, 0.1, 0.15], None)];
+    let input = PlotInput {
+        title: "3-D",
+        demonstration: &demo,
+        demonstration_t: None,
+        free: &free,
+        adapted: &adapted,
+        goal: None,
+        obstacles: &obstacles,
+        robots: &[],
+        obstacle_time: 0.0,
+    };
+    let svg = render_svg(&input).unwrap();
+    dump("plot_3d_three_projections", &svg);
+    check_common(&svg);
+    for caption in ["x1 - x2", "x1 - x3", "x2 - x3"] {
+        assert_eq!(count_text(&svg, caption), 1, "panel {caption:?}");
+    }
+    for axis in ["x1", "x2", "x3"] {
+        assert_eq!(count_text(&svg, axis), 2, "axis name {axis:?}");
+    }
+    // The ellipsoid in each projection, with the right proportions.
+    let polys = polygons(&svg);
+    assert_eq!(polys.len(), 3);
+    for (poly, ratio) in polys.iter().zip([2.0, 0.2 / 0.15, 0.1 / 0.15]) {
+        let w = poly.iter().map(|p| p.0).fold(f64::MIN, f64::max)
+            - poly.iter().map(|p| p.0).fold(f64::MAX, f64::min);
+        let h = poly.iter().map(|p| p.1).fold(f64::MIN, f64::max)
+            - poly.iter().map(|p| p.1).fold(f64::MAX, f64::min);
+        assert!((w / h - ratio).abs() < 0.1 * ratio, "{w} x {h} px, expected ratio {ratio}");
+    }
+}
+
+#[test]
+fn plot_three_robots() {
+    let d = 6;
+    let starts = [(0.0, 0.0), (1.0, 0.0), (0.5, 1.0)];
+    let goals = [(1.0, 1.0), (0.0, 1.0), (0.5, 0.0)];
+    let path = |s: f64, w: f64| -> Vec<f64> {
+        (0..3)
+            .flat_map(|r| {
+                let (a, b) = (starts[r], goals[r]);
+                [a.0 + (b.0 - a.0) * s + w * bump(s), a.1 + (b.1 - a.1) * s]
+            })
+            .collect()
+    };
+    let free = traj(d, 2001, |s| path(s, 0.0));
+    let adapted = traj(d, 2001, |s| path(s, 0.1));
+    let demo: Vec<Vec<f64>> = (0..=50).map(|k| path(k as f64 / 50.0, 0.0)).collect();
+    let circle = Shape::Superquadric(Superquadric::new(vec![0.08, 0.08], vec![1.0, 1.0]).unwrap());
+    let robots: Vec<Agent> = (0..3)
+        .map(|r| Agent {
+            id: format!("youbot{}", r + 1),
+            dims: vec![2 * r, 2 * r + 1],
+            footprint: Some(circle.clone()),
+        })
+        .collect();
+    let obstacles = vec![ellipse("box", vec![0.5, 0.5], vec![0.1, 0.1], Some(vec![0.1, 0.0]))];
+    let input = PlotInput {
+        title: "three youBots",
+        demonstration: &demo,
+        demonstration_t: None,
+        free: &free,
+        adapted: &adapted,
+        goal: None,
+        obstacles: &obstacles,
+        robots: &robots,
+        obstacle_time: 0.5,
+    };
+    let svg = render_svg(&input).unwrap();
+    dump("plot_three_robots", &svg);
+    check_common(&svg);
+    for r in &robots {
+        assert_eq!(count_text(&svg, &r.id), 1, "legend entry {}", r.id);
+    }
+    for colour in ["#1F77B4", "#FF7F0E", "#2CA02C"] {
+        assert!(svg.contains(&format!("stroke=\"{colour}\"")), "robot colour {colour}");
+    }
+    assert_eq!(count_text(&svg, "x1"), 1);
+    // The obstacle is filled once (at t = 0.5); its start and end positions are dashed outlines only.
+    assert_eq!(polygons(&svg).len(), 1);
+    assert_eq!(count_text(&svg, "obstacle at t = 0.5"), 1);
+}
+
+#[test]
+fn plot_against_time_above_3d() {
+    let d = 7;
+    let free = traj(d, 5001, |s| (0..d).map(|i| s * i as f64).collect());
+    let adapted = traj(d, 5001, |s| (0..d).map(|i| s * i as f64 + 0.1 * bump(s)).collect());
+    let obstacles = vec![ellipse("ball", vec![0.5; d], vec![0.2; d], None)];
+    let input = PlotInput {
+        title: "7-D",
+        demonstration: &[],
+        demonstration_t: None,
+        free: &free,
+        adapted: &adapted,
+        goal: None,
+        obstacles: &obstacles,
+        robots: &[],
+        obstacle_time: 0.0,
+    };
+    let svg = render_svg(&input).unwrap();
+    dump("plot_against_time_above_3d", &svg);
+    check_common(&svg);
+    assert_eq!(count_text(&svg, "t"), MAX_TIME_PANELS);
+    assert_eq!(count_text(&svg, "x6"), 1);
+    assert_eq!(count_text(&svg, "x7"), 0);
+    assert_eq!(count_text(&svg, "showing 6 of 7 coordinates"), 1);
+    assert_eq!(polygons(&svg).len(), MAX_TIME_PANELS);
+    // Decimated: no polyline has more than MAX_POINTS vertices.
+    for pl in svg.split("<polyline").skip(1) {
+        let pts = &pl[pl.find("points=\"").unwrap() + 8..];
+        assert!(pts[..pts.find('"').unwrap()].split_whitespace().count() <= MAX_POINTS);
+    }
+}
+
+#[test]
+fn plot_1d_and_non_finite_rows() {
+    let free = traj(1, 101, |s| vec![s]);
+    let adapted = traj(1, 101, |s| vec![if (0.4..0.5).contains(&s) { f64::NAN } else { s * s }]);
+    let obstacles = vec![ellipse("wall", vec![0.5], vec![0.05], None)];
+    let demo = vec![vec![0.0], vec![0.5], vec![1.0]];
+    let input = PlotInput {
+        title: "1-D",
+        demonstration: &demo,
+        demonstration_t: None,
+        free: &free,
+        adapted: &adapted,
+        goal: None,
+        obstacles: &obstacles,
+        robots: &[],
+        obstacle_time: f64::NAN,
+    };
+    let svg = render_svg(&input).unwrap();
+    dump("plot_1d_and_non_finite_rows", &svg);
+    check_common(&svg);
+    assert_eq!(count_text(&svg, "x1"), 1);
+}
+
+#[test]
+fn plot_rejects_inconsistent_input() {
+    let c = case_2d();
+    let wrong = vec![ellipse("ball", vec![0.5; 3], vec![0.2; 3], None)];
+    let err = render_svg(&PlotInput { obstacles: &wrong, ..input_2d(&c) }).unwrap_err();
+    assert!(matches!(err, PlotError::Dimension { expected: 2, found: 3, .. }), "{err}");
+    let robots = vec![Agent { id: "a".into(), dims: vec![0, 5], footprint: None }];
+    let err = render_svg(&PlotInput { robots: &robots, ..input_2d(&c) }).unwrap_err();
+    assert!(matches!(err, PlotError::Robot { index: 0, .. }), "{err}");
+    let empty = Trajectory::with_capacity(2, 0);
+    let err = render_svg(&PlotInput { adapted: &empty, ..input_2d(&c) }).unwrap_err();
+    assert!(matches!(err, PlotError::EmptyTrajectory("adapted")), "{err}");
+}
+
+#[test]
+fn plot_goal_marker() {
+    let c = case_2d();
+    let default = render_svg(&input_2d(&c)).unwrap();
+    // The obstacle-free rollout ends at (1, 1): the same goal given explicitly draws the same figure.
+    let same = render_svg(&PlotInput { goal: Some(&[1.0, 1.0]), ..input_2d(&c) }).unwrap();
+    assert_eq!(same, default);
+    let moved = render_svg(&PlotInput { goal: Some(&[1.2, 0.9]), ..input_2d(&c) }).unwrap();
+    dump("plot_goal_marker", &moved);
+    check_common(&moved);
+    assert_ne!(moved, default);
+    let err = render_svg(&PlotInput { goal: Some(&[1.0]), ..input_2d(&c) }).unwrap_err();
+    assert!(matches!(err, PlotError::Dimension { expected: 2, found: 1, .. }), "{err}");
+}
+
+#[test]
+fn plot_demonstration_times() {
+    let free = traj(1, 101, |s| vec![s]);
+    let adapted = traj(1, 101, |s| vec![s * s]);
+    let demo = vec![vec![0.0], vec![0.4], vec![1.0]];
+    let input = PlotInput {
+        title: "1-D, timed demonstration",
+        demonstration: &demo,
+        demonstration_t: None,
+        free: &free,
+        adapted: &adapted,
+        goal: None,
+        obstacles: &[],
+        robots: &[],
+        obstacle_time: 0.0,
+    };
+    let spread = render_svg(&input).unwrap();
+    assert_eq!(count_text(&spread, "demonstration (time rescaled)"), 1);
+    // Times starting at 3 are shifted to start with the rollouts, at 0: evenly spaced over the rollout's span, they
+    // draw what the fallback draws, with the legend no longer saying the time is rescaled.
+    let timed = render_svg(&PlotInput { demonstration_t: Some(&[3.0, 3.5, 4.0]), ..input }).unwrap();
+    assert_eq!(timed, spread.replace("demonstration (time rescaled)", "demonstration"));
+    // A demonstration longer than the rollouts widens the time axis.
+    let long = render_svg(&PlotInput { demonstration_t: Some(&[3.0, 4.0, 5.0]), ..input }).unwrap();
+    dump("plot_demonstration_times", &long);
+    check_common(&long);
+    assert_ne!(long.replace("demonstration", ""), timed.replace("demonstration", ""));
+    assert_eq!(count_text(&long, "2.0"), 1, "tick at t = 2");
+    let err = render_svg(&PlotInput { demonstration_t: Some(&[0.0, 1.0]), ..input }).unwrap_err();
+    assert!(matches!(err, PlotError::Length { expected: 3, found: 2, .. }), "{err}");
+}
+
+#[test]
+fn plot_helpers() {
+    assert_eq!(decimated(5), vec![0, 1, 2, 3, 4]);
+    let idx = decimated(1_000_001);
+    assert!(idx.len() <= MAX_POINTS && idx[0] == 0 && *idx.last().unwrap() == 1_000_000);
+    let hull = convex_hull(vec![(0.0, 0.0), (1.0, 0.0), (0.5, 0.5), (1.0, 1.0), (0.0, 1.0), (0.2, 0.8)]);
+    assert_eq!(hull, vec![(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]);
+    let ((x0, x1), (y0, y1)) = fit_equal_aspect((0.0, 1.0), (0.0, 3.0), 600.0, 300.0);
+    assert!(((x1 - x0) / (y1 - y0) - 2.0).abs() < 1e-12 && (y1 - y0 - 3.0).abs() < 1e-12);
+    assert_eq!(fmt_num(0.5), "0.5");
+    assert_eq!(fmt_num(2.0), "2");
+}
