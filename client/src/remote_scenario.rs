@@ -11,10 +11,9 @@
 //! - **several robots**: each robot's dimensions of the demonstration are learned as its own primitive (robot
 //!   `scenario-<id>`), and the two runs are `ExecuteGroup` streams paced as fast as read, one member per robot,
 //!   `max_duration_s` = the scenario's duration; the members' setpoints are put back together in the scenario's
-//!   dimension order. Learning is per dimension, so each robot's primitive is the rows of the whole one; the
-//!   metrics equal the offline run's only if the server's group execution is the engine's joint multi-robot
-//!   rollout. Measured with this repository's server on `youbots-three-dynamic.json`: it is not (the positions
-//!   differ from the first step, ~2e-6 relative; `eps_max` 0.750 against 0.694 offline, no collision either way).
+//!   dimension order. Learning is per dimension, so each robot's primitive is the rows of the whole one, and the
+//!   server's group run is the engine's joint rollout: the metrics are the offline run's (`tests/tests/server.rs`
+//!   checks it on `youbots-three-dynamic.json`).
 //!   Rows past the scenario's duration (streams end on segment boundaries) are cut; a shorter run is cut to the
 //!   shorter length, and a note says so.
 //!

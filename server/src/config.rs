@@ -36,6 +36,10 @@ impl Default for Config {
     }
 }
 
+/// Where the embedded peer listens by default: Zenoh's well-known port, on every interface, so that perception
+/// nodes can connect to the cell's server (`tcp/<host>:7447`) or find it by multicast scouting.
+pub const DEFAULT_ZENOH_LISTEN: &str = "tcp/0.0.0.0:7447";
+
 /// The embedded Zenoh peer (or client of a router network).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -44,7 +48,7 @@ pub struct ZenohConfig {
     pub disabled: bool,
     /// `peer` or `client`.
     pub mode: String,
-    /// Endpoints to listen on, e.g. `tcp/127.0.0.1:7447`. Empty: Zenoh's default.
+    /// Endpoints to listen on; default [`DEFAULT_ZENOH_LISTEN`]. Empty: Zenoh's own default (a random port).
     pub listen: Vec<String>,
     /// Endpoints to connect to (routers or peers).
     pub connect: Vec<String>,
@@ -57,7 +61,7 @@ impl Default for ZenohConfig {
         Self {
             disabled: false,
             mode: "peer".into(),
-            listen: Vec::new(),
+            listen: vec![DEFAULT_ZENOH_LISTEN.into()],
             connect: Vec::new(),
             multicast_scouting: true,
         }

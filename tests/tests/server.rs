@@ -432,3 +432,37 @@ async fn bad_input_gets_a_clear_status_and_the_server_keeps_serving() {
     assert_eq!(status, tonic_health::pb::health_check_response::ServingStatus::Serving as i32);
     within("shutdown", handle.shutdown()).await.unwrap();
 }
+
+#[tokio::test(flavor = "multi_thread")]
+async fn scenario_run_through_the_server_gives_the_offline_metrics() {
+    let dir = tempfile::tempdir().unwrap();
+    let (handle, client) = serve(dir.path()).await;
+    let scenarios = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+    for file in [
+        "paper-one-obstacle/dynamic_volumetric.json",
+        "paper-one-obstacle/static_point.json",
+        "moving-obstacle-dynamic-volumetric.json",
+        "youbots-three-dynamic.json",
+    ] {
+        let path = scenarios.join(file);
+        let (off, on) = (dir.path().join("off"), dir.path().join("on"));
+        let offline = dmp_client::offline::run_scenario(&path, &off).unwrap().metrics;
+        let remote =
+            within("remote scenario", dmp_client::remote_scenario::run_scenario_remote(&client, &path, &on))
+                .await
+                .unwrap()
+                .metrics;
+        let strip = |m: &dmp::metrics::Metrics| {
+            let mut v = serde_json::to_value(m).unwrap();
+            v.as_object_mut().unwrap().remove("compute_seconds");
+            v
+        };
+        assert_eq!(strip(&offline), strip(&remote), "{file}");
+        let (a, b) = (
+            std::fs::read(off.join("trajectory.csv")).unwrap(),
+            std::fs::read(on.join("trajectory.csv")).unwrap(),
+        );
+        assert!(a == b, "{file}: trajectory.csv differs");
+    }
+    within("shutdown", handle.shutdown()).await.unwrap();
+}

@@ -164,14 +164,16 @@ async fn produce(
             }
         }
         // 3. Compute and send one segment.
-        let points = runner.advance(cfg.segment_points);
+        // The last segment ends with the point at exactly max_duration.
+        let remaining = ((cfg.max_duration - runner.time()) / dt).round().max(0.0) as usize + 1;
+        let points = runner.advance(cfg.segment_points.min(remaining));
         let outcome = points.outcome.unwrap_or(Outcome::Running);
-        let end_time = runner.time();
+        let last_point_time = runner.time() - dt;
         let (status, last) = if stopping && runner.at_rest() {
             (v1::SegmentStatus::Stopped, Some("stopped"))
         } else if outcome == Outcome::GoalReached {
             (v1::SegmentStatus::GoalReached, Some("goal reached"))
-        } else if end_time >= cfg.max_duration {
+        } else if last_point_time >= cfg.max_duration - 0.5 * dt {
             (v1::SegmentStatus::Stopped, Some("max duration"))
         } else {
             (

@@ -430,7 +430,12 @@ impl MotionService for MotionServiceImpl {
             primitive.weights.extend(p.weights.iter().cloned());
             motion.start.extend(&r.motion.start);
             motion.goal.extend(&r.motion.goal);
-            avoidance.extra.extend(r.avoidance.extra.iter().cloned());
+            // The members' extra obstacles, once each (members often repeat the same ones).
+            for o in &r.avoidance.extra {
+                if !avoidance.extra.iter().any(|e| e.id() == o.id()) {
+                    avoidance.extra.push(o.clone());
+                }
+            }
             members.push(Member {
                 robot_id: r.robot_id.clone(),
                 dims,
