@@ -10,3 +10,4 @@ pub mod v1 {
 pub const FILE_DESCRIPTOR_SET: &[u8] = tonic::include_file_descriptor_set!("dmp_descriptor");
 
 pub mod codec;
+pub mod primitive;

@@ -175,50 +175,17 @@ pub fn obstacle_from_json(bytes: &[u8], id_from_key: &str) -> Result<v1::Obstacl
 }
 
 /// The message of a primitive.
-pub fn primitive_to_proto(p: &dmp::Primitive) -> v1::Primitive {
-    v1::Primitive {
-        format_version: p.format_version,
-        dim: p.dim as u32,
-        n_basis: p.n_basis as u32,
-        alpha: p.alpha,
-        k: p.k.clone(),
-        d: p.d.clone(),
-        tau: p.tau,
-        start: p.start.clone(),
-        goal: p.goal.clone(),
-        weights: p.weights.iter().flatten().copied().collect(),
-    }
-}
+pub use dmp_proto::primitive::primitive_to_proto;
 
-/// The engine's primitive of a message, validated.
+/// The engine's primitive of a message, validated and within the limits.
 pub fn primitive_from_proto(p: &v1::Primitive, limits: &Limits) -> Result<dmp::Primitive, ServerError> {
-    let (dim, n) = (p.dim as usize, p.n_basis as usize);
-    if dim == 0 || dim > limits.max_dim {
-        return Err(ServerError::invalid("dim", format!("must be between 1 and {}", limits.max_dim)));
+    if p.dim as usize > limits.max_dim {
+        return Err(ServerError::invalid("dim", format!("must be at most {}", limits.max_dim)));
     }
-    if n == 0 || n > limits.max_basis {
-        return Err(ServerError::invalid("n_basis", format!("must be between 1 and {}", limits.max_basis)));
+    if p.n_basis as usize > limits.max_basis {
+        return Err(ServerError::invalid("n_basis", format!("must be at most {}", limits.max_basis)));
     }
-    if p.weights.len() != dim * (n + 1) {
-        return Err(ServerError::invalid(
-            "weights",
-            format!("must have dim x (n_basis + 1) = {} entries", dim * (n + 1)),
-        ));
-    }
-    let prim = dmp::Primitive {
-        format_version: p.format_version,
-        dim,
-        n_basis: n,
-        alpha: p.alpha,
-        k: p.k.clone(),
-        d: p.d.clone(),
-        tau: p.tau,
-        start: p.start.clone(),
-        goal: p.goal.clone(),
-        weights: p.weights.chunks(n + 1).map(<[f64]>::to_vec).collect(),
-    };
-    prim.validate()?;
-    Ok(prim)
+    Ok(dmp_proto::primitive::primitive_from_proto(p)?)
 }
 
 /// The engine's demonstration of a message, within the limits.
