@@ -71,7 +71,8 @@ pub async fn run_scenario_remote(
     let stalls = detect_stalls(&p, &adapted)?;
     let free = Rollout { trajectory: free, contacts: vec![], stalls: vec![] };
     let adapted = Rollout { trajectory: adapted, contacts: vec![], stalls };
-    let mut metrics = dmp::metrics::metrics(&p, &free, &adapted);
+    let mut metrics = dmp::metrics::metrics(&p, &free, &adapted)
+        .map_err(|source| ClientError::Invalid { path: path.to_path_buf(), source })?;
     metrics.compute_seconds = started.elapsed().as_secs_f64();
     write_outputs(&p, &free.trajectory, &adapted.trajectory, &metrics, out)?;
     Ok(RunSummary { metrics, notes })
@@ -348,29 +349,35 @@ mod tests {
             &p,
             &Rollout { trajectory: out.free.trajectory.clone(), contacts: vec![], stalls: vec![] },
             &Rollout { trajectory: out.adapted.trajectory.clone(), contacts: vec![], stalls },
-        );
+        )
+        .unwrap();
         assert_eq!(again, out.metrics);
     }
 }
 
 #[cfg(test)]
-mod through_a_mock_server {
+mod through_the_server {
     use super::*;
-    use crate::mock_server;
+    use crate::grpc::tests::{TestServer, within};
 
-    /// Runs `file` offline and through the mock server (whose plans are the engine's rollouts); the metrics must be
-    /// the same, `compute_seconds` aside.
-    async fn same_metrics(file: &str) -> Vec<String> {
-        same_metrics_at(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios").join(file)).await.1
+    /// Runs `file` offline and through the server (whose plans and group runs are the engine's rollouts); the
+    /// metrics must be the same, `compute_seconds` aside.
+    async fn same_metrics(client: &DmpClient, file: &str) -> Vec<String> {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios").join(file);
+        same_metrics_at(client, &path).await.1
     }
 
     /// Returns the offline metrics and the notes of the run through the server.
-    async fn same_metrics_at(path: &Path) -> (dmp::metrics::Metrics, Vec<String>) {
+    async fn same_metrics_at(client: &DmpClient, path: &Path) -> (dmp::metrics::Metrics, Vec<String>) {
         let file = path.display();
         let dir = tempfile::tempdir().unwrap();
         let offline = crate::offline::run_scenario(path, &dir.path().join("offline")).unwrap();
-        let client = DmpClient::connect(format!("http://{}", mock_server::spawn().await)).await.unwrap();
-        let remote = run_scenario_remote(&client, path, &dir.path().join("remote")).await.unwrap();
+        let remote = within(
+            &format!("scenario run {file}"),
+            run_scenario_remote(client, path, &dir.path().join("remote")),
+        )
+        .await
+        .unwrap();
         let (mut a, mut b) = (offline.metrics, remote.metrics);
         a.compute_seconds = 0.0;
         b.compute_seconds = 0.0;
@@ -397,12 +404,16 @@ mod through_a_mock_server {
         let dir = tempfile::tempdir().unwrap();
         let file = dir.path().join("stall.json");
         std::fs::write(&file, s.to_string()).unwrap();
-        let (metrics, _) = same_metrics_at(&file).await;
+        let server = TestServer::start().await;
+        let (metrics, _) = same_metrics_at(&server.client().await, &file).await;
         assert_eq!(metrics.stalls.len(), 1);
+        server.stop().await;
     }
 
     #[tokio::test(flavor = "multi_thread")]
     async fn single_robot_scenarios_give_the_offline_metrics() {
+        let server = TestServer::start().await;
+        let client = server.client().await;
         for m in [
             "none",
             "static_point",
@@ -411,17 +422,20 @@ mod through_a_mock_server {
             "static_volumetric",
             "dynamic_volumetric",
         ] {
-            let notes = same_metrics(&format!("paper-one-obstacle/{m}.json")).await;
+            let notes = same_metrics(&client, &format!("paper-one-obstacle/{m}.json")).await;
             assert!(notes.is_empty(), "{notes:?}");
         }
-        same_metrics("moving-obstacle-dynamic-volumetric.json").await;
-        same_metrics("paper-two-obstacles-steering-angle.json").await;
+        same_metrics(&client, "moving-obstacle-dynamic-volumetric.json").await;
+        same_metrics(&client, "paper-two-obstacles-steering-angle.json").await;
+        server.stop().await;
     }
 
     #[tokio::test(flavor = "multi_thread")]
     async fn group_scenarios_give_the_offline_metrics() {
-        let notes = same_metrics("youbots-three-dynamic.json").await;
+        let server = TestServer::start().await;
+        let notes = same_metrics(&server.client().await, "youbots-three-dynamic.json").await;
         assert!(notes.is_empty(), "{notes:?}");
+        server.stop().await;
     }
 
     #[tokio::test(flavor = "multi_thread")]
@@ -432,8 +446,15 @@ mod through_a_mock_server {
         let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(src).unwrap()).unwrap();
         v["rollout"]["dt"] = 0.0.into();
         std::fs::write(&file, v.to_string()).unwrap();
-        let client = DmpClient::connect(format!("http://{}", mock_server::spawn().await)).await.unwrap();
-        let e = run_scenario_remote(&client, &file, &dir.path().join("out")).await.unwrap_err();
+        let server = TestServer::start().await;
+        let client = server.client().await;
+        let e = within("scenario run", run_scenario_remote(&client, &file, &dir.path().join("out")))
+            .await
+            .unwrap_err();
         assert!(e.is_bad_input() && e.to_string().contains("rollout.dt"), "{e}");
+        // Nothing reached the server: no primitive was learned.
+        assert!(within("list", client.list(SCENARIO_ROBOT)).await.unwrap().is_empty());
+        assert!(!dir.path().join("out").exists());
+        server.stop().await;
     }
 }

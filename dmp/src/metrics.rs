@@ -139,9 +139,9 @@ fn motion_figures(p: &Prepared, free: &Rollout, adapted: &Rollout, dims: &[usize
 }
 
 /// Computes the metrics of `adapted` against `free` for the prepared scenario `p`.
-pub fn metrics(p: &Prepared, free: &Rollout, adapted: &Rollout) -> Metrics {
+pub fn metrics(p: &Prepared, free: &Rollout, adapted: &Rollout) -> crate::Result<Metrics> {
     let ta = &adapted.trajectory;
-    let field = p.field().expect("the scene was validated by prepare");
+    let field = p.field()?;
     let agents = field.agents().to_vec();
     let all: Vec<usize> = (0..p.primitive.dim).collect();
     let (eps_max, eps_mean, acc_max, acc_max_after_10pct, acc_mean, final_goal_distance, time_to_goal) =
@@ -217,7 +217,7 @@ pub fn metrics(p: &Prepared, free: &Rollout, adapted: &Rollout) -> Metrics {
         .iter()
         .map(|(i, s)| StallMetrics { robot: agents[*i].id.clone(), since: s.since, distance: s.distance })
         .collect();
-    Metrics {
+    Ok(Metrics {
         steps: p.steps,
         dt: p.dt,
         duration: p.duration,
@@ -235,5 +235,5 @@ pub fn metrics(p: &Prepared, free: &Rollout, adapted: &Rollout) -> Metrics {
         robots,
         robot_pairs,
         stalls,
-    }
+    })
 }

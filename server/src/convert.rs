@@ -10,6 +10,9 @@ use crate::error::ServerError;
 /// Default number of boundary samples of the point methods.
 pub const DEFAULT_POINT_SAMPLES: usize = 50;
 
+/// Largest dimension of an obstacle (a robot's space is at most `limits.max_dim`, 64 by default).
+pub const MAX_OBSTACLE_DIM: usize = 64;
+
 /// Exponent of the superquadric that stands for a box (a rounded box; see [`solid_to_shape`]).
 pub const BOX_EXPONENT: f64 = 4.0;
 
@@ -112,6 +115,12 @@ pub fn obstacle_to_engine(o: &v1::Obstacle) -> Result<dmp::Obstacle, ServerError
     }
     let shape = if o.margin > 0.0 { shape.inflated(o.margin)? } else { shape };
     let d = dmp::Isopotential::dim(&shape);
+    if d > MAX_OBSTACLE_DIM {
+        return Err(ServerError::invalid(
+            "shape",
+            format!("has {d} dimensions, more than {MAX_OBSTACLE_DIM}"),
+        ));
+    }
     let rotation = if o.rotation.is_empty() {
         None
     } else {

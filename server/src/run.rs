@@ -26,6 +26,9 @@ use crate::state::AppState;
 use crate::store::Store;
 use crate::zenoh_bridge::{ZenohBridge, locators, open_session};
 
+/// How long a shutdown waits for connections to drain before closing them.
+const DRAIN_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(5);
+
 /// A running server.
 #[derive(Debug)]
 pub struct ServerHandle {
@@ -130,8 +133,27 @@ pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
     let incoming = tonic::transport::server::TcpIncoming::from(listener).with_nodelay(Some(true));
     let stop = shutdown.clone();
     let task = tokio::spawn(async move {
-        let served = router.serve_with_incoming_shutdown(incoming, stop.cancelled_owned()).await;
-        health.set_service_status("", tonic_health::ServingStatus::NotServing).await;
+        // On shutdown: NOT_SERVING first, so that balancers stop sending, then drain (streams end on the same
+        // signal), at most DRAIN_TIMEOUT.
+        let signal = {
+            let stop = stop.clone();
+            async move {
+                stop.cancelled().await;
+                health.set_service_status("", tonic_health::ServingStatus::NotServing).await;
+            }
+        };
+        let served = router.serve_with_incoming_shutdown(incoming, signal);
+        let deadline = async {
+            stop.cancelled().await;
+            tokio::time::sleep(DRAIN_TIMEOUT).await;
+        };
+        let served = tokio::select! {
+            r = served => r.map_err(|e| ServerError::Internal(format!("gRPC server: {e}"))),
+            _ = deadline => {
+                warn!(timeout = ?DRAIN_TIMEOUT, "connections still open after the drain timeout: closing them");
+                Ok(())
+            }
+        };
         if let Some(b) = bridge {
             b.close().await;
         }
@@ -141,7 +163,7 @@ pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
             warn!(error = %e, "closing the Zenoh session");
         }
         info!("server stopped");
-        served.map_err(|e| ServerError::Internal(format!("gRPC server: {e}")))
+        served
     });
     info!(grpc = %grpc_addr, zenoh = ?zenoh_locators, cell = %state.config.cell, "serving");
     Ok(ServerHandle { grpc_addr, zenoh_locators, state, bridge_malformed, task })

@@ -394,6 +394,19 @@ async fn bad_input_gets_a_clear_status_and_the_server_keeps_serving() {
     let request = v1::ExecuteRequest { motion: Some(spec("r", "line")), dt: -1.0, ..Default::default() };
     let e = within("execute bad dt", client.execute(request)).await.err().expect("refused");
     assert!(e.to_string().contains("dt"), "{e}");
+    // An unstable step is refused before anything is computed, and so is a method that cannot work.
+    let e = within(
+        "plan unstable",
+        client.plan(v1::PlanRequest { motion: Some(spec("r", "line")), dt: 0.1, duration: 1.0 }),
+    )
+    .await
+    .unwrap_err();
+    assert!(e.to_string().contains("unstable"), "{e}");
+    let mut motion = spec("r", "line");
+    motion.avoidance = Some(dynamic_volumetric(10.0, 0.5, 0.5));
+    let request = v1::ExecuteRequest { motion: Some(motion), ..Default::default() };
+    let e = within("execute bad beta", client.execute(request)).await.err().expect("refused");
+    assert!(e.to_string().contains("motion.avoidance.beta"), "{e}");
     let mut bad = ellipse("neg", vec![0.0, 0.0], vec![-0.3, 0.2]);
     let e = within("put bad obstacle", client.put_obstacle(bad.clone())).await.unwrap_err();
     assert!(e.to_string().contains("semi_axes[0]"), "{e}");
@@ -430,7 +443,13 @@ async fn bad_input_gets_a_clear_status_and_the_server_keeps_serving() {
             .into_inner()
             .status;
     assert_eq!(status, tonic_health::pb::health_check_response::ServingStatus::Serving as i32);
-    within("shutdown", handle.shutdown()).await.unwrap();
+    // A client that stops reading does not hold the shutdown.
+    let mut motion = spec("r", "line");
+    motion.tau = 50.0;
+    let request = v1::ExecuteRequest { motion: Some(motion), max_duration_s: 100.0, ..Default::default() };
+    let _unread = within("execute", client.execute(request)).await.unwrap();
+    until("the stream is open", || handle.open_streams() == 1).await;
+    within("shutdown with an unread stream", handle.shutdown()).await.unwrap();
 }
 
 #[tokio::test(flavor = "multi_thread")]

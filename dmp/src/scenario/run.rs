@@ -134,7 +134,7 @@ pub fn run(p: &Prepared) -> Result<ScenarioOutcome> {
     let free = rollout(&p.primitive, &p.motion, &mut p.free_field()?, p.dt, p.steps)?;
     let mut field = p.field()?;
     let adapted = rollout(&p.primitive, &p.motion, &mut field, p.dt, p.steps)?;
-    let metrics = metrics(p, &free, &adapted);
+    let metrics = metrics(p, &free, &adapted)?;
     Ok(ScenarioOutcome { free, adapted, metrics })
 }
 

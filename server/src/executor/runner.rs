@@ -16,6 +16,26 @@ use crate::scene::{RemoteRobot, SceneSnapshot};
 const ARRIVED_DISTANCE: f64 = 1e-3;
 const ARRIVED_SPEED: f64 = 1e-3;
 
+/// Largest `dt sqrt(K) / tau` accepted: RK4 on the critically damped transformation system is stable up to about
+/// 2.8; this keeps a margin (the paper's K = 1050 at dt = 1 ms allows tau down to 16 ms).
+pub const MAX_STIFF_STEP: f64 = 2.0;
+
+/// Checks that RK4 with step `dt` is stable for stiffness `k` and time scale `tau`.
+pub fn check_stability(k: &[f64], dt: f64, tau: f64, field: &str) -> Result<(), ServerError> {
+    let k_max = k.iter().copied().fold(0.0, f64::max);
+    let x = dt * k_max.sqrt() / tau;
+    if x > MAX_STIFF_STEP {
+        return Err(ServerError::invalid(
+            field,
+            format!(
+                "dt sqrt(K) / tau = {x:.3} exceeds {MAX_STIFF_STEP}: the integration would be unstable (use a smaller dt or a larger tau; tau >= {:.4} s here)",
+                dt * k_max.sqrt() / MAX_STIFF_STEP
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// A robot of the run and the dimensions of the shared DMP it owns.
 #[derive(Debug, Clone)]
 pub struct Member {
@@ -123,6 +143,7 @@ impl Runner {
         if !(dt.is_finite() && dt > 0.0 && dt <= 0.1) {
             return Err(ServerError::invalid("dt", "must be greater than 0 and at most 0.1 s"));
         }
+        check_stability(&primitive.k, dt, motion.tau, "tau")?;
         let integrator = Integrator::new(&primitive)?;
         let state = State::at_rest(&motion.start);
         let agents = agents(&members);
@@ -255,6 +276,7 @@ impl Runner {
         if !(tau.is_finite() && tau > 0.0) {
             return Err(ServerError::invalid("tau", "must be a finite number greater than zero"));
         }
+        check_stability(&self.primitive.k, self.dt, tau, "tau")?;
         self.motion.tau = tau;
         Ok(())
     }
@@ -304,8 +326,9 @@ impl Runner {
         self.state.xd.iter().map(|v| v * v).sum::<f64>().sqrt() <= ARRIVED_SPEED
     }
 
-    /// Computes `n` points from the current state (the first is the current state), advancing the run.
-    pub fn advance(&mut self, n: usize) -> Points {
+    /// Computes `n` points from the current state (the first is the current state), advancing the run. Fails if
+    /// the state stops being finite (which the stability check on `dt` and `tau` should prevent).
+    pub fn advance(&mut self, n: usize) -> Result<Points, ServerError> {
         let d = self.primitive.dim;
         let mut p = Points {
             start_time: self.state.t,
@@ -330,6 +353,12 @@ impl Runner {
             }
             // Times are whole multiples of dt, not a drifting sum.
             self.state.t = (self.state.t / self.dt).round() * self.dt;
+            if !self.state.x.iter().chain(&self.state.xd).chain(&self.acc).all(|v| v.is_finite()) {
+                return Err(ServerError::FailedPrecondition(format!(
+                    "the integration diverged at t = {:.3} s (no setpoint was sent from there)",
+                    self.state.t
+                )));
+            }
             p.xdd.extend_from_slice(&self.acc);
             self.contacts.clear();
             let (t, x) = (self.state.t, &self.state.x);
@@ -346,11 +375,18 @@ impl Runner {
                     self.touched.insert(id);
                 }
             }
-            for det in &mut self.stall {
-                if det.update(self.state.t, &self.state.x, &self.state.xd, &self.motion.goal).is_some()
-                    && worst == Outcome::Running
-                {
-                    worst = Outcome::Stalled;
+            if self.holding {
+                // At rest on purpose: not a stall.
+                for (det, m) in self.stall.iter_mut().zip(&self.members) {
+                    *det = StallDetector::new(StallConfig::default(), m.dims.clone().collect());
+                }
+            } else {
+                for det in &mut self.stall {
+                    if det.update(self.state.t, &self.state.x, &self.state.xd, &self.motion.goal).is_some()
+                        && worst == Outcome::Running
+                    {
+                        worst = Outcome::Stalled;
+                    }
                 }
             }
         }
@@ -361,7 +397,7 @@ impl Runner {
         } else {
             worst
         });
-        p
+        Ok(p)
     }
 
     /// One step of holding: the phase is frozen and the robot decelerates under the DMP's damping alone,
@@ -369,7 +405,13 @@ impl Runner {
     fn hold_step(&mut self) {
         let tau = self.motion.tau;
         for i in 0..self.primitive.dim {
-            let k = self.primitive.d[i] / tau;
+            // The primitive's damping, or critical damping if it has none (a robot must come to rest).
+            let damping = if self.primitive.d[i] > 0.0 {
+                self.primitive.d[i]
+            } else {
+                2.0 * self.primitive.k[i].sqrt()
+            };
+            let k = damping / tau;
             let v0 = self.state.xd[i];
             self.acc[i] = -k * v0;
             let decay = (-k * self.dt).exp();

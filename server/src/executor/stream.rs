@@ -68,12 +68,24 @@ pub async fn run_stream(
     }
     match result {
         Ok(reason) => info!(robots = ?ids, reason, t = runner.time(), "stream ended"),
+        Err(ServerError::ShuttingDown) => {
+            info!(robots = ?ids, t = runner.time(), "stream ended by shutdown");
+            // Never wait on a reader that stopped reading: the status goes only if there is room.
+            let _ = tx.try_send(Err(ServerError::ShuttingDown.into()));
+        }
         Err(e) => {
             warn!(robots = ?ids, error = %e, "stream failed");
-            let _ = tx.send(Err(e.into())).await;
+            tokio::select! {
+                _ = tx.send(Err(e.into())) => {}
+                _ = app.shutdown.cancelled() => {}
+            }
         }
     }
 }
+
+/// Margin added to the robot's current time when a change rolls the run back: the superseding segment must reach
+/// the robot before its first point is due (computing and sending it takes well under this).
+const ROLLBACK_MARGIN: Duration = Duration::from_millis(3);
 
 async fn produce(
     app: &AppState,
@@ -84,26 +96,36 @@ async fn produce(
 ) -> Result<&'static str, ServerError> {
     let mut scene_rx = app.scene.subscribe();
     let first_robot = runner.members()[0].robot_id.clone();
-    let snap = scene_rx.borrow_and_update().clone();
-    runner.apply_scene(
-        &snap,
-        &app.scene.other_robots(&first_robot, now_unix_s(), REMOTE_MAX_AGE_S),
-        now_unix_s(),
-    )?;
     let start = Instant::now();
     let start_unix = now_unix_s();
+    // The wall time (Unix seconds) of run time t: real time maps them one to one; as fast as read, "now" is
+    // whenever the point is computed.
+    let wall_of = |t: f64| if cfg.realtime { start_unix + t } else { now_unix_s() };
+    let snap = scene_rx.borrow_and_update().clone();
+    let now = wall_of(runner.time());
+    runner.apply_scene(&snap, &app.scene.other_robots(&first_robot, now, REMOTE_MAX_AGE_S), now)?;
     let dt = runner.dt();
     let mut seq = 0u64;
     let mut stopping = false;
+    // Real time: the run is complete once this point (run time) has been executed; until then it can still be
+    // superseded.
+    let mut finished: Option<(f64, &'static str)> = None;
     loop {
         // 1. Wait until the next segment is due (real time) while reacting to changes; as fast as read: take what
         //    is pending and go on.
         let mut changed_scene = false;
         let mut commands = Vec::new();
         if cfg.realtime {
-            let due = start + Duration::from_secs_f64(runner.time()).saturating_sub(cfg.lookahead);
+            let due = match finished {
+                Some((t_end, _)) => start + Duration::from_secs_f64(t_end),
+                None => start + Duration::from_secs_f64(runner.time()).saturating_sub(cfg.lookahead),
+            };
             tokio::select! {
-                _ = tokio::time::sleep_until(due) => {}
+                _ = tokio::time::sleep_until(due) => {
+                    if let Some((_, reason)) = finished {
+                        return Ok(reason);
+                    }
+                }
                 r = scene_rx.changed() => {
                     if r.is_err() { return Ok("scene closed") }
                     changed_scene = true;
@@ -112,12 +134,12 @@ async fn produce(
                     Some(c) => commands.push(c),
                     None => *control = None,
                 },
-                _ = app.shutdown.cancelled() => return Ok("shutdown"),
+                _ = app.shutdown.cancelled() => return Err(ServerError::ShuttingDown),
                 _ = tx.closed() => return Ok("client left"),
             }
         } else {
             if app.shutdown.is_cancelled() {
-                return Ok("shutdown");
+                return Err(ServerError::ShuttingDown);
             }
             changed_scene = scene_rx.has_changed().unwrap_or(false);
         }
@@ -126,12 +148,30 @@ async fn produce(
                 commands.push(c);
             }
         }
-        // 2. Apply changes from the robot's current time: roll back what was computed ahead of it.
-        if (changed_scene || !commands.is_empty()) && cfg.realtime {
-            let now_t = start.elapsed().as_secs_f64() + dt;
-            runner.rollback_to(now_t);
+        // Measured states are published, and change nothing in the plan.
+        let mut changes_plan = changed_scene;
+        for c in &commands {
+            if let Control::State(s) = c {
+                let fp = runner
+                    .members()
+                    .iter()
+                    .find(|m| m.robot_id == s.robot_id)
+                    .and_then(|m| m.footprint.clone());
+                app.robots.publish(s.clone(), fp).await;
+            } else {
+                changes_plan = true;
+            }
         }
-        let now = now_unix_s();
+        if !changes_plan && finished.is_some() {
+            continue;
+        }
+        // 2. Apply changes from the robot's current time: roll back what was computed ahead of it.
+        if changes_plan && cfg.realtime {
+            let now_t = (start.elapsed() + ROLLBACK_MARGIN).as_secs_f64() + dt;
+            runner.rollback_to(now_t);
+            finished = None;
+        }
+        let now = wall_of(runner.time());
         if changed_scene {
             let snap = scene_rx.borrow_and_update().clone();
             runner.apply_scene(&snap, &app.scene.other_robots(&first_robot, now, REMOTE_MAX_AGE_S), now)?;
@@ -153,20 +193,12 @@ async fn produce(
                     stopping = true;
                     runner.set_holding(true);
                 }
-                Control::State(s) => {
-                    let fp = runner
-                        .members()
-                        .iter()
-                        .find(|m| m.robot_id == s.robot_id)
-                        .and_then(|m| m.footprint.clone());
-                    app.robots.publish(s, fp).await;
-                }
+                Control::State(_) => {}
             }
         }
-        // 3. Compute and send one segment.
-        // The last segment ends with the point at exactly max_duration.
+        // 3. Compute and send one segment; the last one ends with the point at exactly max_duration.
         let remaining = ((cfg.max_duration - runner.time()) / dt).round().max(0.0) as usize + 1;
-        let points = runner.advance(cfg.segment_points.min(remaining));
+        let points = runner.advance(cfg.segment_points.min(remaining))?;
         let outcome = points.outcome.unwrap_or(Outcome::Running);
         let last_point_time = runner.time() - dt;
         let (status, last) = if stopping && runner.at_rest() {
@@ -188,12 +220,17 @@ async fn produce(
         };
         let batch = split(runner, &points, seq, status, cfg.realtime.then_some(start_unix));
         publish_states(app, runner, &points, cfg.realtime.then_some(start_unix)).await;
-        if tx.send(Ok(batch)).await.is_err() {
-            return Ok("client left");
+        tokio::select! {
+            sent = tx.send(Ok(batch)) => if sent.is_err() { return Ok("client left") },
+            _ = app.shutdown.cancelled() => return Err(ServerError::ShuttingDown),
         }
         seq += 1;
         if let Some(reason) = last {
-            return Ok(reason);
+            if !cfg.realtime {
+                return Ok(reason);
+            }
+            // Keep the stream open until the robot has executed the last point: a change may still supersede it.
+            finished = Some((last_point_time, reason));
         }
     }
 }

@@ -68,7 +68,12 @@ impl MotionServiceImpl {
         let proto = record
             .primitive
             .ok_or_else(|| ServerError::Internal("stored record without primitive".into()))?;
-        let primitive = primitive_from_proto(&proto, &self.state.config.limits)?;
+        let primitive = primitive_from_proto(&proto, &self.state.config.limits).map_err(|e| {
+            ServerError::Internal(format!(
+                "the stored primitive {}/{} is not valid: {e}",
+                spec.robot_id, spec.primitive
+            ))
+        })?;
         let d = primitive.dim;
         let pick = |field: &str, v: &[f64], default: &[f64]| -> Result<Vec<f64>, ServerError> {
             if v.is_empty() {
@@ -104,6 +109,9 @@ impl MotionServiceImpl {
                 obstacle_to_engine(o).map_err(|e| e.within(&format!("{prefix}.extra_obstacles[{i}]")))?,
             );
         }
+        // Checked now, not when the first obstacle or robot appears (which would end a running stream).
+        obstacles.0.method.validate(&format!("{prefix}.avoidance"), d)?;
+        robots.0.method.validate(&format!("{prefix}.robot_avoidance"), d)?;
         let footprint = spec
             .footprint
             .as_ref()
@@ -168,7 +176,7 @@ impl MotionServiceImpl {
         ))
     }
 
-    fn single_runner(&self, r: Resolved, dt: f64) -> Result<Runner, ServerError> {
+    fn single_runner(&self, r: Resolved, dt: f64, history: usize) -> Result<Runner, ServerError> {
         let dim = r.primitive.dim;
         let member = Member {
             robot_id: r.robot_id,
@@ -176,9 +184,21 @@ impl MotionServiceImpl {
             footprint: r.footprint,
             footprint_proto: r.footprint_proto,
         };
-        Runner::new(vec![member], r.primitive, r.motion, dt, r.avoidance, history_len(dt))
+        Runner::new(vec![member], r.primitive, r.motion, dt, r.avoidance, history)
     }
 
+    /// Refuses, before any work, an answer that would exceed the message size: `values` numbers of position,
+    /// velocity and acceleration (8 bytes each).
+    fn check_message_size(&self, field: &str, values: usize) -> Result<(), ServerError> {
+        let bytes = values.saturating_mul(3 * 8).saturating_add(1024);
+        let max = self.state.config.limits.max_message_bytes;
+        if bytes > max {
+            return Err(ServerError::ResourceExhausted(format!(
+                "{field}: the answer would take about {bytes} bytes, more than the limit of {max}"
+            )));
+        }
+        Ok(())
+    }
     /// Spawns the producer of a stream and returns the receiving end.
     fn spawn(
         &self,
@@ -197,10 +217,11 @@ impl MotionServiceImpl {
     }
 }
 
-/// Enough history to roll back over a lookahead of up to ten seconds... bounded to one second of steps, which
-/// covers every lookahead the defaults use; older points are never superseded.
-fn history_len(dt: f64) -> usize {
-    ((1.0 / dt).ceil() as usize).clamp(16, 100_000)
+/// States kept for rollbacks: everything a stream can have sent ahead of the robot (the lookahead and one segment),
+/// plus a margin.
+fn history_len(dt: f64, cfg: &StreamConfig) -> usize {
+    let ahead = cfg.lookahead.as_secs_f64() + cfg.segment_points as f64 * dt;
+    ((ahead / dt).ceil() as usize + 2).max(16)
 }
 
 fn single(rx: mpsc::Receiver<Result<Batch, Status>>) -> SegmentStream {
@@ -229,15 +250,16 @@ impl MotionService for MotionServiceImpl {
             .into());
         }
         let steps = (steps_f as usize).max(1);
+        self.check_message_size("duration", (steps + 1) * r.primitive.dim)?;
         let robot_id = r.robot_id.clone();
-        let mut runner = self.single_runner(r, dt)?;
+        let mut runner = self.single_runner(r, dt, 16)?;
         let now = now_unix_s();
         let snap = self.state.scene.snapshot();
         runner.apply_scene(&snap, &self.state.scene.other_robots(&robot_id, now, 0.5), now)?;
         let version = snap.version;
         let out = tokio::task::spawn_blocking(move || plan_blocking(runner, steps))
             .await
-            .map_err(|e| Status::internal(e.to_string()))?;
+            .map_err(|e| Status::internal(e.to_string()))??;
         let (segment_points, collisions, stalled, goal) = out;
         let dim = segment_points.dim;
         let status = if collisions.is_empty() && goal {
@@ -282,7 +304,8 @@ impl MotionService for MotionServiceImpl {
             r.motion.tau,
         )?;
         info!(robot = %r.robot_id, realtime = cfg.realtime, "execute");
-        let runner = self.single_runner(r, dt)?;
+        self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
+        let runner = self.single_runner(r, dt, history_len(dt, &cfg))?;
         Ok(Response::new(single(self.spawn(runner, cfg, None)?)))
     }
 
@@ -296,7 +319,7 @@ impl MotionService for MotionServiceImpl {
         let mut inbound = request.into_inner();
         let first = tokio::time::timeout(Duration::from_secs(10), inbound.message())
             .await
-            .map_err(|_| Status::deadline_exceeded("no `start` message within 10 s"))??;
+            .map_err(|_| ServerError::invalid("message", "no `start` message within 10 s"))??;
         let Some(v1::SessionRequest { message: Some(M::Start(req)) }) = first else {
             return Err(
                 ServerError::invalid("message", "the first message of a session must be `start`").into()
@@ -315,7 +338,8 @@ impl MotionService for MotionServiceImpl {
             .map_err(|e| e.within("start"))?;
         let robot_id = r.robot_id.clone();
         let dim = r.primitive.dim;
-        let runner = self.single_runner(r, dt)?;
+        self.check_message_size("start.segment_s", cfg.segment_points * dim)?;
+        let runner = self.single_runner(r, dt, history_len(dt, &cfg))?;
         let (ctl_tx, ctl_rx) = mpsc::channel(64);
         let rx = self.spawn(runner, cfg, Some(ctl_rx))?;
         let shutdown = self.state.shutdown.clone();
@@ -338,6 +362,10 @@ impl MotionService for MotionServiceImpl {
                     Some(M::Stop(_)) => Control::Stop,
                     Some(M::State(mut s)) => {
                         s.robot_id = robot_id.clone();
+                        if let Err(e) = crate::robots::check_robot_state(&s) {
+                            tracing::warn!(robot = %robot_id, error = %e, "ignored an invalid robot state");
+                            continue;
+                        }
                         Control::State(s)
                     }
                     other => {
@@ -444,7 +472,9 @@ impl MotionService for MotionServiceImpl {
             });
         }
         info!(robots = members.len(), realtime = cfg.realtime, "execute group");
-        let runner = Runner::new(members, primitive, motion, dt, avoidance, history_len(dt))?;
+        self.check_message_size("segment_s", cfg.segment_points * primitive.dim)?;
+        let history = history_len(dt, &cfg);
+        let runner = Runner::new(members, primitive, motion, dt, avoidance, history)?;
         let rx = self.spawn(runner, cfg, None)?;
         let stream = ReceiverStream::new(rx).map(|r| {
             r.map(|segments| v1::GroupSegment {
@@ -457,14 +487,17 @@ impl MotionService for MotionServiceImpl {
 }
 
 /// Rolls a runner out for `steps` steps: the points (steps + 1 rows), contacts, stalled, arrived.
-fn plan_blocking(mut runner: Runner, steps: usize) -> (PlanPoints, Vec<String>, bool, bool) {
-    let pts = runner.advance(steps + 1);
+fn plan_blocking(
+    mut runner: Runner,
+    steps: usize,
+) -> Result<(PlanPoints, Vec<String>, bool, bool), ServerError> {
+    let pts = runner.advance(steps + 1)?;
     let dim = runner.state().x.len();
     let outcome = pts.outcome;
     let collisions = runner.touched().iter().cloned().collect();
     let stalled = outcome == Some(crate::executor::runner::Outcome::Stalled);
     let goal = outcome == Some(crate::executor::runner::Outcome::GoalReached);
-    (PlanPoints { dim, x: pts.x, xd: pts.xd, xdd: pts.xdd }, collisions, stalled, goal)
+    Ok((PlanPoints { dim, x: pts.x, xd: pts.xd, xdd: pts.xdd }, collisions, stalled, goal))
 }
 
 struct PlanPoints {
