@@ -20,8 +20,6 @@ pub mod convert;
 pub mod demo_csv;
 pub mod error;
 pub mod grpc;
-#[cfg(test)]
-mod mock_server;
 pub mod offline;
 pub mod outputs;
 pub mod plot;
