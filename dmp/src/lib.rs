@@ -7,14 +7,14 @@
 //! | --- | --- |
 //! | canonical system (phase in closed form) | [`canonical`] |
 //! | Gaussian basis and forcing term | [`basis`] |
-//! | learning from one demonstration | [`learn`], [`derivatives`] |
+//! | learning from one demonstration | [`mod@learn`], [`derivatives`] |
 //! | the stored primitive | [`primitive`] |
 //! | RK4 integration, step by step | [`integrate`] |
 //! | isopotentials (superquadrics) | [`isopotential`] |
 //! | obstacles (pose, motion, boundary samples) | [`obstacle`] |
 //! | the five repulsive terms | [`avoidance`] |
 //! | a whole scene, robots as moving obstacles | [`field`] |
-//! | rollouts, stalls | [`rollout`], [`stall`] |
+//! | rollouts, stalls | [`mod@rollout`], [`stall`] |
 
 pub mod avoidance;
 pub mod basis;
