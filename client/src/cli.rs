@@ -46,6 +46,8 @@ pub enum Command {
     Scenario(ScenarioCommand),
     /// Learn a primitive from one demonstration and store it as the next version of (robot, name).
     Learn(LearnArgs),
+    /// A simulated robot against the server: writes report.json and figures into --out.
+    Sim(crate::sim::SimArgs),
     /// The primitives of a robot (latest version of each).
     List {
         /// The robot.
@@ -342,6 +344,18 @@ pub async fn run_async(cli: Cli) -> Result<String, ClientError> {
             remote::scene_delete(&server, &zenoh, id, *via).await
         }
         Command::Scene(SceneCommand::List) => remote::scene_list(&connect().await?).await,
+        Command::Sim(a) => {
+            let report = crate::sim::run_sim(a, &server, &cli.cell, &cli.zenoh_connect).await?;
+            let problems = report.problems();
+            Ok(format!(
+                "{}: {} robots, collision: {}, {}; wrote {}",
+                report.sim,
+                report.robots.len(),
+                report.collision,
+                if problems.is_empty() { "no problem".to_string() } else { problems.join("; ") },
+                a.out.display()
+            ))
+        }
     }
 }
 

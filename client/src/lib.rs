@@ -13,6 +13,7 @@
 //! | demonstrations from CSV | [`demo_csv`] |
 //! | the server-side commands of `dmpctl` | [`remote`] |
 //! | `scenario run` through the server | [`remote_scenario`] |
+//! | simulated robots (`dmpctl sim`) | [`sim`] |
 //! | the command line | [`cli`] |
 
 pub mod cli;
@@ -27,6 +28,7 @@ pub mod remote;
 pub mod remote_scenario;
 pub mod scenario_file;
 pub mod setpoints;
+pub mod sim;
 pub mod zenoh_pub;
 
 pub use error::ClientError;

@@ -1,34 +1,18 @@
 //! The real server, in-process on 127.0.0.1:0 with Zenoh on loopback (multicast off), driven through the client
 //! library exactly as robots and perception nodes drive it. Every await is under a timeout.
 
-use std::future::Future;
+mod common;
+
 use std::path::Path;
 use std::time::Duration;
 
+use common::{T, config, within};
 use dmp::{Isopotential, Primitive};
 use dmp_client::grpc::DmpClient;
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
-use dmp_server::config::Config;
 use dmp_server::run::{ServerHandle, start};
 use tokio_stream::StreamExt;
-
-const T: Duration = Duration::from_secs(60);
-
-async fn within<F: Future>(what: &str, f: F) -> F::Output {
-    tokio::time::timeout(T, f).await.unwrap_or_else(|_| panic!("timed out: {what}"))
-}
-
-fn config(dir: &Path) -> Config {
-    let mut c = Config {
-        grpc_addr: "127.0.0.1:0".parse().unwrap(),
-        data_dir: dir.to_path_buf(),
-        ..Default::default()
-    };
-    c.zenoh.listen = vec!["tcp/127.0.0.1:0".into()];
-    c.zenoh.multicast_scouting = false;
-    c
-}
 
 async fn serve(dir: &Path) -> (ServerHandle, DmpClient) {
     let handle = within("server start", start(config(dir))).await.expect("server starts");

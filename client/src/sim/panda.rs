@@ -1,0 +1,224 @@
+//! The Panda pick and place (the paper's section on the Panda): move the gripper to the ring, then carry the ring to
+//! the green peg past the red peg, 3-D at 1 kHz.
+//!
+//! # Geometry (metres, the robot's base frame, `z` up)
+//! - Board: a box of centre `(0.5, 0, 0.01)` and half-extents `(0.15, 0.25, 0.01)` (top at `z = 0.02`).
+//! - Red peg: a cylinder of radius 0.01 and height 0.12 standing on the board at `(0.5, 0)` (top at `z = 0.14`).
+//! - Green peg: the same at `(0.55, 0.17)`.
+//! - Ring: outer radius [`RING_RADIUS`], on a stand, grasped at its centre `(0.45, -0.17, 0.06)`.
+//! - Home: `(0.30, -0.40, 0.35)`; place: `(0.55, 0.17, 0.20)`, above the green peg.
+//!
+//! The straight line from the ring to the place crosses `y = 0` at `(0.50, 0, 0.13)`: through the red peg.
+//!
+//! # The planner's view
+//! The pegs are superquadrics of exponents `(1, 1, 2)`, the smallest-volume one through the cylinder's rims
+//! (`(r/a)^2 + (h/c)^4 = 1` with `a^2 c` least: `a = r / sqrt(0.8)`, `c = h / 0.2^(1/4)`); the board a rounded box
+//! of exponent 2 through its corners (`a_i = h_i 3^(1/4)`). While moving to the ring they are inflated by
+//! [`GRIPPER_MARGIN`]; while carrying, by the ring's radius, and the green peg (the target, which the ring goes onto)
+//! is left out. Primitives: null weights (straight lines), `K = 3050`, `alpha = 4`, `D = 2 sqrt(K)`.
+//! Moving to the ring uses the dynamic potential (`lambda = 10, eta = 2, beta = 2`); carrying is run twice, with
+//! the static (`A = 10, eta = 2`) and the dynamic potential.
+//!
+//! # The true world
+//! The gripper's centre is a point while moving to the ring; while carrying, the ring is the ball of radius
+//! [`RING_RADIUS`] around it. Clearance is measured with parry against the true box and cylinders.
+
+use dmp::Primitive;
+use dmp::scenario::ObstacleSpec;
+use dmp_proto::v1;
+
+use super::report::{Figure, SimReport, measure, write_figure};
+use super::robot::Executed;
+use super::world::{Body, Solid, robot_body};
+use super::{Method, SimOptions, avoidance, execute, free_plan, pacing, within};
+use crate::convert::JsonObstacle;
+use crate::error::ClientError;
+use crate::grpc::DmpClient;
+
+/// Control period: 1 kHz.
+pub const DT: f64 = 1e-3;
+/// Outer radius of the ring.
+pub const RING_RADIUS: f64 = 0.025;
+/// Inflation of the obstacles while the bare gripper moves.
+pub const GRIPPER_MARGIN: f64 = 0.01;
+/// Time scale of each motion, seconds.
+pub const TAU: f64 = 1.5;
+
+const HOME: [f64; 3] = [0.30, -0.40, 0.35];
+const RING: [f64; 3] = [0.45, -0.17, 0.06];
+const PLACE: [f64; 3] = [0.55, 0.17, 0.20];
+const BOARD_C: [f64; 3] = [0.5, 0.0, 0.01];
+const BOARD_H: [f64; 3] = [0.15, 0.25, 0.01];
+const PEG_R: f64 = 0.01;
+const PEG_HH: f64 = 0.06;
+const RED: [f64; 3] = [0.5, 0.0, 0.08];
+const GREEN: [f64; 3] = [0.55, 0.17, 0.08];
+
+const ROBOT: &str = "panda";
+
+fn superquadric(
+    id: &str,
+    center: &[f64],
+    semi_axes: Vec<f64>,
+    exponents: Vec<f64>,
+    margin: f64,
+) -> JsonObstacle {
+    let spec = ObstacleSpec {
+        id: id.into(),
+        center: center.to_vec(),
+        semi_axes,
+        exponents: Some(exponents),
+        rotation: None,
+        velocity: None,
+        nested: None,
+    };
+    JsonObstacle { spec, margin, ttl_s: 0.0 }
+}
+
+/// A z-axis cylinder's superquadric of exponents (1, 1, 2) (module documentation).
+fn peg(id: &str, center: &[f64], margin: f64) -> JsonObstacle {
+    let a = PEG_R / 0.8f64.sqrt();
+    let c = PEG_HH / 0.2f64.powf(0.25);
+    superquadric(id, center, vec![a, a, c], vec![1.0, 1.0, 2.0], margin)
+}
+
+fn board(margin: f64) -> JsonObstacle {
+    let k = 3f64.powf(0.25);
+    superquadric("board", &BOARD_C, BOARD_H.iter().map(|h| h * k).collect(), vec![2.0; 3], margin)
+}
+
+/// The true shapes.
+fn world() -> Vec<Body> {
+    vec![
+        Body::new("board", Solid::Cuboid { half: BOARD_H }, &BOARD_C),
+        Body::new("red-peg", Solid::CylinderZ { radius: PEG_R, half_height: PEG_HH }, &RED),
+        Body::new("green-peg", Solid::CylinderZ { radius: PEG_R, half_height: PEG_HH }, &GREEN),
+    ]
+}
+
+fn line(start: &[f64], goal: &[f64]) -> Result<Primitive, ClientError> {
+    Primitive::straight_line(50, 4.0, vec![3050.0; 3], None, TAU, start.to_vec(), goal.to_vec())
+        .map_err(|e| ClientError::argument("primitive", e.to_string()))
+}
+
+struct Motion {
+    key: &'static str,
+    title: &'static str,
+    primitive: &'static str,
+    start: Vec<f64>,
+    goal: Vec<f64>,
+    method: Method,
+    obstacles: Vec<JsonObstacle>,
+    body: Solid,
+}
+
+impl Motion {
+    fn spec(&self) -> v1::MotionSpec {
+        v1::MotionSpec {
+            robot_id: ROBOT.into(),
+            primitive: self.primitive.into(),
+            start: self.start.clone(),
+            goal: self.goal.clone(),
+            avoidance: Some(avoidance(self.method)),
+            extra_obstacles: self.obstacles.iter().map(JsonObstacle::to_proto).collect(),
+            // The scene is known in advance: it travels with the request.
+            ignore_scene: true,
+            ..Default::default()
+        }
+    }
+
+    async fn run(&self, client: &DmpClient, options: &SimOptions) -> Result<Executed, ClientError> {
+        let request = v1::ExecuteRequest {
+            motion: Some(self.spec()),
+            dt: DT,
+            segment_s: 0.01,
+            pacing: pacing(options.realtime),
+            max_duration_s: 4.0 * TAU,
+            ..Default::default()
+        };
+        execute(client, request, options.realtime, |_| {}).await
+    }
+
+    async fn record(
+        &self,
+        client: &DmpClient,
+        options: &SimOptions,
+        exec: &Executed,
+        report: &mut SimReport,
+    ) -> Result<(), ClientError> {
+        let body = robot_body(ROBOT, self.body);
+        let r = measure(exec, DT, &self.goal, &body, &world(), &[]);
+        report.add(&format!("{ROBOT}/{}", self.key), r);
+        let free = free_plan(client, &self.spec(), DT).await?;
+        let engine: Vec<dmp::Obstacle> = self
+            .obstacles
+            .iter()
+            .map(JsonObstacle::to_engine)
+            .collect::<Result<_, _>>()
+            .map_err(|e| ClientError::Plot(e.to_string()))?;
+        let name = format!("{}.svg", self.key);
+        let fig = Figure {
+            title: self.title,
+            line: (&self.start, &self.goal),
+            free: &free,
+            adapted: &exec.traj,
+            obstacles: &engine,
+            robots: &[],
+            time: 0.0,
+        };
+        write_figure(&options.out, &name, &fig)?;
+        report.plots.push(name);
+        Ok(())
+    }
+}
+
+/// Runs the pick and place: the move to the ring, then both carries (at once: they are alternatives).
+pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, ClientError> {
+    within("put", client.put_primitive(ROBOT, "move-to-ring", &line(&HOME, &RING)?)).await??;
+    within("put", client.put_primitive(ROBOT, "carry", &line(&RING, &PLACE)?)).await??;
+    let dynamic = Method::Dynamic { lambda: 10.0, beta: 2.0, eta: 2.0 };
+    let to_ring = Motion {
+        key: "move-to-ring",
+        title: "Panda: move to ring (dynamic potential)",
+        primitive: "move-to-ring",
+        start: HOME.to_vec(),
+        goal: RING.to_vec(),
+        method: dynamic,
+        obstacles: vec![
+            board(GRIPPER_MARGIN),
+            peg("red-peg", &RED, GRIPPER_MARGIN),
+            peg("green-peg", &GREEN, GRIPPER_MARGIN),
+        ],
+        body: Solid::Point,
+    };
+    let mut report = SimReport::new("panda", options.realtime);
+    report.notes.push(
+        "geometry and gains: see client/src/sim/panda.rs (board box, red and green pegs as cylinders; \
+         pegs planned as superquadrics (1, 1, 2), board as a rounded box of exponent 2)"
+            .into(),
+    );
+    let moved = to_ring.run(client, options).await?;
+    to_ring.record(client, options, &moved, &mut report).await?;
+    // Carry from where the gripper actually stopped.
+    if moved.traj.is_empty() {
+        return Err(ClientError::Protocol("the move to the ring streamed no setpoint".into()));
+    }
+    let grasp = super::report::position(&moved.traj, moved.traj.len() - 1).to_vec();
+    let carry = |key, title, method| Motion {
+        key,
+        title,
+        primitive: "carry",
+        start: grasp.clone(),
+        goal: PLACE.to_vec(),
+        method,
+        obstacles: vec![board(RING_RADIUS), peg("red-peg", &RED, RING_RADIUS)],
+        body: Solid::Ball { radius: RING_RADIUS },
+    };
+    let carry_static =
+        carry("carry-static", "Panda: move to peg (static potential)", Method::Static { a: 10.0, eta: 2.0 });
+    let carry_dynamic = carry("carry-dynamic", "Panda: move to peg (dynamic potential)", dynamic);
+    let (a, b) = tokio::join!(carry_static.run(client, options), carry_dynamic.run(client, options));
+    carry_static.record(client, options, &a?, &mut report).await?;
+    carry_dynamic.record(client, options, &b?, &mut report).await?;
+    Ok(report)
+}
