@@ -2,16 +2,13 @@
 //! of `server/src/convert.rs`: the same mappings, so that what the client sends is what the server reads.
 
 use dmp::scenario::{DmpSpec, FootprintSpec, ObstacleSpec};
-use dmp::{Avoidance, DmpError, InvalidInput, Method};
+use dmp::{Avoidance, Method};
 use dmp_proto::v1;
 use serde_json::{Map, Value, json};
 
 use crate::error::ClientError;
 
-/// Keys of a JSON obstacle: the scenario format's (SPEC.md) plus `ttl_s` and `margin` (the server's Zenoh payload).
-pub const JSON_OBSTACLE_KEYS: [&str; 9] =
-    ["id", "center", "semi_axes", "exponents", "rotation", "velocity", "nested", "ttl_s", "margin"];
-
+pub use dmp_proto::obstacle_json::{JSON_OBSTACLE_KEYS, JsonObstacle};
 pub use dmp_proto::primitive::{primitive_from_proto, primitive_to_proto};
 
 /// The learning parameters of a scenario's `dmp` section (`D = null` sends no damping: critical).
@@ -60,137 +57,13 @@ pub fn footprint_to_proto(f: &FootprintSpec) -> v1::Superquadric {
 
 /// The obstacle message of a scenario obstacle, with a margin and a time to live (0: none).
 pub fn obstacle_to_proto(s: &ObstacleSpec, margin: f64, ttl_s: f64) -> v1::Obstacle {
-    let shape = match s.nested {
-        Some(n) => v1::obstacle::Shape::Nested(v1::NestedSuperquadric {
-            semi_axes: s.semi_axes.clone(),
-            n: n.n,
-            m: n.m,
-        }),
-        None => v1::obstacle::Shape::Superquadric(v1::Superquadric {
-            semi_axes: s.semi_axes.clone(),
-            exponents: s.exponents.clone().unwrap_or_default(),
-        }),
-    };
-    v1::Obstacle {
-        id: s.id.clone(),
-        shape: Some(shape),
-        center: s.center.clone(),
-        rotation: s.rotation.as_ref().map(|r| r.iter().flatten().copied().collect()).unwrap_or_default(),
-        velocity: s.velocity.clone().unwrap_or_default(),
-        margin,
-        ttl_s,
-    }
-}
-
-/// An obstacle read from JSON: the scenario's object plus the Zenoh payload's `margin` and `ttl_s`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct JsonObstacle {
-    /// The scenario-format obstacle.
-    pub spec: ObstacleSpec,
-    /// Inflation of every semi-axis (0: none).
-    pub margin: f64,
-    /// Seconds to live (0: forever).
-    pub ttl_s: f64,
-}
-
-impl JsonObstacle {
-    /// Its message.
-    pub fn to_proto(&self) -> v1::Obstacle {
-        obstacle_to_proto(&self.spec, self.margin, self.ttl_s)
-    }
-
-    /// The JSON payload the server reads on `dmp/<cell>/obstacles/<id>` (what [`obstacle_from_json`] parses).
-    pub fn to_json(&self) -> Value {
-        let mut v = serde_json::to_value(&self.spec).unwrap_or(Value::Null);
-        if let Value::Object(obj) = &mut v {
-            obj.retain(|_, v| !v.is_null());
-            if self.margin != 0.0 {
-                obj.insert("margin".into(), self.margin.into());
-            }
-            if self.ttl_s != 0.0 {
-                obj.insert("ttl_s".into(), self.ttl_s.into());
-            }
-        }
-        v
-    }
-
-    /// Checks it with the engine (shape, centre, rotation, velocity, margin, ttl), as the server will; errors name
-    /// the field.
-    pub fn validate(&self) -> Result<(), DmpError> {
-        let num = |field: &str, v: f64| {
-            if v.is_finite() && v >= 0.0 {
-                Ok(())
-            } else {
-                Err(DmpError::from(InvalidInput::new(field, "must be a finite number >= 0")))
-            }
-        };
-        num("margin", self.margin)?;
-        num("ttl_s", self.ttl_s)?;
-        self.to_engine().map(drop)
-    }
-
-    /// The engine's obstacle (its centre is the one at `t = 0`), inflated by the margin.
-    pub fn to_engine(&self) -> Result<dmp::Obstacle, DmpError> {
-        let s = &self.spec;
-        let shape = match s.nested {
-            Some(n) => {
-                if s.exponents.is_some() {
-                    return Err(
-                        InvalidInput::new("nested", "give either `exponents` or `nested`, not both").into()
-                    );
-                }
-                let a: [f64; 3] = s.semi_axes.as_slice().try_into().map_err(|_| {
-                    InvalidInput::new(
-                        "semi_axes",
-                        format!("the nested form is 3-D: needs 3 semi-axes, found {}", s.semi_axes.len()),
-                    )
-                })?;
-                dmp::Shape::Nested(dmp::NestedSuperquadric::new(a, n.n, n.m)?)
-            }
-            None => {
-                let n = s.exponents.clone().unwrap_or_else(|| vec![1.0; s.semi_axes.len()]);
-                dmp::Shape::Superquadric(dmp::Superquadric::new(s.semi_axes.clone(), n)?)
-            }
-        };
-        let shape = if self.margin > 0.0 { shape.inflated(self.margin)? } else { shape };
-        dmp::Obstacle::new(s.id.clone(), shape, s.center.clone(), s.rotation.clone(), s.velocity.clone())
-    }
+    JsonObstacle { spec: s.clone(), margin, ttl_s }.to_proto()
 }
 
 /// Parses one JSON obstacle (an object of [`JSON_OBSTACLE_KEYS`]); `field` prefixes the errors (e.g.
 /// `obstacles[2]`, or empty).
 pub fn obstacle_from_json(value: &Value, field: &str) -> Result<JsonObstacle, ClientError> {
-    let at = |name: &str| if field.is_empty() { name.to_string() } else { format!("{field}.{name}") };
-    let Value::Object(obj) = value else {
-        return Err(ClientError::argument(
-            if field.is_empty() { "(obstacle)" } else { field },
-            "must be a JSON object",
-        ));
-    };
-    if let Some(k) = obj.keys().find(|k| !JSON_OBSTACLE_KEYS.contains(&k.as_str())) {
-        return Err(ClientError::argument(
-            at(k),
-            format!("unknown field, expected one of {JSON_OBSTACLE_KEYS:?}"),
-        ));
-    }
-    let number = |key: &str| -> Result<f64, ClientError> {
-        match obj.get(key) {
-            None | Some(Value::Null) => Ok(0.0),
-            Some(v) => v.as_f64().ok_or_else(|| ClientError::argument(at(key), "must be a number")),
-        }
-    };
-    let (margin, ttl_s) = (number("margin")?, number("ttl_s")?);
-    let rest: Map<String, Value> = obj
-        .iter()
-        .filter(|(k, _)| !matches!(k.as_str(), "margin" | "ttl_s"))
-        .map(|(k, v)| (k.clone(), v.clone()))
-        .collect();
-    let spec: ObstacleSpec = serde_path_to_error::deserialize(Value::Object(rest)).map_err(|e| {
-        let path = e.path().to_string();
-        let inner = e.into_inner().to_string();
-        ClientError::argument(if path == "." { at("(obstacle)") } else { at(&path) }, inner)
-    })?;
-    Ok(JsonObstacle { spec, margin, ttl_s })
+    JsonObstacle::parse(value, field).map_err(|e| ClientError::argument(e.field, e.rule))
 }
 
 /// The JSON of an obstacle message, in the scenario format where it has one (a solid primitive is written as

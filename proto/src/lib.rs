@@ -10,4 +10,5 @@ pub mod v1 {
 pub const FILE_DESCRIPTOR_SET: &[u8] = tonic::include_file_descriptor_set!("dmp_descriptor");
 
 pub mod codec;
+pub mod obstacle_json;
 pub mod primitive;

@@ -136,51 +136,15 @@ pub fn obstacle_to_engine(o: &v1::Obstacle) -> Result<dmp::Obstacle, ServerError
     Ok(dmp::Obstacle::new(o.id.clone(), shape, o.center.clone(), rotation, velocity)?)
 }
 
-/// Keys of a JSON obstacle: the scenario format's (SPEC.md) plus `ttl_s` and `margin`.
-const JSON_OBSTACLE_KEYS: [&str; 9] =
-    ["id", "center", "semi_axes", "exponents", "rotation", "velocity", "nested", "ttl_s", "margin"];
-
-/// Parses a Zenoh JSON payload into the obstacle message (`id_from_key` names it when the JSON has no `id`).
+/// Parses a Zenoh JSON payload (the scenario format's obstacle, plus `margin` and `ttl_s`) into the obstacle
+/// message; `id_from_key` names it when the JSON has no `id`.
 pub fn obstacle_from_json(bytes: &[u8], id_from_key: &str) -> Result<v1::Obstacle, ServerError> {
-    let value: serde_json::Value =
+    let mut value: serde_json::Value =
         serde_json::from_slice(bytes).map_err(|e| ServerError::invalid("payload", e.to_string()))?;
-    let serde_json::Value::Object(mut obj) = value else {
-        return Err(ServerError::invalid("payload", "must be a JSON object"));
-    };
-    if let Some(k) = obj.keys().find(|k| !JSON_OBSTACLE_KEYS.contains(&k.as_str())) {
-        return Err(ServerError::invalid(
-            k.clone(),
-            format!("unknown field, expected one of {JSON_OBSTACLE_KEYS:?}"),
-        ));
+    if let serde_json::Value::Object(obj) = &mut value {
+        obj.entry("id").or_insert_with(|| id_from_key.into());
     }
-    let mut number = |key: &str| -> Result<f64, ServerError> {
-        match obj.remove(key) {
-            None | Some(serde_json::Value::Null) => Ok(0.0),
-            Some(v) => v.as_f64().ok_or_else(|| ServerError::invalid(key, "must be a number")),
-        }
-    };
-    let (ttl_s, margin) = (number("ttl_s")?, number("margin")?);
-    obj.entry("id").or_insert_with(|| id_from_key.into());
-    let s: dmp::scenario::ObstacleSpec = serde_json::from_value(serde_json::Value::Object(obj))
-        .map_err(|e| ServerError::invalid("payload", e.to_string()))?;
-    let shape = match s.nested {
-        Some(n) => {
-            v1::obstacle::Shape::Nested(v1::NestedSuperquadric { semi_axes: s.semi_axes, n: n.n, m: n.m })
-        }
-        None => v1::obstacle::Shape::Superquadric(v1::Superquadric {
-            semi_axes: s.semi_axes,
-            exponents: s.exponents.unwrap_or_default(),
-        }),
-    };
-    Ok(v1::Obstacle {
-        id: s.id,
-        shape: Some(shape),
-        center: s.center,
-        rotation: s.rotation.map(|r| r.into_iter().flatten().collect()).unwrap_or_default(),
-        velocity: s.velocity.unwrap_or_default(),
-        margin,
-        ttl_s,
-    })
+    Ok(dmp_proto::obstacle_json::JsonObstacle::parse(&value, "")?.to_proto())
 }
 
 /// The message of a primitive.

@@ -95,7 +95,7 @@ pub fn prepare(s: &Scenario) -> Result<Prepared> {
                 InvalidInput::new(format!("obstacles[{i}].id"), format!("`{}` is used twice", o.id)).into()
             );
         }
-        obstacles.push(obstacle(o).map_err(|e| prefixed_err(&format!("obstacles[{i}]"), e))?);
+        obstacles.push(o.to_obstacle().map_err(|e| prefixed_err(&format!("obstacles[{i}]"), e))?);
     }
     let mut agents = Vec::with_capacity(s.robots.len());
     for (i, r) in s.robots.iter().enumerate() {
@@ -138,25 +138,30 @@ pub fn run(p: &Prepared) -> Result<ScenarioOutcome> {
     Ok(ScenarioOutcome { free, adapted, metrics })
 }
 
-fn obstacle(o: &ObstacleSpec) -> Result<Obstacle> {
-    let shape = match o.nested {
-        Some(n) => {
-            if o.exponents.is_some() {
-                return Err(
-                    InvalidInput::new("nested", "give either `exponents` or `nested`, not both").into()
-                );
+impl ObstacleSpec {
+    /// The engine's obstacle (per-axis exponents default to 1; `nested` selects the paper's 3-D form); errors name
+    /// the field within the obstacle.
+    pub fn to_obstacle(&self) -> Result<Obstacle> {
+        let o = self;
+        let shape = match o.nested {
+            Some(n) => {
+                if o.exponents.is_some() {
+                    return Err(
+                        InvalidInput::new("nested", "give either `exponents` or `nested`, not both").into()
+                    );
+                }
+                let a: [f64; 3] = o.semi_axes.as_slice().try_into().map_err(|_| {
+                    InvalidInput::new(
+                        "semi_axes",
+                        format!("the nested form is 3-D: needs 3 semi-axes, found {}", o.semi_axes.len()),
+                    )
+                })?;
+                Shape::Nested(NestedSuperquadric::new(a, n.n, n.m)?)
             }
-            let a: [f64; 3] = o.semi_axes.as_slice().try_into().map_err(|_| {
-                InvalidInput::new(
-                    "semi_axes",
-                    format!("the nested form is 3-D: needs 3 semi-axes, found {}", o.semi_axes.len()),
-                )
-            })?;
-            Shape::Nested(NestedSuperquadric::new(a, n.n, n.m)?)
-        }
-        None => superquadric(&o.semi_axes, o.exponents.as_deref())?,
-    };
-    Obstacle::new(o.id.clone(), shape, o.center.clone(), o.rotation.clone(), o.velocity.clone())
+            None => superquadric(&o.semi_axes, o.exponents.as_deref())?,
+        };
+        Obstacle::new(o.id.clone(), shape, o.center.clone(), o.rotation.clone(), o.velocity.clone())
+    }
 }
 
 fn footprint(f: &FootprintSpec) -> Result<Shape> {

@@ -259,6 +259,10 @@ impl Runner {
                 obstacles.push(o);
             }
         }
+        // No other robot now and none before: the field is already empty (the common case, every segment).
+        if obstacles.is_empty() && self.remote.scene().obstacles.is_empty() {
+            return Ok(());
+        }
         let agents = agents(&self.members);
         self.remote = build_remote(&agents, &self.avoidance, obstacles, self.primitive.dim)?;
         Ok(())
@@ -311,7 +315,7 @@ impl Runner {
         &self.touched
     }
 
-    /// Current speed of the slowest-to-stop member, and whether every member is at its goal.
+    /// Whether every member is at its goal and at rest.
     pub fn arrived(&self) -> bool {
         self.members.iter().all(|m| {
             let dist: f64 =
@@ -339,10 +343,17 @@ impl Runner {
         };
         let mut worst = Outcome::Running;
         for _ in 0..n {
-            if self.history.len() == self.history_len {
-                self.history.pop_front();
-            }
-            self.history.push_back(self.state.clone());
+            // Recycle the oldest entry's buffers: no allocation per step once the history is full.
+            let slot = match self.history.len() == self.history_len {
+                true => self.history.pop_front().map(|mut old| {
+                    (old.t, old.s) = (self.state.t, self.state.s);
+                    old.x.clone_from(&self.state.x);
+                    old.xd.clone_from(&self.state.xd);
+                    old
+                }),
+                false => None,
+            };
+            self.history.push_back(slot.unwrap_or_else(|| self.state.clone()));
             p.x.extend_from_slice(&self.state.x);
             p.xd.extend_from_slice(&self.state.xd);
             if self.holding {
