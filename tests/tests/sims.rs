@@ -70,6 +70,10 @@ async fn youbot_avoids_a_box_published_by_a_perception_node() {
     let report = simulate(SimName::YoubotPerception).await;
     assert_clean(&report);
     assert_eq!(report.robots.len(), 4);
+    // Plausible for a youBot: accelerations of a few m/s^2, even going round the box.
+    for (key, r) in &report.robots {
+        assert!(r.peak_acceleration < 10.0, "{key}: peak acceleration {} m/s^2", r.peak_acceleration);
+    }
     // The box that stays is avoided (it is in the robot's way).
     for key in ["youbot/added-static", "youbot/added-dynamic"] {
         let d = report.robots[key].min_clearance_m["box"];
@@ -88,5 +92,92 @@ async fn youbot_avoids_a_box_published_by_a_perception_node() {
             "{method}: the temporary box bent the path by {temporary}"
         );
         assert!(back < 0.1 * temporary, "{method}: {back} from the line past the removed box");
+    }
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn psm_arms_hand_the_ring_over_and_place_it_on_the_peg() {
+    use dmp_client::sim::psm;
+    let wall = std::time::Instant::now();
+    let report = simulate(SimName::Psm).await;
+    println!("psm: {:.2} s of wall clock", wall.elapsed().as_secs_f64());
+    let m = |k: &str| *report.metrics.get(k).unwrap_or_else(|| panic!("no metric {k}"));
+    assert_clean(&report);
+    assert_eq!(report.robots.len(), 6);
+    assert_eq!(report.plots.len(), 3);
+    for (id, r) in &report.robots {
+        assert_eq!(r.late_setpoints, 0, "{id}");
+        assert!(r.setpoints >= 1000, "{id}: {} setpoints at 1 kHz", r.setpoints);
+        // Each arm is measured against the other one's jaws, and every peg.
+        let other = if id.starts_with("psm1/") { "psm2" } else { "psm1" };
+        for o in [other, "peg-1", "peg-2", "target-peg", "board"] {
+            assert!(r.min_clearance_m.contains_key(o), "{id}: no clearance to {o}");
+        }
+    }
+    // The handover: both tips a few mm from the centre when the ring changes hands (their goals are
+    // HANDOVER_OFFSET from it, and the server's arrival tolerance is 1 mm).
+    const { assert!(psm::HANDOVER_OFFSET <= 0.005) };
+    for arm in ["psm1", "psm2"] {
+        let d = m(&format!("handover/{arm}_to_centre_m"));
+        assert!(d < psm::HANDOVER_OFFSET + 0.001, "{arm} is {d} m from the centre at the handover");
+    }
+    // The ring ends on the target peg: its hole over the peg's axis, just above the top, when it is released.
+    let offset = m("ring/offset_from_peg_axis_m");
+    assert!(offset < psm::RING_INNER_RADIUS - psm::PEG_RADIUS, "ring {offset} m off the peg's axis");
+    let height = m("ring/height_above_peg_top_m");
+    assert!(height > 0.0 && height < 0.015, "ring released {height} m above the peg");
+    assert!(m("ring/released_at_s") > m("handover/time_s"));
+    // Avoidance was needed: without it the carried ring hits a peg (and the path moved), and without the robot
+    // term the jaws hit each other when the arms cross after the handover (with it they clear, assert_clean).
+    for (key, peg) in [("psm1/transfer", "peg-1"), ("psm2/move-to-peg", "peg-2")] {
+        let free = m(&format!("{key}/free_min_clearance_m/{peg}"));
+        assert!(free <= 0.0, "{key}: the free plan clears {peg} by {free} m");
+        let deviation = m(&format!("{key}/max_deviation_from_free_m"));
+        assert!(deviation > 0.002, "{key}: avoidance moved the path by only {deviation} m");
+    }
+    for (key, other) in [("psm1/move-to-peg", "psm2"), ("psm2/move-to-peg", "psm1")] {
+        let without = m(&format!("{key}/no_robot_term_min_clearance_m/{other}"));
+        assert!(without <= 0.0, "{key}: without the robot term the jaws clear {other} by {without} m");
+        assert!(report.robots[key].min_clearance_m[other] > 0.001, "{key}: too close to {other}");
+    }
+    // The simulated task takes a few seconds.
+    assert!(m("ring/released_at_s") < 10.0);
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn youbots_avoid_each_other_and_the_cubes_on_one_phase() {
+    let wall = std::time::Instant::now();
+    let report = simulate(SimName::Youbots).await;
+    println!("youbots: {:.2} s of wall clock", wall.elapsed().as_secs_f64());
+    assert_clean(&report);
+    // Two primitives (null weights, constant speed) x two potentials for the walls and cubes, three robots each.
+    assert_eq!(report.robots.len(), 12);
+    assert_eq!(report.plots.len(), 4);
+    let m = |k: &str| *report.metrics.get(k).unwrap_or_else(|| panic!("no metric {k}"));
+    let ids = ["youbot1", "youbot2", "youbot3"];
+    let blocks = ["wall-south", "wall-north", "wall-west", "wall-east", "cube-a", "cube-b", "cube-c"];
+    for (key, r) in &report.robots {
+        let me = key.split('/').next().unwrap();
+        assert_eq!(r.late_setpoints, 0, "{key}");
+        // Measured against every wall and cube and both other robots.
+        for o in blocks.iter().chain(&ids).filter(|o| **o != me) {
+            let d = r.min_clearance_m.get(*o).unwrap_or_else(|| panic!("{key}: no clearance to {o}"));
+            // The margins on top of the robot's size keep a few centimetres of air.
+            assert!(*d > 0.02, "{key}: {d} m from {o}");
+        }
+        // Plausible for a youBot: within its top speed of 0.8 m/s, and accelerations of a few m/s^2.
+        assert!(r.peak_acceleration < 10.0, "{key}: peak acceleration {} m/s^2", r.peak_acceleration);
+        assert!(r.peak_speed < 0.8, "{key}: peak speed {} m/s", r.peak_speed);
+    }
+    for run in ["line-static", "line-dynamic", "constant-speed-static", "constant-speed-dynamic"] {
+        // Avoiding was needed: on the free plans every robot touches a cube, and two robots (youbot1 and
+        // youbot2, head-on) touch each other.
+        for id in ids {
+            let free = m(&format!("youbots/{run}/free_min_cube_clearance_m/{id}"));
+            assert_eq!(free, 0.0, "{run}: {id}'s free plan clears the cubes by {free} m");
+        }
+        assert_eq!(m(&format!("youbots/{run}/free_min_robot_clearance_m")), 0.0, "{run}");
+        // The simulated runs take under a minute.
+        assert!(report.robots[&format!("youbot1/{run}")].duration_s < 60.0, "{run}");
     }
 }

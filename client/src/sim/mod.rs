@@ -10,15 +10,19 @@
 //! | true shapes and distances (parry3d-f64) | `world.rs` |
 //! | `report.json` and figures | `report.rs` |
 //! | the Panda pick and place | `panda.rs` |
+//! | two da Vinci PSMs: ring transfer with a handover, one 6-D phase | `psm.rs` |
 //! | the youBot with a perception node over Zenoh | `perception.rs` |
+//! | three youBots on one phase, walls and cubes | `youbots.rs` |
 //! | fitting an ellipse to a point cloud | `ellipse_fit.rs` |
 
 pub mod ellipse_fit;
 pub mod panda;
 pub mod perception;
+pub mod psm;
 pub mod report;
 pub mod robot;
 pub mod world;
+pub mod youbots;
 
 use std::future::Future;
 use std::path::PathBuf;
@@ -44,6 +48,10 @@ pub enum SimName {
     Panda,
     /// One youBot; a perception node publishes an unknown box over Zenoh.
     YoubotPerception,
+    /// Three youBots on one 2-D phase in a walled room with cubes, each a moving obstacle for the others.
+    Youbots,
+    /// Two da Vinci PSMs on one 6-D phase: pick, hand over and place a ring among pegs, 3-D each at 1 kHz.
+    Psm,
 }
 
 /// `dmpctl sim NAME [--server URL] [--realtime] --out DIR`.
@@ -98,6 +106,8 @@ pub async fn run(url: &str, name: SimName, options: &SimOptions) -> Result<SimRe
     let report = match name {
         SimName::Panda => panda::run(&client, options).await?,
         SimName::YoubotPerception => perception::run(&client, options).await?,
+        SimName::Youbots => youbots::run(&client, options).await?,
+        SimName::Psm => psm::run(&client, options).await?,
     };
     report.write(&options.out)?;
     Ok(report)
