@@ -588,7 +588,7 @@ async fn a_coarse_internal_step_stays_within_1e3_of_the_engines_1ms_rollout() {
             .trajectory;
         for step in [0.005, 0.01] {
             let mut motion = spec("arm", "curve");
-            motion.avoidance = Some(avoidance.clone());
+            motion.avoidance = Some(avoidance);
             motion.extra_obstacles = vec![still.clone(), moving.clone()];
             motion.ignore_scene = true;
             let request = v1::ExecuteRequest {
