@@ -60,7 +60,7 @@ pub struct SceneState {
     tx: Arc<watch::Sender<Arc<SceneSnapshot>>>,
     /// Robot states change at the control rate: kept apart from the versioned obstacles so that they do not wake
     /// every stream. The lock is never held across an await.
-    robots: Arc<Mutex<BTreeMap<String, RemoteRobot>>>,
+    robots: Arc<Mutex<BTreeMap<String, Arc<RemoteRobot>>>>,
     max_obstacles: usize,
 }
 
@@ -162,9 +162,9 @@ impl SceneState {
     pub fn update_robot(&self, state: v1::RobotState, footprint: Option<dmp::Shape>) {
         let mut robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());
         match robots.get_mut(&state.robot_id) {
-            Some(r) => *r = RemoteRobot { state, footprint },
+            Some(r) => *r = Arc::new(RemoteRobot { state, footprint }),
             None => {
-                robots.insert(state.robot_id.clone(), RemoteRobot { state, footprint });
+                robots.insert(state.robot_id.clone(), Arc::new(RemoteRobot { state, footprint }));
             }
         }
     }
@@ -176,7 +176,7 @@ impl SceneState {
     }
 
     /// The other robots of the cell, except `robot_id`, whose state is not older than `max_age_s`.
-    pub fn other_robots(&self, robot_id: &str, now_unix_s: f64, max_age_s: f64) -> Vec<RemoteRobot> {
+    pub fn other_robots(&self, robot_id: &str, now_unix_s: f64, max_age_s: f64) -> Vec<Arc<RemoteRobot>> {
         let mut out = Vec::new();
         self.other_robots_into(robot_id, now_unix_s, max_age_s, &mut out);
         out
@@ -188,7 +188,7 @@ impl SceneState {
         robot_id: &str,
         now_unix_s: f64,
         max_age_s: f64,
-        out: &mut Vec<RemoteRobot>,
+        out: &mut Vec<Arc<RemoteRobot>>,
     ) {
         out.clear();
         let robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());

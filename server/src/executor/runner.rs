@@ -136,6 +136,8 @@ pub struct Runner {
     holding: bool,
     stall: Vec<StallDetector>,
     contacts: Vec<Contact>,
+    /// Scratch for a remote robot's centre.
+    c0: Vec<f64>,
     /// Everything touched so far: obstacle ids and robot ids.
     touched: std::collections::BTreeSet<String>,
 }
@@ -189,6 +191,7 @@ impl Runner {
             holding: false,
             stall,
             contacts: Vec::new(),
+            c0: Vec::new(),
             touched: Default::default(),
         })
     }
@@ -233,7 +236,7 @@ impl Runner {
     pub fn apply_scene(
         &mut self,
         snap: &SceneSnapshot,
-        remote: &[RemoteRobot],
+        remote: &[std::sync::Arc<RemoteRobot>],
         now_unix_s: f64,
     ) -> Result<(), ServerError> {
         self.rebase();
@@ -259,36 +262,72 @@ impl Runner {
     }
 
     /// Updates the cell's other robots (moving obstacles with their footprints).
-    pub fn set_remote(&mut self, remote: &[RemoteRobot], now_unix_s: f64) -> Result<(), ServerError> {
+    pub fn set_remote(
+        &mut self,
+        remote: &[std::sync::Arc<RemoteRobot>],
+        now_unix_s: f64,
+    ) -> Result<(), ServerError> {
+        let members = std::mem::take(&mut self.members);
+        let result = self.set_remote_of(&members, remote, now_unix_s);
+        self.members = members;
+        result
+    }
+
+    fn set_remote_of(
+        &mut self,
+        members: &[Member],
+        remote: &[std::sync::Arc<RemoteRobot>],
+        now_unix_s: f64,
+    ) -> Result<(), ServerError> {
         let t = self.out_t;
         let sub = self.field.agent_dim();
-        let mut obstacles = Vec::new();
-        for r in remote {
-            if self.members.iter().any(|m| m.robot_id == r.state.robot_id) {
-                continue;
-            }
-            let Some(fp) = &r.footprint else { continue };
-            if r.state.position.len() != sub
-                || r.state.velocity.len() != sub
-                || dmp::Isopotential::dim(fp) != sub
-            {
-                continue;
-            }
+        let eligible = |r: &&std::sync::Arc<RemoteRobot>| {
+            !members.iter().any(|m| m.robot_id == r.state.robot_id)
+                && r.footprint.as_ref().is_some_and(|fp| dmp::Isopotential::dim(fp) == sub)
+                && r.state.position.len() == sub
+                && r.state.velocity.len() == sub
+        };
+        // The centre at the run's time zero of a robot seen at `stamp` moving at constant velocity.
+        let c0_into = |r: &RemoteRobot, c0: &mut Vec<f64>| {
             let age = now_unix_s - r.state.stamp_unix_s;
-            let c0: Vec<f64> =
-                r.state.position.iter().zip(&r.state.velocity).map(|(p, v)| p + v * age - v * t).collect();
+            c0.clear();
+            c0.extend(r.state.position.iter().zip(&r.state.velocity).map(|(p, v)| p + v * age - v * t));
+        };
+        // The same robots with the same footprints as the field holds (the common case, every segment): move them
+        // in place instead of compiling a new field.
+        let current = &self.remote.scene().obstacles;
+        let same = remote.iter().filter(eligible).count() == current.len()
+            && remote
+                .iter()
+                .filter(eligible)
+                .zip(current)
+                .all(|(r, o)| o.id() == r.state.robot_id && r.footprint.as_ref() == Some(o.shape()));
+        if same {
+            if current.is_empty() {
+                return Ok(());
+            }
+            self.rebase();
+            let mut c0 = std::mem::take(&mut self.c0);
+            for (i, r) in remote.iter().filter(eligible).enumerate() {
+                c0_into(r, &mut c0);
+                self.remote.set_obstacle_motion(i, &c0, &r.state.velocity);
+            }
+            self.c0 = c0;
+            return Ok(());
+        }
+        let mut obstacles = Vec::new();
+        for r in remote.iter().filter(eligible) {
+            let Some(fp) = &r.footprint else { continue };
+            let mut c0 = Vec::new();
+            c0_into(r, &mut c0);
             if let Ok(o) =
                 Obstacle::new(r.state.robot_id.clone(), fp.clone(), c0, None, Some(r.state.velocity.clone()))
             {
                 obstacles.push(o);
             }
         }
-        // No other robot now and none before: the field is already empty (the common case, every segment).
-        if obstacles.is_empty() && self.remote.scene().obstacles.is_empty() {
-            return Ok(());
-        }
         self.rebase();
-        let agents = agents(&self.members);
+        let agents = agents(members);
         self.remote = build_remote(&agents, &self.avoidance, obstacles, self.primitive.dim)?;
         Ok(())
     }

@@ -25,7 +25,7 @@ const REMOTE_MAX_AGE_S: f64 = 0.5;
 pub const REFILL: Duration = Duration::from_millis(30);
 
 /// Real time: how long after the request the run's first point is due.
-pub const FIRST_POINT_DELAY: Duration = Duration::from_millis(5);
+pub const FIRST_POINT_DELAY: Duration = Duration::from_millis(20);
 
 /// Real time: the most segments one wake-up computes.
 pub fn refill_segments(cfg: &StreamConfig) -> usize {
@@ -115,7 +115,7 @@ async fn produce(
     control: &mut Option<mpsc::Receiver<Control>>,
 ) -> Result<&'static str, ServerError> {
     let mut scene_rx = cell.subscribe();
-    let mut others: Vec<RemoteRobot> = Vec::new();
+    let mut others: Vec<Arc<RemoteRobot>> = Vec::new();
     let first_robot = runner.members()[0].robot_id.clone();
     // Real time: the first point is due FIRST_POINT_DELAY from now, so that the first segment (computed and sent
     // now) reaches the robot before it.
