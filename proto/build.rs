@@ -6,8 +6,13 @@ use std::path::PathBuf;
 use prost::Message;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let files =
-        ["dmp/v1/types.proto", "dmp/v1/primitives.proto", "dmp/v1/scene.proto", "dmp/v1/motion.proto"];
+    let files = [
+        "dmp/v1/types.proto",
+        "dmp/v1/primitives.proto",
+        "dmp/v1/scene.proto",
+        "dmp/v1/motion.proto",
+        "dmp/v1/server.proto",
+    ];
     for f in &files {
         println!("cargo:rerun-if-changed={f}");
     }

@@ -83,6 +83,11 @@ pub enum Command {
     /// The cell's obstacles.
     #[command(subcommand)]
     Scene(SceneCommand),
+    /// Many robots streaming in real time against the server (cells of robots avoiding each other, obstacle
+    /// updates over Zenoh); prints one JSON object: setpoints on time, lateness, scene update latency, server CPU
+    /// and memory. `--zenoh-connect` defaults to tcp/127.0.0.1:7447; `--cell` is not used (cells are
+    /// `<prefix>-<c>`).
+    Load(crate::load::LoadArgs),
 }
 
 /// `dmpctl scenario ...`
@@ -344,6 +349,10 @@ pub async fn run_async(cli: Cli) -> Result<String, ClientError> {
             remote::scene_delete(&server, &zenoh, id, *via).await
         }
         Command::Scene(SceneCommand::List) => remote::scene_list(&connect().await?).await,
+        Command::Load(a) => {
+            let report = crate::load::run(a, &server, &cli.zenoh_connect).await?;
+            Ok(to_json(&report))
+        }
         Command::Sim(a) => {
             let report = crate::sim::run_sim(a, &server, &cli.cell, &cli.zenoh_connect).await?;
             let problems = report.problems();
@@ -448,6 +457,53 @@ mod tests {
             refused(&["learn", "--robot", "r", "--name", "p", "--csv", "a", "--alpha", "-1"])
                 .contains("--alpha")
         );
+    }
+
+    #[test]
+    fn load_takes_its_flags_and_the_global_server() {
+        let c = parse(&[
+            "--server",
+            "http://h:1",
+            "load",
+            "--robots",
+            "20",
+            "--rate",
+            "500",
+            "--segment-ms",
+            "20",
+            "--duration",
+            "3",
+            "--scene-updates",
+            "5",
+            "--zenoh-connect",
+            "tcp/h:2",
+            "--dim",
+            "2",
+            "--out",
+            "r.json",
+        ]);
+        assert_eq!(
+            (c.server.as_deref(), c.zenoh_connect.as_slice()),
+            (Some("http://h:1"), &["tcp/h:2".into()][..])
+        );
+        let Command::Load(a) = c.command else { panic!() };
+        let expected = crate::load::LoadArgs {
+            robots: 20,
+            rate: 500.0,
+            segment_ms: 20.0,
+            duration: 3.0,
+            scene_updates: 5.0,
+            dim: 2,
+            out: Some(PathBuf::from("r.json")),
+            ..Default::default()
+        };
+        assert_eq!(a, expected);
+        let Command::Load(a) = parse(&["load"]).command else { panic!() };
+        assert_eq!(a, crate::load::LoadArgs::default());
+        assert!(refused(&["load", "--robots", "many"]).contains("--robots"));
+        // Numbers clap accepts are checked by the load itself, naming the flag.
+        let Command::Load(a) = parse(&["load", "--rate", "-1"]).command else { panic!() };
+        assert!(a.validate().unwrap_err().to_string().starts_with("--rate"));
     }
 
     #[test]

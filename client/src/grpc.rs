@@ -22,6 +22,7 @@ use dmp_proto::v1;
 use dmp_proto::v1::motion_service_client::MotionServiceClient;
 use dmp_proto::v1::primitive_service_client::PrimitiveServiceClient;
 use dmp_proto::v1::scene_service_client::SceneServiceClient;
+use dmp_proto::v1::server_service_client::ServerServiceClient;
 use dmp_proto::v1::session_request::Message;
 use tokio::sync::mpsc;
 use tokio_stream::wrappers::ReceiverStream;
@@ -60,6 +61,9 @@ pub struct DmpClient {
     primitives: PrimitiveServiceClient<Channel>,
     scene: SceneServiceClient<Channel>,
     motion: MotionServiceClient<Channel>,
+    server: ServerServiceClient<Channel>,
+    /// The cell of the scene requests; empty means the server's default cell.
+    cell: String,
 }
 
 /// Every error of an error's chain, `: `-separated (tonic's transport error says little on its own).
@@ -131,10 +135,29 @@ impl DmpClient {
             scene: SceneServiceClient::new(channel.clone())
                 .max_decoding_message_size(n)
                 .max_encoding_message_size(n),
-            motion: MotionServiceClient::new(channel)
+            motion: MotionServiceClient::new(channel.clone())
                 .max_decoding_message_size(n)
                 .max_encoding_message_size(n),
+            server: ServerServiceClient::new(channel),
+            cell: String::new(),
         }
+    }
+
+    /// The same client, with its scene requests (put, delete, list, watch) in `cell` (empty: the server's
+    /// default cell). Motions name their cell in `MotionSpec::cell`.
+    pub fn with_cell(mut self, cell: impl Into<String>) -> Self {
+        self.cell = cell.into();
+        self
+    }
+
+    /// The cell of the scene requests (empty: the server's default).
+    pub fn cell(&self) -> &str {
+        &self.cell
+    }
+
+    /// The server's resource use and traffic.
+    pub async fn stats(&self) -> Result<v1::ServerStats, ClientError> {
+        Ok(self.server.clone().get_stats(v1::GetStatsRequest {}).await?.into_inner())
     }
 
     /// The server's address.
@@ -253,24 +276,34 @@ impl DmpClient {
 
     /// Adds or replaces an obstacle of the cell's scene.
     pub async fn put_obstacle(&self, obstacle: v1::Obstacle) -> Result<v1::SceneChange, ClientError> {
-        let request = v1::PutObstacleRequest { obstacle: Some(obstacle) };
+        let request = v1::PutObstacleRequest { obstacle: Some(obstacle), cell: self.cell.clone() };
         Ok(self.scene.clone().put_obstacle(request).await?.into_inner())
     }
 
     /// Removes an obstacle (`changed` is false when there was none of that id).
     pub async fn delete_obstacle(&self, id: &str) -> Result<v1::SceneChange, ClientError> {
-        let request = v1::DeleteObstacleRequest { id: id.into() };
+        let request = v1::DeleteObstacleRequest { id: id.into(), cell: self.cell.clone() };
         Ok(self.scene.clone().delete_obstacle(request).await?.into_inner())
     }
 
     /// The current obstacles.
     pub async fn list_obstacles(&self) -> Result<v1::SceneSnapshot, ClientError> {
-        Ok(self.scene.clone().list_obstacles(v1::ListObstaclesRequest {}).await?.into_inner())
+        Ok(self
+            .scene
+            .clone()
+            .list_obstacles(v1::ListObstaclesRequest { cell: self.cell.clone() })
+            .await?
+            .into_inner())
     }
 
     /// The current scene, then the scene after every change.
     pub async fn watch_scene(&self) -> Result<SceneStream, ClientError> {
-        let events = self.scene.clone().watch_scene(v1::WatchSceneRequest {}).await?.into_inner();
+        let events = self
+            .scene
+            .clone()
+            .watch_scene(v1::WatchSceneRequest { cell: self.cell.clone() })
+            .await?
+            .into_inner();
         Ok(Box::pin(
             events.map(|r| r.map_err(ClientError::from)?.snapshot.ok_or_else(|| missing("snapshot"))),
         ))

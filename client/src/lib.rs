@@ -14,6 +14,7 @@
 //! | the server-side commands of `dmpctl` | [`remote`] |
 //! | `scenario run` through the server | [`remote_scenario`] |
 //! | simulated robots (`dmpctl sim`) | [`sim`] |
+//! | the load generator (`dmpctl load`) | [`load`] |
 //! | the command line | [`cli`] |
 
 pub mod cli;
@@ -21,6 +22,7 @@ pub mod convert;
 pub mod demo_csv;
 pub mod error;
 pub mod grpc;
+pub mod load;
 pub mod offline;
 pub mod outputs;
 pub mod plot;

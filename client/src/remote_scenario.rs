@@ -230,6 +230,7 @@ async fn group(
                         footprint: Some(footprint_to_proto(&r.footprint)),
                         extra_obstacles: if free { Vec::new() } else { obstacles.clone() },
                         ignore_scene: true,
+                        cell: String::new(),
                     }),
                 }
             })
@@ -240,6 +241,8 @@ async fn group(
         lookahead_s: 0.0,
         max_duration_s: p.duration,
         tau: p.motion.tau,
+        // RK4 at the output rate, as offline (the server's default interpolates between coarser steps).
+        integration_step_s: p.dt,
     };
     let dims: Vec<&[usize]> = s.robots.iter().map(|r| r.dims.as_slice()).collect();
     let (adapted, free) =

@@ -161,9 +161,16 @@ impl ObstaclePublisher {
 
     /// Puts a protobuf obstacle (encoding `application/protobuf`) under its id.
     pub async fn put_proto(&self, obstacle: &v1::Obstacle) -> Result<(), ClientError> {
+        self.put_proto_in(&self.cell, obstacle).await
+    }
+
+    /// Puts a protobuf obstacle under its id in another cell than the publisher's (the server subscribes to every
+    /// cell's obstacles, so [`ObstaclePublisher::wait_for_subscriber`] on one cell covers the others).
+    pub async fn put_proto_in(&self, cell: &str, obstacle: &v1::Obstacle) -> Result<(), ClientError> {
+        check_chunk("cell", cell)?;
         check_chunk("id", &obstacle.id)?;
         self.session
-            .put(obstacle_key(&self.cell, &obstacle.id), codec::encode(obstacle))
+            .put(obstacle_key(cell, &obstacle.id), codec::encode(obstacle))
             .encoding(Encoding::from(codec::PROTOBUF_ENCODING))
             .congestion_control(CongestionControl::Block)
             .await

@@ -19,6 +19,7 @@
 pub mod avoidance;
 pub mod basis;
 pub mod canonical;
+pub mod dense;
 pub mod derivatives;
 pub mod directions;
 pub mod distance;

@@ -103,6 +103,18 @@ impl Obstacle {
         Self { center, ..self.clone() }
     }
 
+    /// Moves the obstacle in place: centre at time zero and constant velocity (same dimension; a value that is
+    /// not finite or of another length leaves it unchanged and returns false). Allocates nothing.
+    pub fn set_motion(&mut self, center: &[f64], velocity: &[f64]) -> bool {
+        let d = self.dim();
+        if center.len() != d || velocity.len() != d || !center.iter().chain(velocity).all(|v| v.is_finite()) {
+            return false;
+        }
+        self.center.copy_from_slice(center);
+        self.velocity.copy_from_slice(velocity);
+        true
+    }
+
     /// `n` points on the surface, as offsets from the centre in the world frame (row-major `n x d`): the SPEC's
     /// boundary sampling of the point methods. They move with the obstacle.
     pub fn boundary_offsets(&self, n: usize) -> Vec<f64> {
@@ -330,6 +342,33 @@ mod tests {
             let v = e.value(o.shape(), o.rotation(), &c, &p);
             assert!(v.abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn moving_a_compiled_field_in_place_equals_compiling_it_again() {
+        use crate::field::{RepulsiveField, Scene};
+        use crate::{Avoidance, Method, Perturbation};
+        let shape = Shape::Superquadric(crate::Superquadric::ellipsoid(vec![0.3, 0.2]).unwrap());
+        let at = |c: Vec<f64>, v: Vec<f64>| {
+            Obstacle::new("o", shape.clone(), c, Some(rot2(0.4)), Some(v)).unwrap()
+        };
+        let avoidance = Avoidance::new(Method::DynamicVolumetric(crate::avoidance::DynamicVolumetric {
+            lambda: 10.0,
+            beta: 2.0,
+            eta: 0.5,
+        }));
+        let field =
+            |o: Obstacle| RepulsiveField::new(Scene::with_obstacles(vec![o], avoidance, 0), 2).unwrap();
+        let mut moved = field(at(vec![0.0, 0.0], vec![0.0, 0.0]));
+        assert!(moved.set_obstacle_motion(0, &[0.5, 0.4], &[-0.3, 0.1]));
+        assert!(!moved.set_obstacle_motion(0, &[f64::NAN, 0.0], &[0.0, 0.0]), "refused, unchanged");
+        assert!(!moved.set_obstacle_motion(1, &[0.0, 0.0], &[0.0, 0.0]));
+        let mut fresh = field(at(vec![0.5, 0.4], vec![-0.3, 0.1]));
+        let (mut a, mut b) = ([0.0; 2], [0.0; 2]);
+        moved.add(0.7, &[0.1, 0.2], &[0.5, 0.3], 1.0, &mut a);
+        fresh.add(0.7, &[0.1, 0.2], &[0.5, 0.3], 1.0, &mut b);
+        assert_eq!(a, b);
+        assert!(a.iter().any(|v| *v != 0.0));
     }
 
     #[test]

@@ -76,6 +76,14 @@ pub struct Defaults {
     pub avoidance: dmp::Avoidance,
     /// For other robots: the dynamic volumetric potential with the youBot test's gains.
     pub robot_avoidance: dmp::Avoidance,
+    /// Internal RK4 step of streamed runs, seconds (requests may ask for another); output points in between are
+    /// interpolated exactly. Rounded to a multiple of the output `dt` and at most one segment. The default, 1 ms,
+    /// is the engine's own step: coarser steps are much cheaper but lose accuracy where a repulsive term is stiff
+    /// (a robot pressed against an obstacle or another robot), so they are opt-in.
+    pub integration_step_s: f64,
+    /// Shortest time between two states of one robot published on Zenoh, seconds (the local cell sees every
+    /// segment's state).
+    pub robot_state_period_s: f64,
 }
 
 impl Default for Defaults {
@@ -92,6 +100,8 @@ impl Default for Defaults {
                 beta: 2.0,
                 eta: 0.2,
             })),
+            integration_step_s: 0.001,
+            robot_state_period_s: 0.02,
         }
     }
 }
@@ -108,8 +118,10 @@ pub struct Limits {
     pub max_dim: usize,
     /// Largest N.
     pub max_basis: usize,
-    /// Most obstacles in the scene.
+    /// Most obstacles in a cell's scene.
     pub max_obstacles: usize,
+    /// Most cells.
+    pub max_cells: usize,
     /// Most concurrent streams (Execute, Session, ExecuteGroup, WatchScene).
     pub max_streams: usize,
     /// Longest plan or run, in steps.
@@ -126,6 +138,7 @@ impl Default for Limits {
             max_dim: 64,
             max_basis: 1000,
             max_obstacles: 1000,
+            max_cells: 1000,
             max_streams: 2000,
             max_steps: dmp::rollout::MAX_ROLLOUT_STEPS,
             stream_buffer: 4,

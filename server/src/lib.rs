@@ -6,13 +6,15 @@
 //! | configuration (file, then flags) | [`config`], [`cli`] |
 //! | wire <-> engine conversions, validation | [`convert`] |
 //! | errors and their gRPC status | [`error`] |
-//! | the scene (obstacles, robot states) | [`scene`] |
+//! | the cells a server serves, each with its own scene | [`cells`] |
+//! | one cell's scene (obstacles, robot states) | [`scene`] |
 //! | shared state of the services | [`state`] |
 //! | the embedded store of primitives (redb) | [`store`] |
 //! | robots' states: local scene and `dmp/<cell>/robots/<id>/state` | [`robots`] |
 //! | the Zenoh session and the subscribers that feed the scene | [`zenoh_bridge`] |
 //! | the gRPC services, one file each | [`services`] |
 
+pub mod cells;
 pub mod cli;
 pub mod config;
 pub mod convert;

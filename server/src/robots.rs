@@ -43,12 +43,19 @@ pub fn check_robot_state(s: &v1::RobotState) -> Result<Option<dmp::Shape>, Serve
     Ok(Some(shape))
 }
 
-/// Publishes executing robots' states: into the local scene always, and on Zenoh when the server has a session.
-/// Cheap to clone; a Zenoh error is logged, never returned (a robot's motion never waits on the network).
+/// Publishes executing robots' states: into their cell's scene always (every segment), and on Zenoh when the
+/// server has a session (at most once per `period` per robot: other servers extrapolate with the velocity). Cheap to
+/// clone; a Zenoh error is logged, never returned (a robot's motion never waits on the network).
 #[derive(Debug, Clone)]
 pub struct RobotBus {
-    scene: SceneState,
     zenoh: Option<Arc<ZenohOut>>,
+}
+
+/// A robot's Zenoh publisher and the stamp of its last state sent.
+#[derive(Debug)]
+struct Out {
+    publisher: Publisher<'static>,
+    last_stamp: Mutex<f64>,
 }
 
 /// The Zenoh side: one publisher per robot, declared at its first state (a declared publisher keeps its routes,
@@ -56,44 +63,63 @@ pub struct RobotBus {
 #[derive(Debug)]
 struct ZenohOut {
     session: Session,
-    cell: String,
-    /// By robot id. The lock is held only to look up or insert, never across an await.
-    publishers: Mutex<HashMap<String, Arc<Publisher<'static>>>>,
+    period_s: f64,
+    /// By cell, then robot id. The lock is held only to look up or insert, never across an await.
+    publishers: Mutex<HashMap<String, HashMap<String, Arc<Out>>>>,
 }
 
 impl RobotBus {
-    /// A bus on `scene`, publishing on `dmp/<cell>/robots/...` of the session when one is given.
-    pub fn new(scene: SceneState, zenoh: Option<(Session, String)>) -> Self {
-        let zenoh = zenoh.map(|(session, cell)| {
-            Arc::new(ZenohOut { session, cell, publishers: Mutex::new(HashMap::new()) })
+    /// A bus publishing on `dmp/<cell>/robots/...` of `zenoh` (session, period between two states of a robot,
+    /// seconds) when one is given.
+    pub fn new(zenoh: Option<(Session, f64)>) -> Self {
+        let zenoh = zenoh.map(|(session, period_s)| {
+            Arc::new(ZenohOut { session, period_s, publishers: Mutex::new(HashMap::new()) })
         });
-        Self { scene, zenoh }
+        Self { zenoh }
     }
 
-    /// Records a robot's state in the local scene and publishes it on Zenoh (encoding `application/protobuf`).
-    pub async fn publish(&self, state: v1::RobotState, footprint: Option<dmp::Shape>) {
+    /// Records a robot's state in its cell's scene and publishes it on Zenoh (encoding `application/protobuf`)
+    /// unless the robot's last state went out less than the period ago.
+    pub async fn publish(&self, scene: &SceneState, state: v1::RobotState, footprint: Option<dmp::Shape>) {
         let Some(z) = &self.zenoh else {
-            self.scene.update_robot(state, footprint);
+            scene.update_robot(state, footprint);
             return;
         };
-        let payload = codec::encode(&state);
-        let robot_id = state.robot_id.clone();
-        self.scene.update_robot(state, footprint);
-        let Some(publisher) = z.publisher(&robot_id).await else { return };
-        if let Err(e) = publisher.put(payload).await {
+        let out = z.publisher(scene.cell(), &state.robot_id).await;
+        let due = out.as_ref().is_some_and(|o| {
+            let mut last = o.last_stamp.lock().unwrap_or_else(|p| p.into_inner());
+            let due = state.stamp_unix_s - *last >= z.period_s;
+            if due {
+                *last = state.stamp_unix_s;
+            }
+            due
+        });
+        let payload = due.then(|| codec::encode(&state));
+        let robot_id = (payload.is_some()).then(|| state.robot_id.clone());
+        scene.update_robot(state, footprint);
+        if let (Some(out), Some(payload), Some(robot_id)) = (out, payload, robot_id)
+            && let Err(e) = out.publisher.put(payload).await
+        {
             warn!(robot = %robot_id, error = %e, "zenoh: robot state not published");
         }
     }
 
     /// Forgets a robot whose run ended, locally and on Zenoh (a delete on its key).
-    pub async fn retire(&self, robot_id: &str) {
-        self.scene.remove_robot(robot_id);
+    pub async fn retire(&self, scene: &SceneState, robot_id: &str) {
+        scene.remove_robot(robot_id);
         let Some(z) = &self.zenoh else { return };
-        let publisher = z.publishers.lock().unwrap_or_else(|p| p.into_inner()).remove(robot_id);
-        let result = match publisher {
-            Some(p) => p.delete().await,
+        let out = {
+            let mut map = z.publishers.lock().unwrap_or_else(|p| p.into_inner());
+            let out = map.get_mut(scene.cell()).and_then(|m| m.remove(robot_id));
+            if map.get(scene.cell()).is_some_and(|m| m.is_empty()) {
+                map.remove(scene.cell());
+            }
+            out
+        };
+        let result = match out {
+            Some(o) => o.publisher.delete().await,
             None if check_name("robot_id", robot_id).is_ok() => {
-                z.session.delete(robot_state_key(&z.cell, robot_id)).await
+                z.session.delete(robot_state_key(scene.cell(), robot_id)).await
             }
             None => return,
         };
@@ -105,15 +131,21 @@ impl RobotBus {
 
     /// How many robots currently have a Zenoh publisher.
     pub fn publishers(&self) -> usize {
-        self.zenoh.as_ref().map_or(0, |z| z.publishers.lock().unwrap_or_else(|p| p.into_inner()).len())
+        self.zenoh.as_ref().map_or(0, |z| {
+            z.publishers.lock().unwrap_or_else(|p| p.into_inner()).values().map(HashMap::len).sum()
+        })
     }
 }
 
 impl ZenohOut {
     /// The robot's publisher, declared at first use; None (logged) for an id that cannot be a key chunk.
-    async fn publisher(&self, robot_id: &str) -> Option<Arc<Publisher<'static>>> {
-        if let Some(p) = self.publishers.lock().unwrap_or_else(|p| p.into_inner()).get(robot_id) {
-            return Some(p.clone());
+    async fn publisher(&self, cell: &str, robot_id: &str) -> Option<Arc<Out>> {
+        let found = {
+            let map = self.publishers.lock().unwrap_or_else(|p| p.into_inner());
+            map.get(cell).and_then(|m| m.get(robot_id)).cloned()
+        };
+        if found.is_some() {
+            return found;
         }
         if let Err(e) = check_name("robot_id", robot_id) {
             warn!(robot = %robot_id, reason = %e, "zenoh: robot state not published");
@@ -121,14 +153,16 @@ impl ZenohOut {
         }
         let declared = self
             .session
-            .declare_publisher(robot_state_key(&self.cell, robot_id))
+            .declare_publisher(robot_state_key(cell, robot_id))
             .encoding(Encoding::APPLICATION_PROTOBUF)
             .await;
         match declared {
-            Ok(p) => {
-                let mut publishers = self.publishers.lock().unwrap_or_else(|p| p.into_inner());
+            Ok(publisher) => {
+                let out = Arc::new(Out { publisher, last_stamp: Mutex::new(f64::NEG_INFINITY) });
+                let mut map = self.publishers.lock().unwrap_or_else(|p| p.into_inner());
                 // A concurrent first publish may have won: keep its publisher, drop (undeclare) this one.
-                Some(publishers.entry(robot_id.to_owned()).or_insert_with(|| Arc::new(p)).clone())
+                let cell_map = map.entry(cell.to_owned()).or_default();
+                Some(cell_map.entry(robot_id.to_owned()).or_insert(out).clone())
             }
             Err(e) => {
                 warn!(robot = %robot_id, error = %e, "zenoh: cannot declare the robot's publisher");
@@ -141,6 +175,7 @@ impl ZenohOut {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cells::Cells;
     use crate::config::ZenohConfig;
     use crate::scene::now_unix_s;
     use crate::zenoh_bridge::{ZenohBridge, locators, obstacle_key, open_session};
@@ -180,11 +215,11 @@ mod tests {
 
     #[tokio::test(flavor = "multi_thread")]
     async fn without_zenoh_states_stay_local() {
-        let scene = SceneState::new(10);
-        let bus = RobotBus::new(scene.clone(), None);
-        bus.publish(state("r1", 1.0), None).await;
+        let scene = SceneState::new("c", 10);
+        let bus = RobotBus::new(None);
+        bus.publish(&scene, state("r1", 1.0), None).await;
         assert_eq!(scene.other_robots("r2", now_unix_s(), 60.0).len(), 1);
-        bus.retire("r1").await;
+        bus.retire(&scene, "r1").await;
         assert!(scene.other_robots("r2", now_unix_s(), 60.0).is_empty());
     }
 
@@ -200,15 +235,14 @@ mod tests {
         };
         // b (with the bridge) listens; a (with the bus) connects to it and so knows b's subscribers on opening.
         let b = within("open b", open_session(&cfg(vec![]))).await.unwrap();
-        let scene_b = SceneState::new(10);
+        let cells_b = Cells::new("c", 10, 10).unwrap();
+        let scene_b = cells_b.scene("c").unwrap();
         let shutdown = CancellationToken::new();
         let bridge =
-            within("bridge b", ZenohBridge::start(b.clone(), "c", scene_b.clone(), shutdown.clone()))
-                .await
-                .unwrap();
+            within("bridge b", ZenohBridge::start(b.clone(), cells_b, shutdown.clone())).await.unwrap();
         let a = within("open a", open_session(&cfg(locators(&b).await))).await.unwrap();
-        let scene_a = SceneState::new(10);
-        let bus = RobotBus::new(scene_a.clone(), Some((a.clone(), "c".into())));
+        let scene_a = SceneState::new("c", 10);
+        let bus = RobotBus::new(Some((a.clone(), 0.0)));
 
         // Belt and braces: a knows b's robot subscriber (declared after the obstacle one) before publishing.
         let probe = within("probe", a.declare_publisher(robot_state_key("c", "probe"))).await.unwrap();
@@ -219,8 +253,8 @@ mod tests {
         drop(listener);
         drop(probe);
         let mut rx = scene_b.subscribe();
-        bus.publish(state("r1", 1.0), None).await;
-        bus.publish(state("r1", 2.0), None).await;
+        bus.publish(&scene_a, state("r1", 1.0), None).await;
+        bus.publish(&scene_a, state("r1", 2.0), None).await;
         assert_eq!(bus.publishers(), 1);
         // A sentinel obstacle sent after the states on the same session: when it arrives, so have they.
         let sentinel = obstacle_key("c", "sentinel");
@@ -232,7 +266,7 @@ mod tests {
         assert!(seen[0].footprint.is_some());
         assert_eq!(scene_a.other_robots("r2", now_unix_s(), 60.0).len(), 1, "recorded locally");
 
-        bus.retire("r1").await;
+        bus.retire(&scene_a, "r1").await;
         assert_eq!(bus.publishers(), 0);
         assert!(scene_a.other_robots("r2", now_unix_s(), 60.0).is_empty());
         within("sentinel delete", a.delete(&sentinel)).await.unwrap();

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use dmp_proto::v1::motion_service_server::MotionServiceServer;
 use dmp_proto::v1::primitive_service_server::PrimitiveServiceServer;
 use dmp_proto::v1::scene_service_server::SceneServiceServer;
+use dmp_proto::v1::server_service_server::ServerServiceServer;
 use tokio::net::TcpListener;
 use tokio::sync::Semaphore;
 use tokio::task::JoinHandle;
@@ -15,13 +16,14 @@ use tokio_util::sync::CancellationToken;
 use tonic::transport::Server;
 use tracing::{info, warn};
 
+use crate::cells::Cells;
 use crate::config::Config;
 use crate::error::ServerError;
 use crate::robots::RobotBus;
-use crate::scene::SceneState;
 use crate::services::motion::MotionServiceImpl;
 use crate::services::primitives::PrimitiveServiceImpl;
 use crate::services::scene::SceneServiceImpl;
+use crate::services::server::ServerServiceImpl;
 use crate::state::AppState;
 use crate::store::Store;
 use crate::zenoh_bridge::{ZenohBridge, locators, open_session};
@@ -74,19 +76,18 @@ pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
     let store = tokio::task::spawn_blocking(move || Store::open(&dir))
         .await
         .map_err(|e| ServerError::Internal(e.to_string()))??;
-    let scene = SceneState::new(config.limits.max_obstacles);
+    let cells = Cells::new(&config.cell, config.limits.max_cells, config.limits.max_obstacles)?;
     let shutdown = CancellationToken::new();
 
     let (session, bridge, robots, zenoh_locators) = if config.zenoh.disabled {
         // Without Zenoh the bridge's reaper is not there: obstacles put over gRPC with a ttl still expire.
-        crate::zenoh_bridge::spawn_reaper(scene.clone(), shutdown.clone());
-        (None, None, RobotBus::new(scene.clone(), None), Vec::new())
+        crate::zenoh_bridge::spawn_reaper(cells.clone(), shutdown.clone());
+        (None, None, RobotBus::new(None), Vec::new())
     } else {
         let session = open_session(&config.zenoh).await?;
-        let bridge =
-            ZenohBridge::start(session.clone(), config.cell.clone(), scene.clone(), shutdown.clone()).await?;
+        let bridge = ZenohBridge::start(session.clone(), cells.clone(), shutdown.clone()).await?;
         let locs = locators(&session).await;
-        let robots = RobotBus::new(scene.clone(), Some((session.clone(), config.cell.clone())));
+        let robots = RobotBus::new(Some((session.clone(), config.defaults.robot_state_period_s)));
         (Some(session), Some(bridge), robots, locs)
     };
     let bridge_malformed = bridge.as_ref().map(|b| b.malformed_counter());
@@ -95,9 +96,10 @@ pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
         streams: Arc::new(Semaphore::new(config.limits.max_streams)),
         config,
         store,
-        scene,
+        cells,
         robots,
         shutdown: shutdown.clone(),
+        counters: Default::default(),
     });
     let max = state.config.limits.max_message_bytes;
 
@@ -105,6 +107,7 @@ pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
     health.set_serving::<PrimitiveServiceServer<PrimitiveServiceImpl>>().await;
     health.set_serving::<SceneServiceServer<SceneServiceImpl>>().await;
     health.set_serving::<MotionServiceServer<MotionServiceImpl>>().await;
+    health.set_serving::<ServerServiceServer<ServerServiceImpl>>().await;
     health.set_service_status("", tonic_health::ServingStatus::Serving).await;
     let reflection = tonic_reflection::server::Builder::configure()
         .register_encoded_file_descriptor_set(dmp_proto::FILE_DESCRIPTOR_SET)
@@ -128,7 +131,8 @@ pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
             MotionServiceServer::new(MotionServiceImpl::new(state.clone()))
                 .max_decoding_message_size(max)
                 .max_encoding_message_size(max),
-        );
+        )
+        .add_service(ServerServiceServer::new(ServerServiceImpl::new(state.clone())));
     // Segments are small and latency-critical: no Nagle delay on accepted connections.
     let incoming = tonic::transport::server::TcpIncoming::from(listener).with_nodelay(Some(true));
     let stop = shutdown.clone();

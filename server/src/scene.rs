@@ -1,5 +1,5 @@
-//! The cell's scene: obstacles (versioned, read by every stream through a `watch` channel, so readers never block
-//! the writer) and the latest state of every robot (moving obstacles for the others).
+//! One cell's scene: obstacles (versioned, read by every stream through a `watch` channel, so readers never block
+//! the writer) and the latest state of every robot working in the cell (moving obstacles for the others).
 
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
@@ -56,18 +56,29 @@ pub struct RemoteRobot {
 /// The shared scene. Cheap to clone.
 #[derive(Debug, Clone)]
 pub struct SceneState {
+    cell: Arc<str>,
     tx: Arc<watch::Sender<Arc<SceneSnapshot>>>,
     /// Robot states change at the control rate: kept apart from the versioned obstacles so that they do not wake
     /// every stream. The lock is never held across an await.
-    robots: Arc<Mutex<BTreeMap<String, RemoteRobot>>>,
+    robots: Arc<Mutex<BTreeMap<String, Arc<RemoteRobot>>>>,
     max_obstacles: usize,
 }
 
 impl SceneState {
-    /// An empty scene holding at most `max_obstacles`.
-    pub fn new(max_obstacles: usize) -> Self {
+    /// The empty scene of `cell`, holding at most `max_obstacles`.
+    pub fn new(cell: impl Into<Arc<str>>, max_obstacles: usize) -> Self {
         let (tx, _) = watch::channel(Arc::new(SceneSnapshot::default()));
-        Self { tx: Arc::new(tx), robots: Arc::default(), max_obstacles }
+        Self { cell: cell.into(), tx: Arc::new(tx), robots: Arc::default(), max_obstacles }
+    }
+
+    /// The cell's name.
+    pub fn cell(&self) -> &str {
+        &self.cell
+    }
+
+    /// How many robots the cell sees now.
+    pub fn robot_count(&self) -> usize {
+        self.robots.lock().unwrap_or_else(|p| p.into_inner()).len()
     }
 
     /// The current snapshot.
@@ -150,7 +161,12 @@ impl SceneState {
     /// Records the latest state of a robot.
     pub fn update_robot(&self, state: v1::RobotState, footprint: Option<dmp::Shape>) {
         let mut robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());
-        robots.insert(state.robot_id.clone(), RemoteRobot { state, footprint });
+        match robots.get_mut(&state.robot_id) {
+            Some(r) => *r = Arc::new(RemoteRobot { state, footprint }),
+            None => {
+                robots.insert(state.robot_id.clone(), Arc::new(RemoteRobot { state, footprint }));
+            }
+        }
     }
 
     /// Forgets a robot (its run ended).
@@ -160,13 +176,28 @@ impl SceneState {
     }
 
     /// The other robots of the cell, except `robot_id`, whose state is not older than `max_age_s`.
-    pub fn other_robots(&self, robot_id: &str, now_unix_s: f64, max_age_s: f64) -> Vec<RemoteRobot> {
+    pub fn other_robots(&self, robot_id: &str, now_unix_s: f64, max_age_s: f64) -> Vec<Arc<RemoteRobot>> {
+        let mut out = Vec::new();
+        self.other_robots_into(robot_id, now_unix_s, max_age_s, &mut out);
+        out
+    }
+
+    /// [`SceneState::other_robots`] into `out` (cleared first), reusing its allocations.
+    pub fn other_robots_into(
+        &self,
+        robot_id: &str,
+        now_unix_s: f64,
+        max_age_s: f64,
+        out: &mut Vec<Arc<RemoteRobot>>,
+    ) {
+        out.clear();
         let robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());
-        robots
-            .values()
-            .filter(|r| r.state.robot_id != robot_id && now_unix_s - r.state.stamp_unix_s <= max_age_s)
-            .cloned()
-            .collect()
+        out.extend(
+            robots
+                .values()
+                .filter(|r| r.state.robot_id != robot_id && now_unix_s - r.state.stamp_unix_s <= max_age_s)
+                .cloned(),
+        );
     }
 }
 

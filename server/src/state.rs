@@ -5,10 +5,10 @@ use std::sync::Arc;
 use tokio::sync::Semaphore;
 use tokio_util::sync::CancellationToken;
 
+use crate::cells::Cells;
 use crate::config::Config;
 use crate::error::ServerError;
 use crate::robots::RobotBus;
-use crate::scene::SceneState;
 use crate::store::Store;
 
 /// The server's shared state: configuration, store, scene, the robots' state bus, stream permits and the shutdown
@@ -19,14 +19,31 @@ pub struct AppState {
     pub config: Config,
     /// The primitives.
     pub store: Store,
-    /// Obstacles and robot states.
-    pub scene: SceneState,
+    /// Every cell's obstacles and robot states.
+    pub cells: Cells,
     /// Publishes executing robots' states (over Zenoh when it is on).
     pub robots: RobotBus,
     /// One permit per open stream, `limits.max_streams` in all.
     pub streams: Arc<Semaphore>,
     /// Cancelled when the server shuts down: every stream ends.
     pub shutdown: CancellationToken,
+    /// Traffic counters.
+    pub counters: Counters,
+}
+
+/// What the server has done so far.
+#[derive(Debug)]
+pub struct Counters {
+    /// When the server started.
+    pub started: std::time::Instant,
+    /// Segments sent (a group segment counts once per member).
+    pub segments_sent: std::sync::atomic::AtomicU64,
+}
+
+impl Default for Counters {
+    fn default() -> Self {
+        Self { started: std::time::Instant::now(), segments_sent: Default::default() }
+    }
 }
 
 impl AppState {

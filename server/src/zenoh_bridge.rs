@@ -1,4 +1,6 @@
-//! The server's Zenoh side: opening the session from [`ZenohConfig`], and the bridge that feeds the scene.
+//! The server's Zenoh side: opening the session from [`ZenohConfig`], and the bridge that feeds the cells' scenes
+//! (every cell: the bridge subscribes to `dmp/*/...` and a new cell is created on its first sample, up to
+//! `limits.max_cells`).
 //!
 //! | key | payload | effect |
 //! | --- | --- | --- |
@@ -25,11 +27,12 @@ use zenoh::pubsub::Subscriber;
 use zenoh::sample::{Locality, Sample, SampleKind};
 use zenoh::{Session, Wait};
 
+use crate::cells::Cells;
 use crate::config::ZenohConfig;
-use crate::convert::{check_name, obstacle_from_json};
+use crate::convert::obstacle_from_json;
 use crate::error::ServerError;
 use crate::robots::check_robot_state;
-use crate::scene::{SceneState, now_unix_s};
+use crate::scene::now_unix_s;
 
 /// How long opening a session waits for the `connect` endpoints before it fails (only when some are given).
 pub const CONNECT_TIMEOUT_MS: u64 = 2000;
@@ -48,6 +51,11 @@ pub fn obstacle_key(cell: &str, obstacle_id: &str) -> String {
 /// The key of one robot's state: `dmp/<cell>/robots/<robot-id>/state`.
 pub fn robot_state_key(cell: &str, robot_id: &str) -> String {
     format!("dmp/{cell}/robots/{robot_id}/state")
+}
+
+/// The cell of a key `dmp/<cell>/...` (empty if the key has no such chunk; the subscriptions guarantee one).
+fn cell_of(key: &str) -> &str {
+    key.split('/').nth(1).unwrap_or_default()
 }
 
 /// The Zenoh configuration of [`ZenohConfig`]: mode, listen and connect endpoints, scouting.
@@ -182,9 +190,9 @@ fn check_size(bytes: &[u8]) -> Result<(), ServerError> {
     Ok(())
 }
 
-/// Spawns the task that removes expired obstacles every [`REAP_PERIOD`] until `stop` is cancelled. The bridge
-/// starts one; without Zenoh, start one for the time to live of gRPC puts.
-pub fn spawn_reaper(scene: SceneState, stop: CancellationToken) -> JoinHandle<()> {
+/// Spawns the task that removes expired obstacles of every cell every [`REAP_PERIOD`] until `stop` is cancelled.
+/// The bridge starts one; without Zenoh, start one for the time to live of gRPC puts.
+pub fn spawn_reaper(cells: Cells, stop: CancellationToken) -> JoinHandle<()> {
     tokio::spawn(async move {
         let mut tick = tokio::time::interval(REAP_PERIOD);
         tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
@@ -192,9 +200,12 @@ pub fn spawn_reaper(scene: SceneState, stop: CancellationToken) -> JoinHandle<()
             tokio::select! {
                 _ = stop.cancelled() => break,
                 _ = tick.tick() => {
-                    let n = scene.expire(now_unix_s());
-                    if n > 0 {
-                        debug!(expired = n, version = scene.snapshot().version, "obstacles expired");
+                    let now = now_unix_s();
+                    for scene in cells.all() {
+                        let n = scene.expire(now);
+                        if n > 0 {
+                            debug!(cell = scene.cell(), expired = n, version = scene.snapshot().version, "obstacles expired");
+                        }
                     }
                 }
             }
@@ -205,7 +216,7 @@ pub fn spawn_reaper(scene: SceneState, stop: CancellationToken) -> JoinHandle<()
 /// What the callbacks share: the scene and the counter of refused payloads.
 #[derive(Debug, Clone)]
 struct Ingest {
-    scene: SceneState,
+    cells: Cells,
     malformed: Arc<AtomicU64>,
 }
 
@@ -219,15 +230,16 @@ impl Ingest {
     fn try_obstacle(&self, sample: &Sample) -> Result<(), ServerError> {
         let key = sample.key_expr().as_str();
         let id = key.rsplit('/').next().unwrap_or_default();
+        let scene = self.cells.scene(cell_of(key))?;
         match sample.kind() {
             SampleKind::Delete => {
-                let (version, existed) = self.scene.delete(id);
+                let (version, existed) = scene.delete(id);
                 debug!(key, existed, version, "obstacle deleted over zenoh");
             }
             SampleKind::Put => {
                 let bytes = sample.payload().to_bytes();
                 let o = decode_obstacle(sample.encoding(), &bytes, id)?;
-                let version = self.scene.put(o, now_unix_s())?;
+                let version = scene.put(o, now_unix_s())?;
                 debug!(key, version, "obstacle put over zenoh");
             }
         }
@@ -243,14 +255,15 @@ impl Ingest {
     fn try_robot(&self, sample: &Sample) -> Result<(), ServerError> {
         let key = sample.key_expr().as_str();
         let id = key.strip_suffix("/state").and_then(|k| k.rsplit('/').next()).unwrap_or_default();
+        let scene = self.cells.scene(cell_of(key))?;
         match sample.kind() {
             SampleKind::Delete => {
-                self.scene.remove_robot(id);
+                scene.remove_robot(id);
                 debug!(key, "robot retired over zenoh");
             }
             SampleKind::Put => {
                 let (state, footprint) = decode_robot_state(&sample.payload().to_bytes(), id)?;
-                self.scene.update_robot(state, footprint);
+                scene.update_robot(state, footprint);
             }
         }
         Ok(())
@@ -274,19 +287,17 @@ pub struct ZenohBridge {
 }
 
 impl ZenohBridge {
-    /// Subscribes to the obstacles and robot states of `cell` on `session` and starts the reaper, which stops on
-    /// `shutdown` or [`ZenohBridge::close`]. The robot states this session publishes itself ([`crate::robots`]) are
-    /// not received back: the publisher records them locally.
+    /// Subscribes to the obstacles and robot states of every cell on `session` and starts the reaper, which stops
+    /// on `shutdown` or [`ZenohBridge::close`]. The robot states this session publishes itself ([`crate::robots`])
+    /// are not received back: the publisher records them locally.
     pub async fn start(
         session: Session,
-        cell: impl AsRef<str>,
-        scene: SceneState,
+        cells: Cells,
         shutdown: CancellationToken,
     ) -> Result<Self, ServerError> {
-        let cell = cell.as_ref();
-        check_name("cell", cell)?;
+        let cell = "*";
         let malformed = Arc::new(AtomicU64::new(0));
-        let ingest = Ingest { scene: scene.clone(), malformed: malformed.clone() };
+        let ingest = Ingest { cells: cells.clone(), malformed: malformed.clone() };
         let zenoh_err = |e: zenoh::Error| ServerError::Internal(format!("zenoh: cannot subscribe: {e}"));
 
         let obstacles_key = obstacle_key(cell, "*");
@@ -305,7 +316,7 @@ impl ZenohBridge {
             .map_err(zenoh_err)?;
 
         let stop = shutdown.child_token();
-        let reaper = spawn_reaper(scene, stop.clone());
+        let reaper = spawn_reaper(cells, stop.clone());
         info!(obstacles = %obstacles_key, robots = %robots_key, "zenoh bridge subscribed");
         Ok(Self { obstacles, robots, reaper, stop: stop.drop_guard(), malformed })
     }
@@ -371,19 +382,18 @@ mod tests {
     struct Pair {
         server: Session,
         client: Session,
-        scene: SceneState,
+        scene: crate::scene::SceneState,
         bridge: ZenohBridge,
         shutdown: CancellationToken,
     }
 
     async fn pair(cell: &str) -> Pair {
         let server = within("open server", open_session(&loopback(vec![]))).await.unwrap();
-        let scene = SceneState::new(100);
+        let cells = Cells::new(cell, 10, 100).unwrap();
+        let scene = cells.scene(cell).unwrap();
         let shutdown = CancellationToken::new();
         let bridge =
-            within("bridge", ZenohBridge::start(server.clone(), cell, scene.clone(), shutdown.clone()))
-                .await
-                .unwrap();
+            within("bridge", ZenohBridge::start(server.clone(), cells, shutdown.clone())).await.unwrap();
         let client = within("open client", open_session(&loopback(locators(&server).await))).await.unwrap();
         Pair { server, client, scene, bridge, shutdown }
     }

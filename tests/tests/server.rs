@@ -469,3 +469,154 @@ async fn scenario_run_through_the_server_gives_the_offline_metrics() {
     }
     within("shutdown", handle.shutdown()).await.unwrap();
 }
+
+/// A small `dmpctl load` (what CI may run; never the full one): 20 robots in 2 cells at 1 kHz in 10 ms segments
+/// for 2 s, with obstacle updates over Zenoh at 5 Hz. Structure and sanity only: no timing target (CI machines
+/// are noisy).
+#[tokio::test(flavor = "multi_thread")]
+async fn a_smoke_load_streams_twenty_robots_in_two_cells() {
+    let dir = tempfile::tempdir().unwrap();
+    let (handle, _client) = serve(dir.path()).await;
+    let out = dir.path().join("load.json");
+    let args = dmp_client::load::LoadArgs {
+        robots: 20,
+        rate: 1000.0,
+        segment_ms: 10.0,
+        duration: 2.0,
+        scene_updates: 5.0,
+        out: Some(out.clone()),
+        ..Default::default()
+    };
+    let url = format!("http://{}", handle.grpc_addr);
+    let report = within("the load", dmp_client::load::run(&args, &url, &handle.zenoh_locators))
+        .await
+        .expect("the load runs");
+    let json = serde_json::to_value(&report).unwrap();
+    println!("{}", serde_json::to_string_pretty(&json).unwrap());
+    assert_eq!(
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(&out).unwrap()).unwrap(),
+        json
+    );
+    for key in [
+        "setpoints_expected",
+        "setpoints_on_time",
+        "late_segments",
+        "server_cpu_percent",
+        "server_rss_mib",
+        "server_rss_mib_max",
+    ] {
+        assert!(json[key].is_number(), "{key}: {}", json[key]);
+    }
+    for key in ["p50", "p99", "max"] {
+        assert!(json["lateness_ms"][key].is_number(), "lateness_ms.{key}");
+    }
+    for key in ["p50", "p99"] {
+        assert!(json["scene_update_latency_ms"][key].is_number(), "scene_update_latency_ms.{key}");
+    }
+
+    assert!(report.errors.is_empty(), "{:#?}", report.errors);
+    assert_eq!((report.cells, report.streams_started, report.streams_failed), (2, 20, 0));
+    // Each robot streams from its start (spread over the first stagger_s seconds) to the end.
+    let ideal = 20.0 * 1000.0 * (args.duration - report.stagger_s * 19.0 / 20.0 / 2.0);
+    let expected = report.setpoints_expected as f64;
+    assert!((expected - ideal).abs() < 0.05 * ideal, "{expected} setpoints expected, about {ideal} ideal");
+    assert!(report.setpoints_on_time > 0 && report.setpoints_on_time <= report.setpoints_expected);
+    // Ten setpoints a segment, and more segments where a scene update superseded what was sent.
+    assert!(report.segments as f64 > 0.8 * expected / 10.0, "{} segments", report.segments);
+    assert!(report.late_segments <= report.segments);
+    assert_eq!(report.lateness_ms.count, report.segments);
+    assert!(report.scene_updates_sent > 0);
+    assert!(report.scene_update_latency_ms.count > 0, "no scene update reached a robot");
+    assert!(
+        report.scene_update_latency_ms.count + report.scene_updates_unanswered <= report.scene_updates_sent
+    );
+    assert!(report.server_cpu_percent.unwrap() > 0.0);
+    assert!(report.server_rss_mib.unwrap() > 0.0);
+    assert!(!report.server_rss_mib_series.is_empty());
+    assert_eq!(report.server_open_streams_max, Some(20));
+    within("shutdown", handle.shutdown()).await.unwrap();
+}
+
+/// The bound: a stream on a coarse internal step (RK4 every 5 or 10 ms, quintic Hermite in between) stays
+/// within 1e-3 of the engine's own 1 ms RK4 rollout of the same situation: the paper's curve past a still ellipse
+/// and a moving one, with the static and the dynamic volumetric potentials.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_coarse_internal_step_stays_within_1e3_of_the_engines_1ms_rollout() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, x) = paper_curve();
+    let (handle, client) = serve(dir.path()).await;
+    within("learn", client.learn("arm", "curve", &t, &x, Default::default())).await.unwrap();
+    let primitive = dmp::learn(&dmp::Demonstration::new(t, x).unwrap(), &dmp::LearnConfig::paper()).unwrap();
+    let still = ellipse("still", vec![-0.5, 0.7], vec![0.3, 0.2]);
+    let mut moving = ellipse("moving", vec![0.6, 0.2], vec![0.15, 0.1]);
+    moving.velocity = vec![-0.4, 0.3];
+    let engine_obstacle = |o: &v1::Obstacle| {
+        let v1::obstacle::Shape::Superquadric(q) = o.shape.clone().unwrap() else { unreachable!() };
+        let shape = dmp::Shape::Superquadric(dmp::Superquadric::ellipsoid(q.semi_axes).unwrap());
+        let velocity = (!o.velocity.is_empty()).then(|| o.velocity.clone());
+        dmp::Obstacle::new(o.id.clone(), shape, o.center.clone(), None, velocity).unwrap()
+    };
+    let methods = [
+        (
+            dmp::Method::StaticVolumetric(dmp::avoidance::StaticVolumetric { a: 1.0, eta: 1.0 }),
+            v1::Avoidance {
+                method: Some(v1::avoidance::Method::StaticVolumetric(v1::avoidance::StaticVolumetric {
+                    a: 1.0,
+                    eta: 1.0,
+                })),
+                ..Default::default()
+            },
+        ),
+        (
+            dmp::Method::DynamicVolumetric(dmp::avoidance::DynamicVolumetric {
+                lambda: 10.0,
+                beta: 2.0,
+                eta: 0.5,
+            }),
+            dynamic_volumetric(10.0, 2.0, 0.5),
+        ),
+    ];
+    for (method, avoidance) in methods {
+        let scene = dmp::Scene::with_obstacles(
+            vec![engine_obstacle(&still), engine_obstacle(&moving)],
+            dmp::Avoidance::new(method),
+            50,
+        );
+        let mut field = dmp::RepulsiveField::new(scene, 2).unwrap();
+        let reference = dmp::rollout(&primitive, &dmp::Motion::of(&primitive), &mut field, 1e-3, 1500)
+            .unwrap()
+            .trajectory;
+        for step in [0.005, 0.01] {
+            let mut motion = spec("arm", "curve");
+            motion.avoidance = Some(avoidance);
+            motion.extra_obstacles = vec![still.clone(), moving.clone()];
+            motion.ignore_scene = true;
+            let request = v1::ExecuteRequest {
+                motion: Some(motion),
+                dt: 1e-3,
+                segment_s: 0.01,
+                max_duration_s: 1.5,
+                integration_step_s: step,
+                ..Default::default()
+            };
+            let stream = within("execute", client.execute(request)).await.unwrap();
+            let mut positions = Vec::new();
+            let mut stream = std::pin::pin!(stream);
+            while let Some(seg) = within("segment", stream.next()).await {
+                positions.extend(seg.unwrap().positions);
+            }
+            // Until the goal is reached (the stream ends there) or for the whole 1.5 s.
+            assert!(
+                positions.len() >= 2 * 1001 && positions.len() <= reference.x.len(),
+                "{method:?} at {step}"
+            );
+            let worst = positions.iter().zip(&reference.x).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            println!(
+                "{method:?}, internal step {step} s: largest deviation from the 1 ms rollout {worst:.3e}"
+            );
+            assert!(worst <= 1e-3, "{method:?} at a {step} s step: {worst}");
+            assert!(worst > 0.0, "a coarse step is not the 1 ms rollout itself");
+        }
+    }
+    within("shutdown", handle.shutdown()).await.unwrap();
+}

@@ -184,6 +184,13 @@ impl RepulsiveField {
         })
     }
 
+    /// Moves obstacle `i` in place (centre at time zero, constant velocity), keeping everything compiled: the
+    /// cheap update of a moving obstacle whose shape stays the same. False (and no change) when `i` is out of range
+    /// or the values do not fit ([`Obstacle::set_motion`]).
+    pub fn set_obstacle_motion(&mut self, i: usize, center: &[f64], velocity: &[f64]) -> bool {
+        self.scene.obstacles.get_mut(i).is_some_and(|o| o.set_motion(center, velocity))
+    }
+
     /// Sets the cap on the norm of each robot's repulsive term.
     pub fn with_max_perturbation(mut self, cap: f64) -> Self {
         self.max_perturbation = cap;

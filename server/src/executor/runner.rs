@@ -1,9 +1,14 @@
 //! One run on one phase: a robot, or a group of robots sharing a DMP, stepped segment by segment. Scene, goal and
 //! tau changes are applied from the current state (never by a jump), and the run can roll back to a recent point
 //! so that a new segment supersedes setpoints already sent.
+//!
+//! RK4 runs on an internal grid of `step_points` output steps; the output points in between are the quintic
+//! Hermite interpolant of the two knots around them ([`dmp::dense`]). Every change restarts the grid at the next
+//! output point, so a change takes effect exactly where it would with RK4 at the output rate.
 
 use std::collections::VecDeque;
 
+use dmp::dense::{Knot, interpolate};
 use dmp::field::{Agent, Contact, RepulsiveField, Scene};
 use dmp::stall::{StallConfig, StallDetector};
 use dmp::{Avoidance, Integrator, Motion, Obstacle, Perturbation, Primitive, State};
@@ -109,33 +114,43 @@ pub struct Runner {
     primitive: Primitive,
     integrator: Integrator,
     motion: Motion,
-    state: State,
+    /// The grid point the output is in, and the next one (None until computed after a change).
+    knot0: Knot,
+    knot1: Option<Knot>,
+    /// Where RK4 computes the next knot.
+    scratch: State,
+    /// Time of the next output point.
+    out_t: f64,
     dt: f64,
+    /// Internal RK4 step, in output steps.
+    step_points: usize,
     avoidance: AvoidanceSpec,
     /// The scene's obstacles and the group's robots.
     field: RepulsiveField,
     /// The cell's other robots.
     remote: RepulsiveField,
     scene_version: u64,
-    /// States at the start of each recent step, for rollbacks.
+    /// The recent output points (their states), for rollbacks.
     history: VecDeque<State>,
     history_len: usize,
     holding: bool,
     stall: Vec<StallDetector>,
-    acc: Vec<f64>,
     contacts: Vec<Contact>,
+    /// Scratch for a remote robot's centre.
+    c0: Vec<f64>,
     /// Everything touched so far: obstacle ids and robot ids.
     touched: std::collections::BTreeSet<String>,
 }
 
 impl Runner {
-    /// A run of `primitive` (dimension = the members' dims together) with `motion`, output step `dt`. Keeps the
-    /// last `history_len` states for rollbacks.
+    /// A run of `primitive` (dimension = the members' dims together) with `motion`, output step `dt` and RK4 every
+    /// `step_points` output steps. Keeps the last `history_len` output points for rollbacks.
     pub fn new(
         members: Vec<Member>,
         primitive: Primitive,
         motion: Motion,
         dt: f64,
+        step_points: usize,
         avoidance: AvoidanceSpec,
         history_len: usize,
     ) -> Result<Self, ServerError> {
@@ -143,9 +158,12 @@ impl Runner {
         if !(dt.is_finite() && dt > 0.0 && dt <= 0.1) {
             return Err(ServerError::invalid("dt", "must be greater than 0 and at most 0.1 s"));
         }
-        check_stability(&primitive.k, dt, motion.tau, "tau")?;
+        let step_points = step_points.max(1);
+        check_stability(&primitive.k, dt * step_points as f64, motion.tau, "tau")?;
         let integrator = Integrator::new(&primitive)?;
         let state = State::at_rest(&motion.start);
+        let knot0 =
+            Knot { t: 0.0, s: 1.0, x: state.x.clone(), xd: state.xd.clone(), xdd: vec![0.0; primitive.dim] };
         let agents = agents(&members);
         let field = build_field(&agents, &avoidance, Vec::new(), primitive.dim)?;
         let remote = build_remote(&agents, &avoidance, Vec::new(), primitive.dim)?;
@@ -153,14 +171,17 @@ impl Runner {
             .iter()
             .map(|m| StallDetector::new(StallConfig::default(), m.dims.clone().collect()))
             .collect();
-        let dim = primitive.dim;
         Ok(Self {
             members,
             primitive,
             integrator,
             motion,
-            state,
+            knot0,
+            knot1: None,
+            scratch: state,
+            out_t: 0.0,
             dt,
+            step_points,
             avoidance,
             field,
             remote,
@@ -169,8 +190,8 @@ impl Runner {
             history_len,
             holding: false,
             stall,
-            acc: vec![0.0; dim],
             contacts: Vec::new(),
+            c0: Vec::new(),
             touched: Default::default(),
         })
     }
@@ -180,14 +201,19 @@ impl Runner {
         &self.members
     }
 
-    /// Current time of the run.
+    /// Time of the next output point.
     pub fn time(&self) -> f64 {
-        self.state.t
+        self.out_t
     }
 
-    /// The current state.
-    pub fn state(&self) -> &State {
-        &self.state
+    /// The DMP's dimension (the members' together).
+    pub fn dim(&self) -> usize {
+        self.primitive.dim
+    }
+
+    /// The internal RK4 step, in output steps.
+    pub fn step_points(&self) -> usize {
+        self.step_points
     }
 
     /// The scene version the field was built with.
@@ -210,10 +236,11 @@ impl Runner {
     pub fn apply_scene(
         &mut self,
         snap: &SceneSnapshot,
-        remote: &[RemoteRobot],
+        remote: &[std::sync::Arc<RemoteRobot>],
         now_unix_s: f64,
     ) -> Result<(), ServerError> {
-        let t = self.state.t;
+        self.rebase();
+        let t = self.out_t;
         let sub = self.field.agent_dim();
         let mut obstacles = Vec::new();
         if !self.avoidance.ignore_scene {
@@ -235,35 +262,72 @@ impl Runner {
     }
 
     /// Updates the cell's other robots (moving obstacles with their footprints).
-    pub fn set_remote(&mut self, remote: &[RemoteRobot], now_unix_s: f64) -> Result<(), ServerError> {
-        let t = self.state.t;
+    pub fn set_remote(
+        &mut self,
+        remote: &[std::sync::Arc<RemoteRobot>],
+        now_unix_s: f64,
+    ) -> Result<(), ServerError> {
+        let members = std::mem::take(&mut self.members);
+        let result = self.set_remote_of(&members, remote, now_unix_s);
+        self.members = members;
+        result
+    }
+
+    fn set_remote_of(
+        &mut self,
+        members: &[Member],
+        remote: &[std::sync::Arc<RemoteRobot>],
+        now_unix_s: f64,
+    ) -> Result<(), ServerError> {
+        let t = self.out_t;
         let sub = self.field.agent_dim();
-        let mut obstacles = Vec::new();
-        for r in remote {
-            if self.members.iter().any(|m| m.robot_id == r.state.robot_id) {
-                continue;
-            }
-            let Some(fp) = &r.footprint else { continue };
-            if r.state.position.len() != sub
-                || r.state.velocity.len() != sub
-                || dmp::Isopotential::dim(fp) != sub
-            {
-                continue;
-            }
+        let eligible = |r: &&std::sync::Arc<RemoteRobot>| {
+            !members.iter().any(|m| m.robot_id == r.state.robot_id)
+                && r.footprint.as_ref().is_some_and(|fp| dmp::Isopotential::dim(fp) == sub)
+                && r.state.position.len() == sub
+                && r.state.velocity.len() == sub
+        };
+        // The centre at the run's time zero of a robot seen at `stamp` moving at constant velocity.
+        let c0_into = |r: &RemoteRobot, c0: &mut Vec<f64>| {
             let age = now_unix_s - r.state.stamp_unix_s;
-            let c0: Vec<f64> =
-                r.state.position.iter().zip(&r.state.velocity).map(|(p, v)| p + v * age - v * t).collect();
+            c0.clear();
+            c0.extend(r.state.position.iter().zip(&r.state.velocity).map(|(p, v)| p + v * age - v * t));
+        };
+        // The same robots with the same footprints as the field holds (the common case, every segment): move them
+        // in place instead of compiling a new field.
+        let current = &self.remote.scene().obstacles;
+        let same = remote.iter().filter(eligible).count() == current.len()
+            && remote
+                .iter()
+                .filter(eligible)
+                .zip(current)
+                .all(|(r, o)| o.id() == r.state.robot_id && r.footprint.as_ref() == Some(o.shape()));
+        if same {
+            if current.is_empty() {
+                return Ok(());
+            }
+            self.rebase();
+            let mut c0 = std::mem::take(&mut self.c0);
+            for (i, r) in remote.iter().filter(eligible).enumerate() {
+                c0_into(r, &mut c0);
+                self.remote.set_obstacle_motion(i, &c0, &r.state.velocity);
+            }
+            self.c0 = c0;
+            return Ok(());
+        }
+        let mut obstacles = Vec::new();
+        for r in remote.iter().filter(eligible) {
+            let Some(fp) = &r.footprint else { continue };
+            let mut c0 = Vec::new();
+            c0_into(r, &mut c0);
             if let Ok(o) =
                 Obstacle::new(r.state.robot_id.clone(), fp.clone(), c0, None, Some(r.state.velocity.clone()))
             {
                 obstacles.push(o);
             }
         }
-        // No other robot now and none before: the field is already empty (the common case, every segment).
-        if obstacles.is_empty() && self.remote.scene().obstacles.is_empty() {
-            return Ok(());
-        }
-        let agents = agents(&self.members);
+        self.rebase();
+        let agents = agents(members);
         self.remote = build_remote(&agents, &self.avoidance, obstacles, self.primitive.dim)?;
         Ok(())
     }
@@ -271,6 +335,7 @@ impl Runner {
     /// Changes the goal from now on (position and velocity stay continuous).
     pub fn set_goal(&mut self, goal: Vec<f64>) -> Result<(), ServerError> {
         crate::convert::vector("goal", &goal, self.primitive.dim)?;
+        self.rebase();
         self.motion.goal = goal;
         Ok(())
     }
@@ -280,13 +345,17 @@ impl Runner {
         if !(tau.is_finite() && tau > 0.0) {
             return Err(ServerError::invalid("tau", "must be a finite number greater than zero"));
         }
-        check_stability(&self.primitive.k, self.dt, tau, "tau")?;
+        check_stability(&self.primitive.k, self.dt * self.step_points as f64, tau, "tau")?;
+        self.rebase();
         self.motion.tau = tau;
         Ok(())
     }
 
     /// Holds (decelerates to rest, phase frozen) or resumes.
     pub fn set_holding(&mut self, holding: bool) {
+        if holding != self.holding {
+            self.rebase();
+        }
         self.holding = holding;
     }
 
@@ -298,16 +367,77 @@ impl Runner {
     /// Rolls back to the first recorded state at or after `t` (no-op when `t` is at or past the current time, or
     /// older than the history). Returns the time the run continues from.
     pub fn rollback_to(&mut self, t: f64) -> f64 {
-        if t >= self.state.t {
-            return self.state.t;
+        if t >= self.out_t {
+            return self.out_t;
         }
+        let mut restored = None;
         while let Some(s) = self.history.back() {
             if s.t + 0.5 * self.dt < t {
                 break;
             }
-            self.state = self.history.pop_back().expect("checked by back()");
+            restored = self.history.pop_back();
         }
-        self.state.t
+        if let Some(s) = restored {
+            self.restart_at(&s);
+        }
+        self.out_t
+    }
+
+    /// Restarts the internal grid at `s` (an output point): the next knot is computed afresh.
+    fn restart_at(&mut self, s: &State) {
+        self.knot0.t = s.t;
+        self.knot0.s = s.s;
+        self.knot0.x.clone_from(&s.x);
+        self.knot0.xd.clone_from(&s.xd);
+        self.knot1 = None;
+        self.out_t = s.t;
+    }
+
+    /// Restarts the internal grid at the next output point, so that a change applies from there: the point is
+    /// interpolated between the current knots (it is what RK4 at the output rate would hold there, to the
+    /// interpolation's accuracy).
+    fn rebase(&mut self) {
+        let Some(k1) = &self.knot1 else { return };
+        if self.out_t <= self.knot0.t {
+            self.knot1 = None;
+            return;
+        }
+        let d = self.primitive.dim;
+        let mut p = Knot::zeros(d);
+        p.t = self.out_t;
+        p.s = interpolate(&self.knot0, k1, self.out_t, &mut p.x, &mut p.xd, &mut p.xdd);
+        self.knot0 = p;
+        self.knot1 = None;
+    }
+
+    /// Computes the knot after `knot0` (one RK4 step of `step_points` output steps, or the exact holding
+    /// deceleration), and the acceleration at `knot0` under the current field and motion.
+    fn next_knot(&mut self) {
+        let h = self.dt * self.step_points as f64;
+        let s = &mut self.scratch;
+        s.t = self.knot0.t;
+        s.s = self.knot0.s;
+        s.x.clone_from(&self.knot0.x);
+        s.xd.clone_from(&self.knot0.xd);
+        let mut k1 = self.knot1.take().unwrap_or_else(|| Knot::zeros(self.primitive.dim));
+        if self.holding {
+            hold_step(&self.primitive, self.motion.tau, s, h, &mut self.knot0.xdd);
+            hold_acc(&self.primitive, self.motion.tau, &s.xd, &mut k1.xdd);
+        } else {
+            let mut both = Both(&mut self.field, &mut self.remote);
+            self.integrator.step(&self.motion, &mut both, s, h, &mut self.knot0.xdd);
+            // Times are whole multiples of dt, not a drifting sum.
+            s.t = (s.t / self.dt).round() * self.dt;
+            if self.step_points > 1 {
+                self.integrator.acceleration(&self.motion, &mut both, s.t, s.s, &s.x, &s.xd, &mut k1.xdd);
+            }
+        }
+        s.t = (s.t / self.dt).round() * self.dt;
+        k1.t = s.t;
+        k1.s = s.s;
+        k1.x.clone_from(&s.x);
+        k1.xd.clone_from(&s.xd);
+        self.knot1 = Some(k1);
     }
 
     /// Every obstacle or robot touched so far.
@@ -315,64 +445,85 @@ impl Runner {
         &self.touched
     }
 
-    /// Whether every member is at its goal and at rest.
+    /// The last output point (the start, before any).
+    fn last(&self) -> (&[f64], &[f64]) {
+        match self.history.back() {
+            Some(s) => (&s.x, &s.xd),
+            None => (&self.knot0.x, &self.knot0.xd),
+        }
+    }
+
+    /// Whether every member is at its goal and at rest (at the last output point).
     pub fn arrived(&self) -> bool {
+        let (x, xd) = self.last();
         self.members.iter().all(|m| {
-            let dist: f64 =
-                m.dims.clone().map(|i| (self.state.x[i] - self.motion.goal[i]).powi(2)).sum::<f64>().sqrt();
-            let speed: f64 = m.dims.clone().map(|i| self.state.xd[i].powi(2)).sum::<f64>().sqrt();
+            let dist: f64 = m.dims.clone().map(|i| (x[i] - self.motion.goal[i]).powi(2)).sum::<f64>().sqrt();
+            let speed: f64 = m.dims.clone().map(|i| xd[i].powi(2)).sum::<f64>().sqrt();
             dist <= ARRIVED_DISTANCE && speed <= ARRIVED_SPEED
         })
     }
 
-    /// True when every member is at rest.
+    /// True when every member is at rest (at the last output point).
     pub fn at_rest(&self) -> bool {
-        self.state.xd.iter().map(|v| v * v).sum::<f64>().sqrt() <= ARRIVED_SPEED
+        self.last().1.iter().map(|v| v * v).sum::<f64>().sqrt() <= ARRIVED_SPEED
     }
 
-    /// Computes `n` points from the current state (the first is the current state), advancing the run. Fails if
-    /// the state stops being finite (which the stability check on `dt` and `tau` should prevent).
+    /// Computes the next `n` output points, advancing the run. Fails if the state stops being finite (which the
+    /// stability check on the step and `tau` should prevent).
     pub fn advance(&mut self, n: usize) -> Result<Points, ServerError> {
         let d = self.primitive.dim;
         let mut p = Points {
-            start_time: self.state.t,
-            x: Vec::with_capacity(n * d),
-            xd: Vec::with_capacity(n * d),
-            xdd: Vec::with_capacity(n * d),
+            start_time: self.out_t,
+            x: vec![0.0; n * d],
+            xd: vec![0.0; n * d],
+            xdd: vec![0.0; n * d],
             outcome: None,
         };
         let mut worst = Outcome::Running;
-        for _ in 0..n {
-            // Recycle the oldest entry's buffers: no allocation per step once the history is full.
-            let slot = match self.history.len() == self.history_len {
-                true => self.history.pop_front().map(|mut old| {
-                    (old.t, old.s) = (self.state.t, self.state.s);
-                    old.x.clone_from(&self.state.x);
-                    old.xd.clone_from(&self.state.xd);
-                    old
-                }),
-                false => None,
-            };
-            self.history.push_back(slot.unwrap_or_else(|| self.state.clone()));
-            p.x.extend_from_slice(&self.state.x);
-            p.xd.extend_from_slice(&self.state.xd);
-            if self.holding {
-                self.hold_step();
-            } else {
-                let mut both = Both(&mut self.field, &mut self.remote);
-                self.integrator.step(&self.motion, &mut both, &mut self.state, self.dt, &mut self.acc);
+        for k in 0..n {
+            let t = self.out_t;
+            if self.knot1.as_ref().is_none_or(|k1| t >= k1.t - 0.5 * self.dt) {
+                if let Some(k1) = self.knot1.take() {
+                    // Step to the next knot: the old one is done with.
+                    let old = std::mem::replace(&mut self.knot0, k1);
+                    self.knot1 = Some(old);
+                }
+                self.next_knot();
             }
-            // Times are whole multiples of dt, not a drifting sum.
-            self.state.t = (self.state.t / self.dt).round() * self.dt;
-            if !self.state.x.iter().chain(&self.state.xd).chain(&self.acc).all(|v| v.is_finite()) {
+            let k1 = self.knot1.as_ref().expect("computed above");
+            let range = k * d..(k + 1) * d;
+            let s = interpolate(
+                &self.knot0,
+                k1,
+                t,
+                &mut p.x[range.clone()],
+                &mut p.xd[range.clone()],
+                &mut p.xdd[range.clone()],
+            );
+            if !p.x[range.clone()]
+                .iter()
+                .chain(&p.xd[range.clone()])
+                .chain(&p.xdd[range.clone()])
+                .all(|v| v.is_finite())
+            {
                 return Err(ServerError::FailedPrecondition(format!(
-                    "the integration diverged at t = {:.3} s (no setpoint was sent from there)",
-                    self.state.t
+                    "the integration diverged at t = {t:.3} s (no setpoint was sent from there)"
                 )));
             }
-            p.xdd.extend_from_slice(&self.acc);
+            // Recycle the oldest entry's buffers: no allocation per point once the history is full.
+            let mut entry = match self.history.len() >= self.history_len {
+                true => self.history.pop_front().unwrap_or_else(|| State::at_rest(&self.knot0.x)),
+                false => State::at_rest(&self.knot0.x),
+            };
+            (entry.t, entry.s) = (t, s);
+            entry.x.copy_from_slice(&p.x[range.clone()]);
+            entry.xd.copy_from_slice(&p.xd[range.clone()]);
+            self.history.push_back(entry);
+            self.out_t = ((t + self.dt) / self.dt).round() * self.dt;
+
+            // Contacts and stalls at the point the robot is sent to (checked at its time).
+            let x = &p.x[range.clone()];
             self.contacts.clear();
-            let (t, x) = (self.state.t, &self.state.x);
             let local = self.field.contacts(t, x, &mut self.contacts);
             let n_local = self.contacts.len();
             if local | self.remote.contacts(t, x, &mut self.contacts) {
@@ -393,7 +544,7 @@ impl Runner {
                 }
             } else {
                 for det in &mut self.stall {
-                    if det.update(self.state.t, &self.state.x, &self.state.xd, &self.motion.goal).is_some()
+                    if det.update(t, x, &p.xd[range.clone()], &self.motion.goal).is_some()
                         && worst == Outcome::Running
                     {
                         worst = Outcome::Stalled;
@@ -410,27 +561,34 @@ impl Runner {
         });
         Ok(p)
     }
+}
 
-    /// One step of holding: the phase is frozen and the robot decelerates under the DMP's damping alone,
-    /// `d2x/dt2 = -(D / tau) dx/dt`, integrated exactly.
-    fn hold_step(&mut self) {
-        let tau = self.motion.tau;
-        for i in 0..self.primitive.dim {
-            // The primitive's damping, or critical damping if it has none (a robot must come to rest).
-            let damping = if self.primitive.d[i] > 0.0 {
-                self.primitive.d[i]
-            } else {
-                2.0 * self.primitive.k[i].sqrt()
-            };
-            let k = damping / tau;
-            let v0 = self.state.xd[i];
-            self.acc[i] = -k * v0;
-            let decay = (-k * self.dt).exp();
-            self.state.x[i] += if k > 0.0 { v0 * (1.0 - decay) / k } else { v0 * self.dt };
-            self.state.xd[i] = v0 * decay;
-        }
-        self.state.t += self.dt;
+/// The damping a holding robot decelerates with, per dimension: the primitive's `D / tau`, or critical damping if
+/// it has none (a robot must come to rest).
+fn hold_rate(p: &Primitive, tau: f64, i: usize) -> f64 {
+    let damping = if p.d[i] > 0.0 { p.d[i] } else { 2.0 * p.k[i].sqrt() };
+    damping / tau
+}
+
+/// The holding acceleration `d2x/dt2 = -(D / tau) dx/dt`.
+fn hold_acc(p: &Primitive, tau: f64, xd: &[f64], acc: &mut [f64]) {
+    for i in 0..p.dim {
+        acc[i] = -hold_rate(p, tau, i) * xd[i];
     }
+}
+
+/// One step `h` of holding: the phase is frozen and the robot decelerates under the DMP's damping alone,
+/// `d2x/dt2 = -(D / tau) dx/dt`, integrated exactly. Writes the acceleration before the step into `acc_before`.
+fn hold_step(p: &Primitive, tau: f64, state: &mut State, h: f64, acc_before: &mut [f64]) {
+    hold_acc(p, tau, &state.xd, acc_before);
+    for i in 0..p.dim {
+        let k = hold_rate(p, tau, i);
+        let v0 = state.xd[i];
+        let decay = (-k * h).exp();
+        state.x[i] += if k > 0.0 { v0 * (1.0 - decay) / k } else { v0 * h };
+        state.xd[i] = v0 * decay;
+    }
+    state.t += h;
 }
 
 fn agents(members: &[Member]) -> Vec<Agent> {

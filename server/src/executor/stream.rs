@@ -1,7 +1,8 @@
 //! The producer task of a streamed execution: one task and one bounded channel per stream (the bound is the
-//! backpressure: a slow reader holds the producer, never grows memory). Real-time pacing computes each segment
-//! `lookahead` ahead of the wall clock; a scene change or a command is applied from the robot's current time by
-//! rolling back and sending a segment that supersedes the points already sent.
+//! backpressure: a slow reader holds the producer, never grows memory). Real-time pacing keeps the segments sent
+//! between `lookahead` and `lookahead + REFILL` ahead of the wall clock, waking once per refill rather than once
+//! per segment; a scene change or a command is applied from the robot's current time by rolling back and sending a
+//! segment that supersedes the points already sent.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -13,17 +14,34 @@ use tracing::{debug, info, warn};
 
 use super::runner::{Outcome, Runner};
 use crate::error::ServerError;
-use crate::scene::now_unix_s;
+use crate::scene::{RemoteRobot, SceneState, now_unix_s};
 use crate::state::AppState;
 
 /// Robot states older than this are ignored.
 const REMOTE_MAX_AGE_S: f64 = 0.5;
 
+/// Real time: how far beyond the lookahead one wake-up computes (the producer sleeps about this long between two
+/// wake-ups).
+pub const REFILL: Duration = Duration::from_millis(30);
+
+/// Real time: how long after the request the run's first point is due.
+pub const FIRST_POINT_DELAY: Duration = Duration::from_millis(20);
+
+/// Real time: the most segments one wake-up computes.
+pub fn refill_segments(cfg: &StreamConfig) -> usize {
+    let seg = cfg.segment_points as f64 * cfg.dt;
+    (REFILL.as_secs_f64() / seg).ceil() as usize + 1
+}
+
 /// How a stream is paced and bounded.
 #[derive(Debug, Clone)]
 pub struct StreamConfig {
+    /// Output step, seconds.
+    pub dt: f64,
     /// Points per segment.
     pub segment_points: usize,
+    /// Internal RK4 step, in output steps.
+    pub step_points: usize,
     /// Real time (true) or as fast as the client reads.
     pub realtime: bool,
     /// Real-time: how far ahead of the wall clock segments are computed.
@@ -57,14 +75,15 @@ pub type Batch = Vec<v1::Segment>;
 pub async fn run_stream(
     app: Arc<AppState>,
     mut runner: Runner,
+    cell: SceneState,
     cfg: StreamConfig,
     tx: mpsc::Sender<Result<Batch, tonic::Status>>,
     mut control: Option<mpsc::Receiver<Control>>,
 ) {
     let ids: Vec<String> = runner.members().iter().map(|m| m.robot_id.clone()).collect();
-    let result = produce(&app, &mut runner, &cfg, &tx, &mut control).await;
+    let result = produce(&app, &cell, &mut runner, &cfg, &tx, &mut control).await;
     for id in &ids {
-        app.robots.retire(id).await;
+        app.robots.retire(&cell, id).await;
     }
     match result {
         Ok(reason) => info!(robots = ?ids, reason, t = runner.time(), "stream ended"),
@@ -89,21 +108,27 @@ const ROLLBACK_MARGIN: Duration = Duration::from_millis(3);
 
 async fn produce(
     app: &AppState,
+    cell: &SceneState,
     runner: &mut Runner,
     cfg: &StreamConfig,
     tx: &mpsc::Sender<Result<Batch, tonic::Status>>,
     control: &mut Option<mpsc::Receiver<Control>>,
 ) -> Result<&'static str, ServerError> {
-    let mut scene_rx = app.scene.subscribe();
+    let mut scene_rx = cell.subscribe();
+    let mut others: Vec<Arc<RemoteRobot>> = Vec::new();
     let first_robot = runner.members()[0].robot_id.clone();
-    let start = Instant::now();
-    let start_unix = now_unix_s();
+    // Real time: the first point is due FIRST_POINT_DELAY from now, so that the first segment (computed and sent
+    // now) reaches the robot before it.
+    let delay = if cfg.realtime { FIRST_POINT_DELAY } else { Duration::ZERO };
+    let start = Instant::now() + delay;
+    let start_unix = now_unix_s() + delay.as_secs_f64();
     // The wall time (Unix seconds) of run time t: real time maps them one to one; as fast as read, "now" is
     // whenever the point is computed.
     let wall_of = |t: f64| if cfg.realtime { start_unix + t } else { now_unix_s() };
     let snap = scene_rx.borrow_and_update().clone();
     let now = wall_of(runner.time());
-    runner.apply_scene(&snap, &app.scene.other_robots(&first_robot, now, REMOTE_MAX_AGE_S), now)?;
+    cell.other_robots_into(&first_robot, now, REMOTE_MAX_AGE_S, &mut others);
+    runner.apply_scene(&snap, &others, now)?;
     let dt = runner.dt();
     let mut seq = 0u64;
     let mut stopping = false;
@@ -157,7 +182,7 @@ async fn produce(
                     .iter()
                     .find(|m| m.robot_id == s.robot_id)
                     .and_then(|m| m.footprint.clone());
-                app.robots.publish(s.clone(), fp).await;
+                app.robots.publish(cell, s.clone(), fp).await;
             } else {
                 changes_plan = true;
             }
@@ -172,12 +197,13 @@ async fn produce(
             finished = None;
         }
         let now = wall_of(runner.time());
+        cell.other_robots_into(&first_robot, now, REMOTE_MAX_AGE_S, &mut others);
         if changed_scene {
             let snap = scene_rx.borrow_and_update().clone();
-            runner.apply_scene(&snap, &app.scene.other_robots(&first_robot, now, REMOTE_MAX_AGE_S), now)?;
+            runner.apply_scene(&snap, &others, now)?;
             debug!(robot = %first_robot, version = snap.version, t = runner.time(), "scene applied");
         } else {
-            runner.set_remote(&app.scene.other_robots(&first_robot, now, REMOTE_MAX_AGE_S), now)?;
+            runner.set_remote(&others, now)?;
         }
         for c in commands {
             match c {
@@ -196,41 +222,56 @@ async fn produce(
                 Control::State(_) => {}
             }
         }
-        // 3. Compute and send one segment; the last one ends with the point at exactly max_duration.
-        let remaining = ((cfg.max_duration - runner.time()) / dt).round().max(0.0) as usize + 1;
-        let points = runner.advance(cfg.segment_points.min(remaining))?;
-        let outcome = points.outcome.unwrap_or(Outcome::Running);
-        let last_point_time = runner.time() - dt;
-        let (status, last) = if stopping && runner.at_rest() {
-            (v1::SegmentStatus::Stopped, Some("stopped"))
-        } else if outcome == Outcome::GoalReached {
-            (v1::SegmentStatus::GoalReached, Some("goal reached"))
-        } else if last_point_time >= cfg.max_duration - 0.5 * dt {
-            (v1::SegmentStatus::Stopped, Some("max duration"))
-        } else {
-            (
-                match outcome {
-                    Outcome::Running | Outcome::GoalReached => v1::SegmentStatus::Running,
-                    Outcome::Stalled => v1::SegmentStatus::Stalled,
-                    Outcome::Collision => v1::SegmentStatus::Collision,
-                    Outcome::Holding => v1::SegmentStatus::Paused,
-                },
-                None,
-            )
-        };
-        let batch = split(runner, &points, seq, status, cfg.realtime.then_some(start_unix));
-        publish_states(app, runner, &points, cfg.realtime.then_some(start_unix)).await;
-        tokio::select! {
-            sent = tx.send(Ok(batch)) => if sent.is_err() { return Ok("client left") },
-            _ = app.shutdown.cancelled() => return Err(ServerError::ShuttingDown),
-        }
-        seq += 1;
-        if let Some(reason) = last {
-            if !cfg.realtime {
-                return Ok(reason);
+        // 3. Compute and send segments: one as fast as read; in real time, up to REFILL beyond the lookahead (each
+        //    segment goes out as soon as it is computed). The last one ends with the point at exactly max_duration.
+        let horizon = (start.elapsed() + cfg.lookahead + REFILL).as_secs_f64();
+        loop {
+            let remaining = ((cfg.max_duration - runner.time()) / dt).round().max(0.0) as usize + 1;
+            let points = runner.advance(cfg.segment_points.min(remaining))?;
+            let outcome = points.outcome.unwrap_or(Outcome::Running);
+            let last_point_time = runner.time() - dt;
+            let (status, last) = if stopping && runner.at_rest() {
+                (v1::SegmentStatus::Stopped, Some("stopped"))
+            } else if outcome == Outcome::GoalReached {
+                (v1::SegmentStatus::GoalReached, Some("goal reached"))
+            } else if last_point_time >= cfg.max_duration - 0.5 * dt {
+                (v1::SegmentStatus::Stopped, Some("max duration"))
+            } else {
+                (
+                    match outcome {
+                        Outcome::Running | Outcome::GoalReached => v1::SegmentStatus::Running,
+                        Outcome::Stalled => v1::SegmentStatus::Stalled,
+                        Outcome::Collision => v1::SegmentStatus::Collision,
+                        Outcome::Holding => v1::SegmentStatus::Paused,
+                    },
+                    None,
+                )
+            };
+            let batch = split(runner, &points, seq, status, cfg.realtime.then_some(start_unix));
+            let members = batch.len() as u64;
+            publish_states(app, cell, runner, &points, cfg.realtime.then_some(start_unix)).await;
+            tokio::select! {
+                sent = tx.send(Ok(batch)) => if sent.is_err() { return Ok("client left") },
+                _ = app.shutdown.cancelled() => return Err(ServerError::ShuttingDown),
             }
-            // Keep the stream open until the robot has executed the last point: a change may still supersede it.
-            finished = Some((last_point_time, reason));
+            app.counters.segments_sent.fetch_add(members, std::sync::atomic::Ordering::Relaxed);
+            seq += 1;
+            if let Some(reason) = last {
+                if !cfg.realtime {
+                    return Ok(reason);
+                }
+                // Keep the stream open until the robot has executed the last point: a change may still supersede
+                // it.
+                finished = Some((last_point_time, reason));
+                break;
+            }
+            if !cfg.realtime || runner.time() >= horizon {
+                break;
+            }
+            // The cell-mates as they are now, for the next segment.
+            let now = wall_of(runner.time());
+            cell.other_robots_into(&first_robot, now, REMOTE_MAX_AGE_S, &mut others);
+            runner.set_remote(&others, now)?;
         }
     }
 }
@@ -250,7 +291,7 @@ fn split(
     status: v1::SegmentStatus,
     start_unix: Option<f64>,
 ) -> Batch {
-    let d = runner.state().x.len();
+    let d = runner.dim();
     let n = p.x.len() / d;
     runner
         .members()
@@ -277,7 +318,13 @@ fn split(
 }
 
 /// Publishes each member's state at the segment's first point.
-async fn publish_states(app: &AppState, runner: &Runner, p: &super::runner::Points, start_unix: Option<f64>) {
+async fn publish_states(
+    app: &AppState,
+    cell: &SceneState,
+    runner: &Runner,
+    p: &super::runner::Points,
+    start_unix: Option<f64>,
+) {
     let stamp = start_unix.map(|s| s + p.start_time).unwrap_or_else(now_unix_s);
     for m in runner.members() {
         let state = v1::RobotState {
@@ -287,6 +334,6 @@ async fn publish_states(app: &AppState, runner: &Runner, p: &super::runner::Poin
             velocity: p.xd[m.dims.clone()].to_vec(),
             footprint: m.footprint_proto.clone(),
         };
-        app.robots.publish(state, m.footprint.clone()).await;
+        app.robots.publish(cell, state, m.footprint.clone()).await;
     }
 }

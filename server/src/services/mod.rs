@@ -3,3 +3,4 @@
 pub mod motion;
 pub mod primitives;
 pub mod scene;
+pub mod server;

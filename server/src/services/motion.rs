@@ -19,7 +19,7 @@ use crate::convert::{
 use crate::error::ServerError;
 use crate::executor::runner::{AvoidanceSpec, Member, Runner};
 use crate::executor::stream::{Batch, Control, StreamConfig, run_stream};
-use crate::scene::now_unix_s;
+use crate::scene::{SceneState, now_unix_s};
 use crate::state::AppState;
 
 /// Default output step.
@@ -48,6 +48,8 @@ type GroupStream = Pin<Box<dyn Stream<Item = Result<v1::GroupSegment, Status>> +
 /// A motion request resolved against the store: the primitive, the motion, the avoidance.
 struct Resolved {
     robot_id: String,
+    /// The robot's cell.
+    cell: SceneState,
     primitive: Primitive,
     motion: Motion,
     avoidance: AvoidanceSpec,
@@ -60,6 +62,7 @@ impl MotionServiceImpl {
         let spec = spec.ok_or_else(|| ServerError::invalid(prefix, "is required"))?;
         check_name(&format!("{prefix}.robot_id"), &spec.robot_id)?;
         check_name(&format!("{prefix}.primitive"), &spec.primitive)?;
+        let cell = self.state.cells.scene(&spec.cell).map_err(|e| e.within(prefix))?;
         let store = self.state.store.clone();
         let (robot, name, version) = (spec.robot_id.clone(), spec.primitive.clone(), spec.version);
         let record = tokio::task::spawn_blocking(move || store.get(&robot, &name, version))
@@ -120,6 +123,7 @@ impl MotionServiceImpl {
             .map_err(|e| e.within(&format!("{prefix}.footprint")))?;
         Ok(Resolved {
             robot_id: spec.robot_id.clone(),
+            cell,
             primitive,
             motion: Motion { start, goal, tau },
             avoidance: AvoidanceSpec { obstacles, robots, extra, ignore_scene: spec.ignore_scene },
@@ -128,6 +132,7 @@ impl MotionServiceImpl {
         })
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn stream_config(
         &self,
         dt: f64,
@@ -136,6 +141,7 @@ impl MotionServiceImpl {
         lookahead_s: f64,
         max_duration_s: f64,
         tau: f64,
+        integration_step_s: f64,
     ) -> Result<(f64, StreamConfig), ServerError> {
         let dt = if dt == 0.0 { DEFAULT_DT } else { dt };
         if !(dt.is_finite() && dt > 0.0 && dt <= 0.1) {
@@ -165,10 +171,25 @@ impl MotionServiceImpl {
             Err(_) => return Err(ServerError::invalid("pacing", format!("unknown value {pacing}"))),
         };
         let segment_points = (segment_s / dt).round().max(1.0) as usize;
+        let step = if integration_step_s == 0.0 {
+            self.state.config.defaults.integration_step_s
+        } else {
+            integration_step_s
+        };
+        if !(step.is_finite() && step > 0.0 && step <= 0.1) {
+            return Err(ServerError::invalid(
+                "integration_step_s",
+                "must be greater than 0 and at most 0.1 s",
+            ));
+        }
+        // A whole number of output steps, at least one, at most one segment.
+        let step_points = ((step / dt).round() as usize).clamp(1, segment_points);
         Ok((
             dt,
             StreamConfig {
+                dt,
                 segment_points,
+                step_points,
                 realtime,
                 lookahead: Duration::from_secs_f64(lookahead_s),
                 max_duration,
@@ -176,7 +197,13 @@ impl MotionServiceImpl {
         ))
     }
 
-    fn single_runner(&self, r: Resolved, dt: f64, history: usize) -> Result<Runner, ServerError> {
+    fn single_runner(
+        &self,
+        r: Resolved,
+        dt: f64,
+        step_points: usize,
+        history: usize,
+    ) -> Result<Runner, ServerError> {
         let dim = r.primitive.dim;
         let member = Member {
             robot_id: r.robot_id,
@@ -184,7 +211,7 @@ impl MotionServiceImpl {
             footprint: r.footprint,
             footprint_proto: r.footprint_proto,
         };
-        Runner::new(vec![member], r.primitive, r.motion, dt, r.avoidance, history)
+        Runner::new(vec![member], r.primitive, r.motion, dt, step_points, r.avoidance, history)
     }
 
     /// Refuses, before any work, an answer that would exceed the message size: `values` numbers of position,
@@ -203,14 +230,18 @@ impl MotionServiceImpl {
     fn spawn(
         &self,
         runner: Runner,
+        cell: SceneState,
         cfg: StreamConfig,
         control: Option<mpsc::Receiver<Control>>,
     ) -> Result<mpsc::Receiver<Result<Batch, Status>>, ServerError> {
         let permit = self.state.stream_permit()?;
-        let (tx, rx) = mpsc::channel(self.state.config.limits.stream_buffer.max(1));
+        // Real time: room for every segment computed in one wake-up (see `stream::REFILL`).
+        let buffer = self.state.config.limits.stream_buffer.max(1)
+            + if cfg.realtime { crate::executor::stream::refill_segments(&cfg) } else { 0 };
+        let (tx, rx) = mpsc::channel(buffer);
         let app = self.state.clone();
         tokio::spawn(async move {
-            run_stream(app, runner, cfg, tx, control).await;
+            run_stream(app, runner, cell, cfg, tx, control).await;
             drop(permit);
         });
         Ok(rx)
@@ -252,10 +283,12 @@ impl MotionService for MotionServiceImpl {
         let steps = (steps_f as usize).max(1);
         self.check_message_size("duration", (steps + 1) * r.primitive.dim)?;
         let robot_id = r.robot_id.clone();
-        let mut runner = self.single_runner(r, dt, 16)?;
+        let cell = r.cell.clone();
+        // A plan is RK4 at the output rate: the engine's own rollout.
+        let mut runner = self.single_runner(r, dt, 1, 16)?;
         let now = now_unix_s();
-        let snap = self.state.scene.snapshot();
-        runner.apply_scene(&snap, &self.state.scene.other_robots(&robot_id, now, 0.5), now)?;
+        let snap = cell.snapshot();
+        runner.apply_scene(&snap, &cell.other_robots(&robot_id, now, 0.5), now)?;
         let version = snap.version;
         let out = tokio::task::spawn_blocking(move || plan_blocking(runner, steps))
             .await
@@ -302,11 +335,13 @@ impl MotionService for MotionServiceImpl {
             req.lookahead_s,
             req.max_duration_s,
             r.motion.tau,
+            req.integration_step_s,
         )?;
-        info!(robot = %r.robot_id, realtime = cfg.realtime, "execute");
+        info!(robot = %r.robot_id, cell = r.cell.cell(), realtime = cfg.realtime, "execute");
         self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
-        let runner = self.single_runner(r, dt, history_len(dt, &cfg))?;
-        Ok(Response::new(single(self.spawn(runner, cfg, None)?)))
+        let cell = r.cell.clone();
+        let runner = self.single_runner(r, dt, cfg.step_points, history_len(dt, &cfg))?;
+        Ok(Response::new(single(self.spawn(runner, cell, cfg, None)?)))
     }
 
     type SessionStream = SegmentStream;
@@ -334,14 +369,16 @@ impl MotionService for MotionServiceImpl {
                 req.lookahead_s,
                 req.max_duration_s,
                 r.motion.tau,
+                req.integration_step_s,
             )
             .map_err(|e| e.within("start"))?;
         let robot_id = r.robot_id.clone();
         let dim = r.primitive.dim;
         self.check_message_size("start.segment_s", cfg.segment_points * dim)?;
-        let runner = self.single_runner(r, dt, history_len(dt, &cfg))?;
+        let cell = r.cell.clone();
+        let runner = self.single_runner(r, dt, cfg.step_points, history_len(dt, &cfg))?;
         let (ctl_tx, ctl_rx) = mpsc::channel(64);
-        let rx = self.spawn(runner, cfg, Some(ctl_rx))?;
+        let rx = self.spawn(runner, cell, cfg, Some(ctl_rx))?;
         let shutdown = self.state.shutdown.clone();
         // Reads the robot's messages; a bad one is logged and dropped (the stream goes on), the end of the inbound
         // stream stops nothing (the robot may just have nothing more to say).
@@ -420,6 +457,16 @@ impl MotionService for MotionServiceImpl {
                 )
                 .into());
             }
+            if r.cell.cell() != first.cell.cell() {
+                return Err(ServerError::invalid(
+                    format!("members[{i}].motion.cell"),
+                    format!(
+                        "must be the first member's cell `{}`: a group works in one cell",
+                        first.cell.cell()
+                    ),
+                )
+                .into());
+            }
             if r.footprint.is_none() {
                 return Err(ServerError::invalid(
                     format!("members[{i}].motion.footprint"),
@@ -433,8 +480,16 @@ impl MotionService for MotionServiceImpl {
         if !(tau.is_finite() && tau > 0.0) {
             return Err(ServerError::invalid("tau", "must be a finite number greater than zero").into());
         }
-        let (dt, cfg) =
-            self.stream_config(req.dt, req.segment_s, req.pacing, req.lookahead_s, req.max_duration_s, tau)?;
+        let (dt, cfg) = self.stream_config(
+            req.dt,
+            req.segment_s,
+            req.pacing,
+            req.lookahead_s,
+            req.max_duration_s,
+            tau,
+            req.integration_step_s,
+        )?;
+        let cell = first.cell.clone();
         // One DMP: the members' primitives side by side (the paper's 6-D youBot DMP).
         let mut primitive = first.primitive.clone();
         primitive.tau = tau;
@@ -474,8 +529,8 @@ impl MotionService for MotionServiceImpl {
         info!(robots = members.len(), realtime = cfg.realtime, "execute group");
         self.check_message_size("segment_s", cfg.segment_points * primitive.dim)?;
         let history = history_len(dt, &cfg);
-        let runner = Runner::new(members, primitive, motion, dt, avoidance, history)?;
-        let rx = self.spawn(runner, cfg, None)?;
+        let runner = Runner::new(members, primitive, motion, dt, cfg.step_points, avoidance, history)?;
+        let rx = self.spawn(runner, cell, cfg, None)?;
         let stream = ReceiverStream::new(rx).map(|r| {
             r.map(|segments| v1::GroupSegment {
                 sequence: segments.first().map(|s| s.sequence).unwrap_or(0),
@@ -492,7 +547,7 @@ fn plan_blocking(
     steps: usize,
 ) -> Result<(PlanPoints, Vec<String>, bool, bool), ServerError> {
     let pts = runner.advance(steps + 1)?;
-    let dim = runner.state().x.len();
+    let dim = runner.dim();
     let outcome = pts.outcome;
     let collisions = runner.touched().iter().cloned().collect();
     let stalled = outcome == Some(crate::executor::runner::Outcome::Stalled);

@@ -210,22 +210,22 @@ mod tests {
     use tonic::Code;
 
     use super::*;
+    use crate::cells::Cells;
     use crate::config::Config;
     use crate::convert::primitive_to_proto;
     use crate::robots::RobotBus;
-    use crate::scene::SceneState;
     use crate::store::Store;
 
     fn service(dir: &std::path::Path) -> PrimitiveServiceImpl {
         let config = Config::default();
-        let scene = SceneState::new(config.limits.max_obstacles);
         PrimitiveServiceImpl::new(Arc::new(AppState {
             streams: Arc::new(Semaphore::new(config.limits.max_streams)),
             store: Store::open(dir).unwrap(),
-            robots: RobotBus::new(scene.clone(), None),
-            scene,
+            robots: RobotBus::new(None),
+            cells: Cells::new("c", 10, config.limits.max_obstacles).unwrap(),
             config,
             shutdown: CancellationToken::new(),
+            counters: Default::default(),
         }))
     }
 

@@ -80,10 +80,11 @@ impl SceneService for SceneServiceImpl {
         &self,
         request: Request<v1::PutObstacleRequest>,
     ) -> Result<Response<v1::SceneChange>, Status> {
-        let obstacle =
-            request.into_inner().obstacle.ok_or_else(|| ServerError::invalid("obstacle", "is required"))?;
+        let request = request.into_inner();
+        let scene = self.state.cells.scene(&request.cell)?;
+        let obstacle = request.obstacle.ok_or_else(|| ServerError::invalid("obstacle", "is required"))?;
         let id = obstacle.id.clone();
-        let version = self.state.scene.put(obstacle, now_unix_s())?;
+        let version = scene.put(obstacle, now_unix_s())?;
         debug!(obstacle = %id, version, "obstacle put over gRPC");
         Ok(Response::new(v1::SceneChange { scene_version: version, changed: true }))
     }
@@ -92,31 +93,33 @@ impl SceneService for SceneServiceImpl {
         &self,
         request: Request<v1::DeleteObstacleRequest>,
     ) -> Result<Response<v1::SceneChange>, Status> {
-        let id = request.into_inner().id;
+        let v1::DeleteObstacleRequest { id, cell } = request.into_inner();
         if id.is_empty() {
             return Err(ServerError::invalid("id", "must not be empty").into());
         }
-        let (version, changed) = self.state.scene.delete(&id);
+        let (version, changed) = self.state.cells.scene(&cell)?.delete(&id);
         debug!(obstacle = %id, version, changed, "obstacle deleted over gRPC");
         Ok(Response::new(v1::SceneChange { scene_version: version, changed }))
     }
 
     async fn list_obstacles(
         &self,
-        _request: Request<v1::ListObstaclesRequest>,
+        request: Request<v1::ListObstaclesRequest>,
     ) -> Result<Response<v1::SceneSnapshot>, Status> {
-        Ok(Response::new(snapshot_to_proto(&self.state.scene.snapshot(), now_unix_s())))
+        let scene = self.state.cells.scene(&request.into_inner().cell)?;
+        Ok(Response::new(snapshot_to_proto(&scene.snapshot(), now_unix_s())))
     }
 
     type WatchSceneStream = ReceiverStream<Result<v1::SceneEvent, Status>>;
 
     async fn watch_scene(
         &self,
-        _request: Request<v1::WatchSceneRequest>,
+        request: Request<v1::WatchSceneRequest>,
     ) -> Result<Response<Self::WatchSceneStream>, Status> {
-        let permit = self.state.stream_permit()?;
         let s = &self.state;
-        Ok(Response::new(watch_stream(&s.scene, s.config.limits.stream_buffer, s.shutdown.clone(), permit)))
+        let scene = s.cells.scene(&request.into_inner().cell)?;
+        let permit = s.stream_permit()?;
+        Ok(Response::new(watch_stream(&scene, s.config.limits.stream_buffer, s.shutdown.clone(), permit)))
     }
 }
 
@@ -151,7 +154,7 @@ mod tests {
 
     #[test]
     fn snapshots_move_centres_to_now() {
-        let scene = SceneState::new(10);
+        let scene = SceneState::new("c", 10);
         scene.put(moving("b"), 100.0).unwrap();
         scene.put(moving("a"), 100.0).unwrap();
         let p = snapshot_to_proto(&scene.snapshot(), 102.5);
@@ -162,7 +165,7 @@ mod tests {
 
     #[tokio::test(flavor = "multi_thread")]
     async fn a_watch_sends_the_snapshot_then_changes_and_frees_its_permit() {
-        let scene = SceneState::new(10);
+        let scene = SceneState::new("c", 10);
         scene.put(moving("a"), now_unix_s()).unwrap();
         let permits = Arc::new(Semaphore::new(1));
         let shutdown = CancellationToken::new();
@@ -185,7 +188,7 @@ mod tests {
 
     #[tokio::test(flavor = "multi_thread")]
     async fn a_watch_ends_on_shutdown() {
-        let scene = SceneState::new(10);
+        let scene = SceneState::new("c", 10);
         let permits = Arc::new(Semaphore::new(1));
         let shutdown = CancellationToken::new();
         let mut stream =
@@ -200,7 +203,7 @@ mod tests {
 
     #[tokio::test(flavor = "multi_thread")]
     async fn a_slow_reader_gets_the_latest_snapshot() {
-        let scene = SceneState::new(100);
+        let scene = SceneState::new("c", 100);
         let permits = Arc::new(Semaphore::new(1));
         let mut stream =
             watch_stream(&scene, 1, CancellationToken::new(), permits.clone().try_acquire_owned().unwrap());
