@@ -143,7 +143,9 @@ async fn produce(
         if cfg.realtime {
             let due = match finished {
                 Some((t_end, _)) => start + Duration::from_secs_f64(t_end),
-                None => start + Duration::from_secs_f64(runner.time()).saturating_sub(cfg.lookahead),
+                None => (start + Duration::from_secs_f64(runner.time()))
+                    .checked_sub(cfg.lookahead)
+                    .unwrap_or_else(Instant::now),
             };
             tokio::select! {
                 _ = tokio::time::sleep_until(due) => {
@@ -249,11 +251,13 @@ async fn produce(
             };
             let batch = split(runner, &points, seq, status, cfg.realtime.then_some(start_unix));
             let members = batch.len() as u64;
-            publish_states(app, cell, runner, &points, cfg.realtime.then_some(start_unix)).await;
+            // The robot first: publishing the states may wait on Zenoh (a robot's first state declares its
+            // publisher).
             tokio::select! {
                 sent = tx.send(Ok(batch)) => if sent.is_err() { return Ok("client left") },
                 _ = app.shutdown.cancelled() => return Err(ServerError::ShuttingDown),
             }
+            publish_states(app, cell, runner, &points, cfg.realtime.then_some(start_unix)).await;
             app.counters.segments_sent.fetch_add(members, std::sync::atomic::Ordering::Relaxed);
             seq += 1;
             if let Some(reason) = last {
