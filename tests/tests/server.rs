@@ -155,8 +155,12 @@ async fn an_obstacle_published_over_zenoh_changes_the_stream_and_is_cleared() {
     };
     let mut stream = within("execute", client.execute(request)).await.unwrap();
     let mut segments = Vec::new();
+    // Wall clock (Unix seconds) at which each segment arrived.
+    let mut arrivals = Vec::new();
+    let now = || std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs_f64();
     while segments.len() < 8 {
         segments.push(within("segment", stream.next()).await.unwrap().unwrap());
+        arrivals.push(now());
     }
     assert!(segments.iter().all(|s| s.scene_version == 0));
     let obstacle = serde_json::json!({"center": [0.6, 0.03], "semi_axes": [0.1, 0.1], "exponents": [1, 1]});
@@ -164,6 +168,7 @@ async fn an_obstacle_published_over_zenoh_changes_the_stream_and_is_cleared() {
     within("put obstacle", perception.put_json("box", &obstacle)).await.unwrap();
     while let Some(s) = within("segment", stream.next()).await {
         segments.push(s.unwrap());
+        arrivals.push(now());
     }
     let last = segments.last().unwrap();
     assert_eq!(last.status, v1::SegmentStatus::GoalReached as i32, "ended with {:?}", last.status);
@@ -180,6 +185,16 @@ async fn an_obstacle_published_over_zenoh_changes_the_stream_and_is_cleared() {
         segments[first_new].start_time < put_at + 0.2,
         "applied late: {}",
         segments[first_new].start_time
+    );
+    // From the robot's current time (plus the 10 ms rollback margin), not from the end of what was kept for
+    // rollbacks: the stream runs up to 90 ms ahead, and all of it can be superseded.
+    // The run time at which it arrived (negative before the first point is due).
+    let seg = &segments[first_new];
+    let arrived_at = arrivals[first_new] - (seg.start_unix_s - seg.start_time);
+    let ahead = seg.start_time - arrived_at.max(0.0);
+    assert!(
+        ahead <= 0.015,
+        "the superseding segment starts {ahead} s after it arrived (run time {arrived_at})"
     );
     // The current setpoints (later segments supersede earlier ones) clear the true shape and bend around it.
     let mut setpoints = dmp_client::setpoints::Setpoints::new();

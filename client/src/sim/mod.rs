@@ -38,6 +38,26 @@ use crate::grpc::DmpClient;
 
 pub use self::report::{RobotReport, SimReport};
 
+/// A still superquadric obstacle (no rotation) inflated by `margin`, as the scene takes it.
+pub fn superquadric(
+    id: &str,
+    center: &[f64],
+    semi_axes: Vec<f64>,
+    exponents: Vec<f64>,
+    margin: f64,
+) -> dmp_proto::obstacle_json::JsonObstacle {
+    let spec = dmp::scenario::ObstacleSpec {
+        id: id.into(),
+        center: center.to_vec(),
+        semi_axes,
+        exponents: Some(exponents),
+        rotation: None,
+        velocity: None,
+        nested: None,
+    };
+    dmp_proto::obstacle_json::JsonObstacle { spec, margin, ttl_s: 0.0 }
+}
+
 /// Longest wait for any one answer of the server (a segment, a put).
 pub const STEP_TIMEOUT: Duration = Duration::from_secs(30);
 

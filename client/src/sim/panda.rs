@@ -24,13 +24,12 @@
 //! [`RING_RADIUS`] around it. Clearance is measured with parry against the true box and cylinders.
 
 use dmp::Primitive;
-use dmp::scenario::ObstacleSpec;
 use dmp_proto::v1;
 
 use super::report::{Figure, SimReport, measure, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
-use super::{Method, SimOptions, avoidance, execute, free_plan, pacing, within};
+use super::{Method, SimOptions, avoidance, execute, free_plan, pacing, superquadric, within};
 use crate::convert::JsonObstacle;
 use crate::error::ClientError;
 use crate::grpc::DmpClient;
@@ -55,25 +54,6 @@ const RED: [f64; 3] = [0.5, 0.0, 0.08];
 const GREEN: [f64; 3] = [0.55, 0.17, 0.08];
 
 const ROBOT: &str = "panda";
-
-fn superquadric(
-    id: &str,
-    center: &[f64],
-    semi_axes: Vec<f64>,
-    exponents: Vec<f64>,
-    margin: f64,
-) -> JsonObstacle {
-    let spec = ObstacleSpec {
-        id: id.into(),
-        center: center.to_vec(),
-        semi_axes,
-        exponents: Some(exponents),
-        rotation: None,
-        velocity: None,
-        nested: None,
-    };
-    JsonObstacle { spec, margin, ttl_s: 0.0 }
-}
 
 /// A z-axis cylinder's superquadric of exponents (1, 1, 2) (module documentation).
 fn peg(id: &str, center: &[f64], margin: f64) -> JsonObstacle {

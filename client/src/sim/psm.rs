@@ -55,14 +55,13 @@
 //! metrics (`<arm>/<stage>/free_min_clearance_m/<id>`, and `<arm>/<stage>/no_robot_term_min_clearance_m/<other
 //! arm>`): they show what avoidance prevented.
 
-use dmp::scenario::ObstacleSpec;
 use dmp::{Agent, Shape, Superquadric, Trajectory};
 use dmp_proto::v1;
 
 use super::report::{CONTACT_M, Figure, Other, RobotReport, SimReport, measure, position, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
-use super::{Method, SimOptions, avoidance, execute_group, pacing, within};
+use super::{Method, SimOptions, avoidance, execute_group, pacing, superquadric, within};
 use crate::convert::JsonObstacle;
 use crate::error::ClientError;
 use crate::grpc::DmpClient;
@@ -125,25 +124,6 @@ fn peg_center(xy: [f64; 2]) -> [f64; 3] {
 }
 
 const PEGS: [(&str, [f64; 2]); 3] = [("peg-1", PEG_1), ("peg-2", PEG_2), ("target-peg", TARGET)];
-
-fn superquadric(
-    id: &str,
-    center: &[f64],
-    semi_axes: Vec<f64>,
-    exponents: Vec<f64>,
-    margin: f64,
-) -> JsonObstacle {
-    let spec = ObstacleSpec {
-        id: id.into(),
-        center: center.to_vec(),
-        semi_axes,
-        exponents: Some(exponents),
-        rotation: None,
-        velocity: None,
-        nested: None,
-    };
-    JsonObstacle { spec, margin, ttl_s: 0.0 }
-}
 
 /// A peg's superquadric of exponents (1, 1, 2) through the cylinder's rims (see `super::panda`).
 fn peg(id: &str, xy: [f64; 2], margin: f64) -> JsonObstacle {

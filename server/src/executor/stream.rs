@@ -103,8 +103,10 @@ pub async fn run_stream(
 }
 
 /// Margin added to the robot's current time when a change rolls the run back: the superseding segment must reach
-/// the robot before its first point is due (computing and sending it takes well under this).
-const ROLLBACK_MARGIN: Duration = Duration::from_millis(3);
+/// the robot before its first point is due. Computing and sending it takes well under a millisecond on an idle
+/// host, but a busy one (the server sharing its cores with robots' drivers and builds) delays a task by several:
+/// 3 ms let a superseding segment arrive late there.
+pub const ROLLBACK_MARGIN: Duration = Duration::from_millis(10);
 
 async fn produce(
     app: &AppState,

@@ -248,10 +248,11 @@ impl MotionServiceImpl {
     }
 }
 
-/// States kept for rollbacks: everything a stream can have sent ahead of the robot (the lookahead and one segment),
-/// plus a margin.
+/// States kept for rollbacks: everything a stream can have sent ahead of the robot (the lookahead, one refill and
+/// one segment), plus a margin.
 fn history_len(dt: f64, cfg: &StreamConfig) -> usize {
-    let ahead = cfg.lookahead.as_secs_f64() + cfg.segment_points as f64 * dt;
+    let refill = if cfg.realtime { crate::executor::stream::REFILL.as_secs_f64() } else { 0.0 };
+    let ahead = cfg.lookahead.as_secs_f64() + refill + cfg.segment_points as f64 * dt;
     ((ahead / dt).ceil() as usize + 2).max(16)
 }
 
