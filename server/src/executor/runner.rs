@@ -117,6 +117,10 @@ pub struct Runner {
     /// The grid point the output is in, and the next one (None until computed after a change).
     knot0: Knot,
     knot1: Option<Knot>,
+    /// Buffers of a knot dropped by a change, for the next one.
+    spare: Option<Knot>,
+    /// Scratch acceleration of an interpolated point.
+    xdd: Vec<f64>,
     /// Where RK4 computes the next knot.
     scratch: State,
     /// Time of the next output point.
@@ -171,6 +175,7 @@ impl Runner {
             .iter()
             .map(|m| StallDetector::new(StallConfig::default(), m.dims.clone().collect()))
             .collect();
+        let dim = primitive.dim;
         Ok(Self {
             members,
             primitive,
@@ -178,6 +183,8 @@ impl Runner {
             motion,
             knot0,
             knot1: None,
+            spare: None,
+            xdd: vec![0.0; dim],
             scratch: state,
             out_t: 0.0,
             dt,
@@ -389,7 +396,7 @@ impl Runner {
         self.knot0.s = s.s;
         self.knot0.x.clone_from(&s.x);
         self.knot0.xd.clone_from(&s.xd);
-        self.knot1 = None;
+        self.spare = self.knot1.take().or(self.spare.take());
         self.out_t = s.t;
     }
 
@@ -397,17 +404,18 @@ impl Runner {
     /// interpolated between the current knots (it is what RK4 at the output rate would hold there, to the
     /// interpolation's accuracy).
     fn rebase(&mut self) {
-        let Some(k1) = &self.knot1 else { return };
-        if self.out_t <= self.knot0.t {
-            self.knot1 = None;
-            return;
+        let Some(k1) = self.knot1.take() else { return };
+        if self.out_t > self.knot0.t {
+            // Into the scratch state, then the knot: no allocation (this runs every segment with cell-mates).
+            let st = &mut self.scratch;
+            st.s = interpolate(&self.knot0, &k1, self.out_t, &mut st.x, &mut st.xd, &mut self.xdd);
+            self.knot0.t = self.out_t;
+            self.knot0.s = st.s;
+            self.knot0.x.copy_from_slice(&st.x);
+            self.knot0.xd.copy_from_slice(&st.xd);
         }
-        let d = self.primitive.dim;
-        let mut p = Knot::zeros(d);
-        p.t = self.out_t;
-        p.s = interpolate(&self.knot0, k1, self.out_t, &mut p.x, &mut p.xd, &mut p.xdd);
-        self.knot0 = p;
-        self.knot1 = None;
+        // The next knot is computed afresh, in these buffers.
+        self.spare = Some(k1);
     }
 
     /// Computes the knot after `knot0` (one RK4 step of `step_points` output steps, or the exact holding
@@ -419,19 +427,23 @@ impl Runner {
         s.s = self.knot0.s;
         s.x.clone_from(&self.knot0.x);
         s.xd.clone_from(&self.knot0.xd);
-        let mut k1 = self.knot1.take().unwrap_or_else(|| Knot::zeros(self.primitive.dim));
+        let mut k1 = self
+            .knot1
+            .take()
+            .or_else(|| self.spare.take())
+            .unwrap_or_else(|| Knot::zeros(self.primitive.dim));
         if self.holding {
             hold_step(&self.primitive, self.motion.tau, s, h, &mut self.knot0.xdd);
             hold_acc(&self.primitive, self.motion.tau, &s.xd, &mut k1.xdd);
         } else {
             let mut both = Both(&mut self.field, &mut self.remote);
             self.integrator.step(&self.motion, &mut both, s, h, &mut self.knot0.xdd);
-            // Times are whole multiples of dt, not a drifting sum.
-            s.t = (s.t / self.dt).round() * self.dt;
             if self.step_points > 1 {
+                s.t = (s.t / self.dt).round() * self.dt;
                 self.integrator.acceleration(&self.motion, &mut both, s.t, s.s, &s.x, &s.xd, &mut k1.xdd);
             }
         }
+        // Times are whole multiples of dt, not a drifting sum.
         s.t = (s.t / self.dt).round() * self.dt;
         k1.t = s.t;
         k1.s = s.s;

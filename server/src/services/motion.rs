@@ -45,6 +45,29 @@ impl MotionServiceImpl {
 type SegmentStream = Pin<Box<dyn Stream<Item = Result<v1::Segment, Status>> + Send + 'static>>;
 type GroupStream = Pin<Box<dyn Stream<Item = Result<v1::GroupSegment, Status>> + Send + 'static>>;
 
+/// How a stream was asked to run: the fields ExecuteRequest and ExecuteGroupRequest share (0 means the default).
+struct StreamRequest {
+    dt: f64,
+    segment_s: f64,
+    pacing: i32,
+    lookahead_s: f64,
+    max_duration_s: f64,
+    integration_step_s: f64,
+}
+
+impl StreamRequest {
+    fn of(r: &v1::ExecuteRequest) -> Self {
+        Self {
+            dt: r.dt,
+            segment_s: r.segment_s,
+            pacing: r.pacing,
+            lookahead_s: r.lookahead_s,
+            max_duration_s: r.max_duration_s,
+            integration_step_s: r.integration_step_s,
+        }
+    }
+}
+
 /// A motion request resolved against the store: the primitive, the motion, the avoidance.
 struct Resolved {
     robot_id: String,
@@ -132,17 +155,8 @@ impl MotionServiceImpl {
         })
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn stream_config(
-        &self,
-        dt: f64,
-        segment_s: f64,
-        pacing: i32,
-        lookahead_s: f64,
-        max_duration_s: f64,
-        tau: f64,
-        integration_step_s: f64,
-    ) -> Result<(f64, StreamConfig), ServerError> {
+    fn stream_config(&self, p: StreamRequest, tau: f64) -> Result<(f64, StreamConfig), ServerError> {
+        let StreamRequest { dt, segment_s, pacing, lookahead_s, max_duration_s, integration_step_s } = p;
         let dt = if dt == 0.0 { DEFAULT_DT } else { dt };
         if !(dt.is_finite() && dt > 0.0 && dt <= 0.1) {
             return Err(ServerError::invalid("dt", "must be greater than 0 and at most 0.1 s"));
@@ -329,15 +343,7 @@ impl MotionService for MotionServiceImpl {
     ) -> Result<Response<Self::ExecuteStream>, Status> {
         let req = request.into_inner();
         let r = self.resolve(req.motion.as_ref(), "motion").await?;
-        let (dt, cfg) = self.stream_config(
-            req.dt,
-            req.segment_s,
-            req.pacing,
-            req.lookahead_s,
-            req.max_duration_s,
-            r.motion.tau,
-            req.integration_step_s,
-        )?;
+        let (dt, cfg) = self.stream_config(StreamRequest::of(&req), r.motion.tau)?;
         info!(robot = %r.robot_id, cell = r.cell.cell(), realtime = cfg.realtime, "execute");
         self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
         let cell = r.cell.clone();
@@ -362,17 +368,8 @@ impl MotionService for MotionServiceImpl {
             );
         };
         let r = self.resolve(req.motion.as_ref(), "start.motion").await?;
-        let (dt, cfg) = self
-            .stream_config(
-                req.dt,
-                req.segment_s,
-                req.pacing,
-                req.lookahead_s,
-                req.max_duration_s,
-                r.motion.tau,
-                req.integration_step_s,
-            )
-            .map_err(|e| e.within("start"))?;
+        let (dt, cfg) =
+            self.stream_config(StreamRequest::of(&req), r.motion.tau).map_err(|e| e.within("start"))?;
         let robot_id = r.robot_id.clone();
         let dim = r.primitive.dim;
         self.check_message_size("start.segment_s", cfg.segment_points * dim)?;
@@ -482,13 +479,15 @@ impl MotionService for MotionServiceImpl {
             return Err(ServerError::invalid("tau", "must be a finite number greater than zero").into());
         }
         let (dt, cfg) = self.stream_config(
-            req.dt,
-            req.segment_s,
-            req.pacing,
-            req.lookahead_s,
-            req.max_duration_s,
+            StreamRequest {
+                dt: req.dt,
+                segment_s: req.segment_s,
+                pacing: req.pacing,
+                lookahead_s: req.lookahead_s,
+                max_duration_s: req.max_duration_s,
+                integration_step_s: req.integration_step_s,
+            },
             tau,
-            req.integration_step_s,
         )?;
         let cell = first.cell.clone();
         // One DMP: the members' primitives side by side (the paper's 6-D youBot DMP).
