@@ -195,6 +195,21 @@ impl Integrator {
         dt: f64,
         acc_before: &mut [f64],
     ) {
+        self.step_from(motion, perturbation, state, dt, acc_before, false);
+    }
+
+    /// As [`Integrator::step`]; with `first_known`, `acc_before` already holds the acceleration at `state` under
+    /// the same motion and perturbation (the last stage of the previous step's knot: "first same as last"), and
+    /// RK4's first stage is not evaluated again. The result is the same to the last bit.
+    pub fn step_from<P: Perturbation + ?Sized>(
+        &mut self,
+        motion: &Motion,
+        perturbation: &mut P,
+        state: &mut State,
+        dt: f64,
+        acc_before: &mut [f64],
+        first_known: bool,
+    ) {
         let d = self.dim;
         let tau = motion.tau;
         let (t0, s0) = (state.t, state.s);
@@ -206,7 +221,11 @@ impl Integrator {
         let mut xds = std::mem::take(&mut self.b.xds);
 
         kx[0].copy_from_slice(&state.xd);
-        self.acceleration(motion, perturbation, t0, s0, &state.x, &state.xd, &mut ka[0]);
+        if first_known {
+            ka[0].copy_from_slice(&acc_before[..d]);
+        } else {
+            self.acceleration(motion, perturbation, t0, s0, &state.x, &state.xd, &mut ka[0]);
+        }
         for (stage, (h, s)) in [(0.5 * dt, s_half), (0.5 * dt, s_half), (dt, s_end)].into_iter().enumerate() {
             for i in 0..d {
                 xs[i] = state.x[i] + h * kx[stage][i];

@@ -234,6 +234,28 @@ fn rk4_error_falls_sixteenfold_when_dt_halves_with_a_dynamic_volumetric_obstacle
 }
 
 #[test]
+fn a_step_from_the_previous_steps_last_acceleration_is_bit_identical() {
+    // First same as last: the acceleration at the state a step ends in, evaluated under the same field, is the
+    // next step's first stage; passing it in skips one field evaluation and changes nothing.
+    let motion = Motion::of(&PAPER);
+    let mut f =
+        field(vec![ellipsoid("disc", &[-0.6, -0.1], &[0.2, 0.15])], dynamic_volumetric(10.0, 2.0, 0.5), 2);
+    let dt = 0.01;
+    let (mut plain, mut fsal) = (Integrator::new(&PAPER).unwrap(), Integrator::new(&PAPER).unwrap());
+    let (mut a, mut b) = (State::at_rest(&motion.start), State::at_rest(&motion.start));
+    let (mut acc_a, mut acc_b) = (vec![0.0; 2], vec![0.0; 2]);
+    let mut known = false;
+    for _ in 0..100 {
+        plain.step(&motion, &mut f, &mut a, dt, &mut acc_a);
+        fsal.step_from(&motion, &mut f, &mut b, dt, &mut acc_b, known);
+        assert_eq!((a.x.clone(), a.xd.clone(), acc_a.clone()), (b.x.clone(), b.xd.clone(), acc_b.clone()));
+        // The acceleration at the end of the step, as a dense-output knot computes it.
+        fsal.acceleration(&motion, &mut f, b.t, b.s, &b.x, &b.xd, &mut acc_b);
+        known = true;
+    }
+}
+
+#[test]
 fn rk4_error_falls_sixteenfold_when_dt_halves_with_a_moving_obstacle() {
     // The paper's ellipse drifting across the path: the field depends on time, so each RK4 stage must see the
     // obstacle where it is at that stage's time.

@@ -3,6 +3,7 @@
 //! this server or another, see each other as moving obstacles.
 
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use dmp::Isopotential;
@@ -11,6 +12,7 @@ use tracing::{debug, warn};
 use zenoh::Session;
 use zenoh::bytes::Encoding;
 use zenoh::pubsub::Publisher;
+use zenoh::sample::Locality;
 
 use crate::convert::{check_name, superquadric_to_shape, vector};
 use crate::error::ServerError;
@@ -51,10 +53,13 @@ pub struct RobotBus {
     zenoh: Option<Arc<ZenohOut>>,
 }
 
-/// A robot's Zenoh publisher and the stamp of its last state sent.
+/// A robot's Zenoh publisher, whether any remote subscriber matches it, and the stamp of its last state sent.
 #[derive(Debug)]
 struct Out {
     publisher: Publisher<'static>,
+    /// Kept up to date by a matching listener: with nobody listening (a lone server), states are neither encoded
+    /// nor put.
+    matching: Arc<AtomicBool>,
     last_stamp: Mutex<f64>,
 }
 
@@ -87,6 +92,9 @@ impl RobotBus {
         };
         let out = z.publisher(scene.cell(), &state.robot_id).await;
         let due = out.as_ref().is_some_and(|o| {
+            if !o.matching.load(Ordering::Relaxed) {
+                return false;
+            }
             let mut last = o.last_stamp.lock().unwrap_or_else(|p| p.into_inner());
             let due = state.stamp_unix_s - *last >= z.period_s;
             if due {
@@ -155,10 +163,24 @@ impl ZenohOut {
             .session
             .declare_publisher(robot_state_key(cell, robot_id))
             .encoding(Encoding::APPLICATION_PROTOBUF)
+            // This server's own subscriber takes remote states only: its robots are already in the scene.
+            .allowed_destination(Locality::Remote)
             .await;
         match declared {
             Ok(publisher) => {
-                let out = Arc::new(Out { publisher, last_stamp: Mutex::new(f64::NEG_INFINITY) });
+                // Called at once if a subscriber matches already, then at every change.
+                let matching = Arc::new(AtomicBool::new(false));
+                let flag = matching.clone();
+                let listener = publisher
+                    .matching_listener()
+                    .callback(move |m| flag.store(m.matching(), Ordering::Relaxed))
+                    .background()
+                    .await;
+                if let Err(e) = listener {
+                    warn!(robot = %robot_id, error = %e, "zenoh: no matching listener, every state is published");
+                    matching.store(true, Ordering::Relaxed);
+                }
+                let out = Arc::new(Out { publisher, matching, last_stamp: Mutex::new(f64::NEG_INFINITY) });
                 let mut map = self.publishers.lock().unwrap_or_else(|p| p.into_inner());
                 // A concurrent first publish may have won: keep its publisher, drop (undeclare) this one.
                 let cell_map = map.entry(cell.to_owned()).or_default();

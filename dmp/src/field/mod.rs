@@ -1,5 +1,6 @@
 //! The repulsive field of a whole scene: fixed and moving obstacles, and robots that are obstacles for each other.
 
+mod contacts;
 mod kernel;
 
 use kernel::DynamicVolumetricKernel;
@@ -210,36 +211,6 @@ impl RepulsiveField {
     /// Dimension each robot moves in.
     pub fn agent_dim(&self) -> usize {
         self.sub_dim
-    }
-
-    /// Appends to `out` every contact at time `t` and state `x`: a robot inside an obstacle's true shape, or a
-    /// robot's centre inside another's footprint. Returns true if there is any.
-    pub fn contacts(&mut self, t: f64, x: &[f64], out: &mut Vec<Contact>) -> bool {
-        let before = out.len();
-        let s = &mut self.s;
-        for (ai, a) in self.agents.iter().enumerate() {
-            gather(x, &a.dims, &mut s.x);
-            for (oi, o) in self.scene.obstacles.iter().enumerate() {
-                o.center_at(t, &mut s.center);
-                let c = s.eval.value(o.shape(), o.rotation(), &s.center, &s.x);
-                if c <= 0.0 {
-                    out.push(Contact::Obstacle { agent: ai, obstacle: oi, c });
-                }
-            }
-            for (bi, b) in self.agents.iter().enumerate() {
-                if bi == ai {
-                    continue;
-                }
-                if let Some(f) = &b.footprint {
-                    gather(x, &b.dims, &mut s.center);
-                    let c = s.eval.value(f, None, &s.center, &s.x);
-                    if c <= 0.0 {
-                        out.push(Contact::Robot { agent: ai, other: bi, c });
-                    }
-                }
-            }
-        }
-        out.len() > before
     }
 
     fn add_agent(&mut self, ai: usize, t: f64, x: &[f64], v: &[f64], tau: f64) {

@@ -41,6 +41,15 @@ impl Shape {
         }
     }
 
+    /// The squared radius of a ball about the centre that holds the whole shape (`C <= 0`): `sum_i a_i^2`.
+    ///
+    /// Both families lie in the box `|y_i| <= a_i`: outside it some `|q_i| = |y_i / a_i| > 1`, so a term of `C + 1`
+    /// (`q_i^(2 n_i)`, or `P^(m/n)` with `P > 1`, or `q_3^(2m)`) exceeds 1 on its own. A point farther than this
+    /// from the centre is outside, whatever the rotation: contact checks skip the evaluation of `C` there.
+    pub fn bounding_radius_sq(&self) -> f64 {
+        self.semi_axes().iter().map(|a| a * a).sum()
+    }
+
     /// The same shape with every semi-axis enlarged by `margin` (a robot's or a held object's size).
     pub fn inflated(&self, margin: f64) -> crate::Result<Shape> {
         Ok(match self {
@@ -129,6 +138,38 @@ pub(crate) mod test_support {
                     "hess[{i}][{j}] {} vs fd {fd}",
                     h[i * d + j]
                 );
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Every point inside a shape (`C <= 0`) lies in its bounding ball, and points just inside the box's
+        /// corners along the axes are the tightest case.
+        #[test]
+        fn the_bounding_ball_holds_the_shape(
+            a in prop::array::uniform3(0.05f64..2.0),
+            n in prop::array::uniform3(1.0f64..4.0),
+            q in prop::array::uniform3(-1.5f64..1.5),
+            nested in any::<bool>(),
+        ) {
+            let shape = if nested {
+                Shape::Nested(NestedSuperquadric::new(a, n[0], n[1]).unwrap())
+            } else {
+                Shape::Superquadric(Superquadric::new(a.to_vec(), n.to_vec()).unwrap())
+            };
+            let y: Vec<f64> = q.iter().zip(&a).map(|(q, a)| q * a).collect();
+            let r2: f64 = y.iter().map(|v| v * v).sum();
+            if shape.value(&y) <= 0.0 {
+                prop_assert!(r2 <= shape.bounding_radius_sq());
+            }
+            if r2 > shape.bounding_radius_sq() {
+                prop_assert!(shape.value(&y) > 0.0);
             }
         }
     }

@@ -119,6 +119,9 @@ pub struct Runner {
     knot1: Option<Knot>,
     /// Buffers of a knot dropped by a change, for the next one.
     spare: Option<Knot>,
+    /// `knot0.xdd` is the acceleration at `knot0` under the current field and motion (it was computed as the
+    /// previous step's end knot and nothing changed since): the next RK4 step reuses it as its first stage.
+    acc0_current: bool,
     /// Scratch acceleration of an interpolated point.
     xdd: Vec<f64>,
     /// Where RK4 computes the next knot.
@@ -184,6 +187,7 @@ impl Runner {
             knot0,
             knot1: None,
             spare: None,
+            acc0_current: false,
             xdd: vec![0.0; dim],
             scratch: state,
             out_t: 0.0,
@@ -397,6 +401,7 @@ impl Runner {
         self.knot0.x.clone_from(&s.x);
         self.knot0.xd.clone_from(&s.xd);
         self.spare = self.knot1.take().or(self.spare.take());
+        self.acc0_current = false;
         self.out_t = s.t;
     }
 
@@ -404,6 +409,8 @@ impl Runner {
     /// interpolated between the current knots (it is what RK4 at the output rate would hold there, to the
     /// interpolation's accuracy).
     fn rebase(&mut self) {
+        // Whatever changes, the field or the motion no longer gives the acceleration stored at knot0.
+        self.acc0_current = false;
         let Some(k1) = self.knot1.take() else { return };
         if self.out_t > self.knot0.t {
             // Into the scratch state, then the knot: no allocation (this runs every segment with cell-mates).
@@ -437,7 +444,8 @@ impl Runner {
             hold_acc(&self.primitive, self.motion.tau, &s.xd, &mut k1.xdd);
         } else {
             let mut both = Both(&mut self.field, &mut self.remote);
-            self.integrator.step(&self.motion, &mut both, s, h, &mut self.knot0.xdd);
+            let known = self.acc0_current;
+            self.integrator.step_from(&self.motion, &mut both, s, h, &mut self.knot0.xdd, known);
             if self.step_points > 1 {
                 s.t = (s.t / self.dt).round() * self.dt;
                 self.integrator.acceleration(&self.motion, &mut both, s.t, s.s, &s.x, &s.xd, &mut k1.xdd);
@@ -499,6 +507,9 @@ impl Runner {
                     // Step to the next knot: the old one is done with.
                     let old = std::mem::replace(&mut self.knot0, k1);
                     self.knot1 = Some(old);
+                    // Its acceleration was evaluated at its exact state (a coarse step) under the field and
+                    // motion still in force (a change would have rebased and dropped it).
+                    self.acc0_current = self.step_points > 1 && !self.holding;
                 }
                 self.next_knot();
             }
@@ -533,22 +544,8 @@ impl Runner {
             self.history.push_back(entry);
             self.out_t = ((t + self.dt) / self.dt).round() * self.dt;
 
-            // Contacts and stalls at the point the robot is sent to (checked at its time).
+            // Stalls at the point the robot is sent to (checked at its time); contacts below, for all points.
             let x = &p.x[range.clone()];
-            self.contacts.clear();
-            let local = self.field.contacts(t, x, &mut self.contacts);
-            let n_local = self.contacts.len();
-            if local | self.remote.contacts(t, x, &mut self.contacts) {
-                worst = Outcome::Collision;
-                for (i, c) in self.contacts.iter().enumerate() {
-                    let f = if i < n_local { &self.field } else { &self.remote };
-                    let id = match *c {
-                        Contact::Obstacle { obstacle, .. } => f.scene().obstacles[obstacle].id().to_string(),
-                        Contact::Robot { other, .. } => f.agents()[other].id.clone(),
-                    };
-                    self.touched.insert(id);
-                }
-            }
             if self.holding {
                 // At rest on purpose: not a stall.
                 for (det, m) in self.stall.iter_mut().zip(&self.members) {
@@ -561,6 +558,24 @@ impl Runner {
                     {
                         worst = Outcome::Stalled;
                     }
+                }
+            }
+        }
+        // Contacts at every point the robot is sent to (each checked at its time); obstacles no point can reach are
+        // skipped as a whole.
+        self.contacts.clear();
+        let local = self.field.contacts_along(p.start_time, self.dt, &p.x, n, &mut self.contacts);
+        let n_local = self.contacts.len();
+        if local | self.remote.contacts_along(p.start_time, self.dt, &p.x, n, &mut self.contacts) {
+            worst = Outcome::Collision;
+            for (i, c) in self.contacts.iter().enumerate() {
+                let f = if i < n_local { &self.field } else { &self.remote };
+                let id = match *c {
+                    Contact::Obstacle { obstacle, .. } => f.scene().obstacles[obstacle].id(),
+                    Contact::Robot { other, .. } => f.agents()[other].id.as_str(),
+                };
+                if !self.touched.contains(id) {
+                    self.touched.insert(id.to_string());
                 }
             }
         }

@@ -228,7 +228,9 @@ async fn produce(
         }
         // 3. Compute and send segments: one as fast as read; in real time, up to REFILL beyond the lookahead (each
         //    segment goes out as soon as it is computed). The last one ends with the point at exactly max_duration.
+        //    The cell-mates are read once per wake-up (above): within a refill they move along their velocities.
         let horizon = (start.elapsed() + cfg.lookahead + REFILL).as_secs_f64();
+        let mut first_of_wake = true;
         loop {
             let remaining = ((cfg.max_duration - runner.time()) / dt).round().max(0.0) as usize + 1;
             let points = runner.advance(cfg.segment_points.min(remaining))?;
@@ -251,7 +253,13 @@ async fn produce(
                     None,
                 )
             };
-            let batch = split(runner, &points, seq, status, cfg.realtime.then_some(start_unix));
+            // The first point's state, published once per wake-up (below).
+            let first = first_of_wake.then(|| FirstPoint {
+                t: points.start_time,
+                x: points.x[..runner.dim()].to_vec(),
+                xd: points.xd[..runner.dim()].to_vec(),
+            });
+            let batch = split(runner, points, seq, status, cfg.realtime.then_some(start_unix));
             let members = batch.len() as u64;
             // The robot first: publishing the states may wait on Zenoh (a robot's first state declares its
             // publisher).
@@ -259,7 +267,17 @@ async fn produce(
                 sent = tx.send(Ok(batch)) => if sent.is_err() { return Ok("client left") },
                 _ = app.shutdown.cancelled() => return Err(ServerError::ShuttingDown),
             }
-            publish_states(app, cell, runner, &points, cfg.realtime.then_some(start_unix)).await;
+            // One state per wake-up: the cell-mates read them at their own wake-ups (once per refill) and
+            // extrapolate them with the velocity.
+            if let Some(first) = first {
+                publish_states(app, cell, runner, first, cfg.realtime.then_some(start_unix)).await;
+                first_of_wake = false;
+                // A change wakes every stream of the cell at once: let the others send their superseding segment
+                // before this one computes the rest of its refill.
+                if changes_plan && cfg.realtime {
+                    tokio::task::yield_now().await;
+                }
+            }
             app.counters.segments_sent.fetch_add(members, std::sync::atomic::Ordering::Relaxed);
             seq += 1;
             if let Some(reason) = last {
@@ -274,10 +292,6 @@ async fn produce(
             if !cfg.realtime || runner.time() >= horizon {
                 break;
             }
-            // The cell-mates as they are now, for the next segment.
-            let now = wall_of(runner.time());
-            cell.other_robots_into(&first_robot, now, REMOTE_MAX_AGE_S, &mut others);
-            runner.set_remote(&others, now)?;
         }
     }
 }
@@ -289,49 +303,59 @@ async fn recv(control: &mut Option<mpsc::Receiver<Control>>) -> Option<Control> 
     }
 }
 
-/// One segment per member out of the run's points.
+/// One segment per member out of the run's points (a single robot's run moves them, without a copy).
 fn split(
     runner: &Runner,
-    p: &super::runner::Points,
+    p: super::runner::Points,
     seq: u64,
     status: v1::SegmentStatus,
     start_unix: Option<f64>,
 ) -> Batch {
     let d = runner.dim();
     let n = p.x.len() / d;
-    runner
-        .members()
-        .iter()
-        .map(|m| {
-            let pick = |v: &[f64]| -> Vec<f64> {
-                (0..n).flat_map(|k| v[k * d + m.dims.start..k * d + m.dims.end].iter().copied()).collect()
-            };
-            v1::Segment {
-                robot_id: m.robot_id.clone(),
-                sequence: seq,
-                start_time: p.start_time,
-                dt: runner.dt(),
-                dim: m.dims.len() as u32,
-                positions: pick(&p.x),
-                velocities: pick(&p.xd),
-                accelerations: pick(&p.xdd),
-                status: status as i32,
-                scene_version: runner.scene_version(),
-                start_unix_s: start_unix.map(|s| s + p.start_time).unwrap_or(0.0),
-            }
-        })
-        .collect()
+    let segment = |m: &super::runner::Member, positions, velocities, accelerations| v1::Segment {
+        robot_id: m.robot_id.clone(),
+        sequence: seq,
+        start_time: p.start_time,
+        dt: runner.dt(),
+        dim: m.dims.len() as u32,
+        positions,
+        velocities,
+        accelerations,
+        status: status as i32,
+        scene_version: runner.scene_version(),
+        start_unix_s: start_unix.map(|s| s + p.start_time).unwrap_or(0.0),
+    };
+    match runner.members() {
+        [m] if m.dims.len() == d => vec![segment(m, p.x, p.xd, p.xdd)],
+        members => members
+            .iter()
+            .map(|m| {
+                let pick = |v: &[f64]| -> Vec<f64> {
+                    (0..n).flat_map(|k| v[k * d + m.dims.start..k * d + m.dims.end].iter().copied()).collect()
+                };
+                segment(m, pick(&p.x), pick(&p.xd), pick(&p.xdd))
+            })
+            .collect(),
+    }
 }
 
-/// Publishes each member's state at the segment's first point.
+/// The state at a segment's first point (run time `t`).
+struct FirstPoint {
+    t: f64,
+    x: Vec<f64>,
+    xd: Vec<f64>,
+}
+
+/// Publishes each member's state at the first point of a segment.
 async fn publish_states(
     app: &AppState,
     cell: &SceneState,
     runner: &Runner,
-    p: &super::runner::Points,
+    p: FirstPoint,
     start_unix: Option<f64>,
 ) {
-    let stamp = start_unix.map(|s| s + p.start_time).unwrap_or_else(now_unix_s);
+    let stamp = start_unix.map(|s| s + p.t).unwrap_or_else(now_unix_s);
     for m in runner.members() {
         let state = v1::RobotState {
             robot_id: m.robot_id.clone(),
