@@ -309,11 +309,18 @@ pub fn run(cli: Cli) -> Result<String, ClientError> {
     match (&cli.command, &cli.server) {
         (Command::Scenario(ScenarioCommand::Run { file, out }), None) => offline_run(file, out),
         (Command::Scenario(ScenarioCommand::Bench { file, repeat }), _) => bench(file, *repeat),
-        _ => tokio::runtime::Builder::new_multi_thread()
-            .enable_all()
-            .build()
-            .map_err(|source| ClientError::Io { path: PathBuf::from("(tokio runtime)"), source })?
-            .block_on(run_async(cli)),
+        (command, _) => {
+            let mut builder = tokio::runtime::Builder::new_multi_thread();
+            if let Command::Load(a) = command {
+                // Checked with the other flags once running; the runtime needs at least one.
+                builder.worker_threads(a.threads.max(1));
+            }
+            builder
+                .enable_all()
+                .build()
+                .map_err(|source| ClientError::Io { path: PathBuf::from("(tokio runtime)"), source })?
+                .block_on(run_async(cli))
+        }
     }
 }
 

@@ -11,7 +11,8 @@ use tracing::{error, info, warn};
 use tracing_subscriber::EnvFilter;
 
 /// Thousands of streams allocate and free small buffers (segments, robot states) at a high rate: mimalloc keeps
-/// that cheaper and the resident memory flatter than the system allocator.
+/// that cheaper than the system allocator. Built without transparent huge pages (`no_thp`): with them its resident
+/// memory rose in steps of about 12 MiB over a run (130 to 190 MiB with 1,000 streams) instead of staying flat.
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
