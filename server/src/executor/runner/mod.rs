@@ -6,16 +6,20 @@
 //! Hermite interpolant of the two knots around them ([`dmp::dense`]). Every change restarts the grid at the next
 //! output point, so a change takes effect exactly where it would with RK4 at the output rate.
 
+mod fields;
+mod hold;
+
 use std::collections::VecDeque;
 
 use dmp::dense::{Knot, interpolate};
-use dmp::field::{Agent, Contact, RepulsiveField, Scene};
+use dmp::field::{Contact, RepulsiveField};
 use dmp::stall::{StallConfig, StallDetector};
 use dmp::{Avoidance, Integrator, Motion, Obstacle, Perturbation, Primitive, State};
 use dmp_proto::v1;
 
+use self::fields::{agents, build_field, build_remote};
+use self::hold::{hold_acc, hold_step};
 use crate::error::ServerError;
-use crate::scene::{RemoteRobot, SceneSnapshot};
 
 /// Distance to the goal and speed under which a robot has arrived.
 const ARRIVED_DISTANCE: f64 = 1e-3;
@@ -240,107 +244,6 @@ impl Runner {
     /// Output step.
     pub fn dt(&self) -> f64 {
         self.dt
-    }
-
-    /// Rebuilds the field from the scene (obstacles as they are at wall time `now_unix_s`, which is the run's
-    /// current time) and the cell's other robots.
-    pub fn apply_scene(
-        &mut self,
-        snap: &SceneSnapshot,
-        remote: &[std::sync::Arc<RemoteRobot>],
-        now_unix_s: f64,
-    ) -> Result<(), ServerError> {
-        self.rebase();
-        let t = self.out_t;
-        let sub = self.field.agent_dim();
-        let mut obstacles = Vec::new();
-        if !self.avoidance.ignore_scene {
-            for o in snap.obstacles.values() {
-                if o.engine.dim() != sub {
-                    continue;
-                }
-                // Centre now, moved back along its velocity to the run's time zero.
-                let mut now = vec![0.0; sub];
-                o.engine.center_at(now_unix_s - o.received_unix_s, &mut now);
-                let c0: Vec<f64> = now.iter().zip(o.engine.velocity()).map(|(c, v)| c - v * t).collect();
-                obstacles.push(o.engine.with_center(c0));
-            }
-        }
-        let agents = agents(&self.members);
-        self.field = build_field(&agents, &self.avoidance, obstacles, self.primitive.dim)?;
-        self.scene_version = snap.version;
-        self.set_remote(remote, now_unix_s)
-    }
-
-    /// Updates the cell's other robots (moving obstacles with their footprints).
-    pub fn set_remote(
-        &mut self,
-        remote: &[std::sync::Arc<RemoteRobot>],
-        now_unix_s: f64,
-    ) -> Result<(), ServerError> {
-        let members = std::mem::take(&mut self.members);
-        let result = self.set_remote_of(&members, remote, now_unix_s);
-        self.members = members;
-        result
-    }
-
-    fn set_remote_of(
-        &mut self,
-        members: &[Member],
-        remote: &[std::sync::Arc<RemoteRobot>],
-        now_unix_s: f64,
-    ) -> Result<(), ServerError> {
-        let t = self.out_t;
-        let sub = self.field.agent_dim();
-        let eligible = |r: &&std::sync::Arc<RemoteRobot>| {
-            !members.iter().any(|m| m.robot_id == r.state.robot_id)
-                && r.footprint.as_ref().is_some_and(|fp| dmp::Isopotential::dim(fp) == sub)
-                && r.state.position.len() == sub
-                && r.state.velocity.len() == sub
-        };
-        // The centre at the run's time zero of a robot seen at `stamp` moving at constant velocity.
-        let c0_into = |r: &RemoteRobot, c0: &mut Vec<f64>| {
-            let age = now_unix_s - r.state.stamp_unix_s;
-            c0.clear();
-            c0.extend(r.state.position.iter().zip(&r.state.velocity).map(|(p, v)| p + v * age - v * t));
-        };
-        // The same robots with the same footprints as the field holds (the common case, every segment): move them
-        // in place instead of compiling a new field.
-        let current = &self.remote.scene().obstacles;
-        let same = remote.iter().filter(eligible).count() == current.len()
-            && remote
-                .iter()
-                .filter(eligible)
-                .zip(current)
-                .all(|(r, o)| o.id() == r.state.robot_id && r.footprint.as_ref() == Some(o.shape()));
-        if same {
-            if current.is_empty() {
-                return Ok(());
-            }
-            self.rebase();
-            let mut c0 = std::mem::take(&mut self.c0);
-            for (i, r) in remote.iter().filter(eligible).enumerate() {
-                c0_into(r, &mut c0);
-                self.remote.set_obstacle_motion(i, &c0, &r.state.velocity);
-            }
-            self.c0 = c0;
-            return Ok(());
-        }
-        let mut obstacles = Vec::new();
-        for r in remote.iter().filter(eligible) {
-            let Some(fp) = &r.footprint else { continue };
-            let mut c0 = Vec::new();
-            c0_into(r, &mut c0);
-            if let Ok(o) =
-                Obstacle::new(r.state.robot_id.clone(), fp.clone(), c0, None, Some(r.state.velocity.clone()))
-            {
-                obstacles.push(o);
-            }
-        }
-        self.rebase();
-        let agents = agents(members);
-        self.remote = build_remote(&agents, &self.avoidance, obstacles, self.primitive.dim)?;
-        Ok(())
     }
 
     /// Changes the goal from now on (position and velocity stay continuous).
@@ -588,79 +491,4 @@ impl Runner {
         });
         Ok(p)
     }
-}
-
-/// The damping a holding robot decelerates with, per dimension: the primitive's `D / tau`, or critical damping if
-/// it has none (a robot must come to rest).
-fn hold_rate(p: &Primitive, tau: f64, i: usize) -> f64 {
-    let damping = if p.d[i] > 0.0 { p.d[i] } else { 2.0 * p.k[i].sqrt() };
-    damping / tau
-}
-
-/// The holding acceleration `d2x/dt2 = -(D / tau) dx/dt`.
-fn hold_acc(p: &Primitive, tau: f64, xd: &[f64], acc: &mut [f64]) {
-    for i in 0..p.dim {
-        acc[i] = -hold_rate(p, tau, i) * xd[i];
-    }
-}
-
-/// One step `h` of holding: the phase is frozen and the robot decelerates under the DMP's damping alone,
-/// `d2x/dt2 = -(D / tau) dx/dt`, integrated exactly. Writes the acceleration before the step into `acc_before`.
-fn hold_step(p: &Primitive, tau: f64, state: &mut State, h: f64, acc_before: &mut [f64]) {
-    hold_acc(p, tau, &state.xd, acc_before);
-    for i in 0..p.dim {
-        let k = hold_rate(p, tau, i);
-        let v0 = state.xd[i];
-        let decay = (-k * h).exp();
-        state.x[i] += if k > 0.0 { v0 * (1.0 - decay) / k } else { v0 * h };
-        state.xd[i] = v0 * decay;
-    }
-    state.t += h;
-}
-
-fn agents(members: &[Member]) -> Vec<Agent> {
-    members
-        .iter()
-        .map(|m| Agent {
-            id: m.robot_id.clone(),
-            dims: m.dims.clone().collect(),
-            footprint: m.footprint.clone(),
-        })
-        .collect()
-}
-
-/// Obstacles with the obstacle method, and the group's robots with the robot method.
-fn build_field(
-    agents: &[Agent],
-    a: &AvoidanceSpec,
-    mut obstacles: Vec<Obstacle>,
-    dim: usize,
-) -> Result<RepulsiveField, ServerError> {
-    obstacles.extend(a.extra.iter().cloned());
-    let group = agents.len() > 1;
-    let scene = Scene {
-        obstacles,
-        avoidance: a.obstacles.0,
-        agents: agents.to_vec(),
-        robot_avoidance: if group { a.robots.0 } else { Avoidance::NONE },
-        point_samples: a.obstacles.1.max(a.robots.1),
-    };
-    Ok(RepulsiveField::new(scene, dim)?)
-}
-
-/// The cell's other robots, as moving obstacles with the robot method.
-fn build_remote(
-    agents: &[Agent],
-    a: &AvoidanceSpec,
-    obstacles: Vec<Obstacle>,
-    dim: usize,
-) -> Result<RepulsiveField, ServerError> {
-    let scene = Scene {
-        obstacles,
-        avoidance: a.robots.0,
-        agents: agents.to_vec(),
-        robot_avoidance: Avoidance::NONE,
-        point_samples: a.robots.1,
-    };
-    Ok(RepulsiveField::new(scene, dim)?)
 }
