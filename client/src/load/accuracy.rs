@@ -2,7 +2,7 @@
 //! Hermite output at 1 kHz (what `--integration-step-ms 5` asks for), stays within 1e-3 of the engine's RK4 at
 //! 1 ms, past the cell's five fixed obstacles and its nine cell-mates, with the server's default avoidance for
 //! both and a new goal halfway. The cell-mates drive their own primitives (without avoiding anything, so that
-//! their motion is the same in both runs) and are seen as the server sees them: a state every refill (30 ms),
+//! their motion is the same in both runs) and are seen as the server sees them: a state every refill (`stream::REFILL`),
 //! extrapolated with its velocity in between.
 
 use std::sync::Arc;
@@ -21,8 +21,6 @@ const STEP_POINTS: usize = 5;
 const DT: f64 = 1e-3;
 /// Seconds simulated: two legs of `tau`, the second to the robot's start.
 const DURATION: f64 = 2.0 * TAU;
-/// Output points between two states of a cell-mate (the server's refill).
-const REFILL_POINTS: usize = 30;
 
 /// A cell-mate: its free motion at 1 ms (to its far goal, then back at `tau`), and its id.
 struct Mate {
@@ -103,7 +101,9 @@ fn run(me: usize, step_points: usize) -> (Vec<f64>, f64, f64) {
         if k == (TAU / DT) as usize {
             runner.set_goal(robot.goals[1].clone()).unwrap();
         }
-        if k % REFILL_POINTS == 0 {
+        // A cell-mate's state is read once per refill of the stream (the server's cadence).
+        let refill_points = (dmp_server::executor::stream::REFILL.as_secs_f64() / DT).round() as usize;
+        if k % refill_points == 0 {
             let t = k as f64 * DT;
             let seen: Vec<Arc<RemoteRobot>> = mates.iter().map(|m| m.seen_at(k, t)).collect();
             runner.set_remote(&seen, t).unwrap();

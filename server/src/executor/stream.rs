@@ -22,7 +22,7 @@ const REMOTE_MAX_AGE_S: f64 = 0.5;
 
 /// Real time: how far beyond the lookahead one wake-up computes (the producer sleeps about this long between two
 /// wake-ups).
-pub const REFILL: Duration = Duration::from_millis(30);
+pub const REFILL: Duration = Duration::from_millis(50);
 
 /// Real time: how long after the request the run's first point is due.
 pub const FIRST_POINT_DELAY: Duration = Duration::from_millis(20);
