@@ -122,6 +122,18 @@ mod tests {
         RepulsiveField::new(scene, 4).unwrap()
     }
 
+    #[test]
+    fn a_robot_that_runs_into_an_obstacle_within_the_stretch_is_caught() {
+        // The first state is outside the obstacle's bounding ball (0.5 m from a box of semi-axes 0.3 x 0.15): only
+        // the robot's reach over the stretch keeps the obstacle in the check.
+        let mut f = scene([0.0, 0.0], [0.0, 0.0], [2.0, 2.0]);
+        let xs: Vec<f64> = (0..12).flat_map(|k| [-0.5 + 0.05 * k as f64, 0.0, 5.0, 5.0]).collect();
+        let mut out = Vec::new();
+        assert!(f.contacts_along(0.0, 0.01, &xs, 12, &mut out));
+        assert!(out.iter().all(|c| matches!(c, Contact::Obstacle { agent: 0, obstacle: 0, .. })));
+        assert!(out.len() >= 4, "{out:?}");
+    }
+
     proptest! {
         /// The pruned check along a stretch finds exactly the contacts of the check at every state: two robots on
         /// straight lines past a moving rotated box and each other.
