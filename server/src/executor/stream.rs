@@ -21,8 +21,8 @@ use crate::state::AppState;
 const REMOTE_MAX_AGE_S: f64 = 0.5;
 
 /// Real time: how far beyond the lookahead one wake-up computes (the producer sleeps about this long between two
-/// wake-ups). 50 ms took 7 % less CPU at 1,000 robots but the update-to-segment p99 at 100 robots rose from
-/// 1.0 - 1.55 ms to 1.7 - 2.2 ms (BENCHMARKS.md).
+/// wake-ups). 50 ms took 7 - 10 % less CPU at 1,000 robots but the update-to-segment p99 at 100 robots rose from
+/// 1.0 - 1.55 ms to 1.3 - 2.2 ms (BENCHMARKS.md).
 pub const REFILL: Duration = Duration::from_millis(30);
 
 /// Real time: how long after the request the run's first point is due.
