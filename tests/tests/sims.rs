@@ -50,6 +50,7 @@ fn assert_clean(report: &SimReport) {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn panda_picks_and_places_past_the_red_peg() {
+    use dmp_client::sim::panda;
     let report = simulate(SimName::Panda).await;
     assert_clean(&report);
     assert_eq!(report.robots.len(), 3);
@@ -57,6 +58,10 @@ async fn panda_picks_and_places_past_the_red_peg() {
     for (id, r) in &report.robots {
         assert_eq!(r.late_setpoints, 0, "{id}");
         assert!(r.setpoints >= 1000, "{id}: {} setpoints at 1 kHz", r.setpoints);
+        // What a real Panda would accept.
+        assert!(r.peak_speed <= panda::MAX_SPEED, "{id}: peak speed {} m/s", r.peak_speed);
+        assert!(r.peak_acceleration <= panda::MAX_ACCELERATION, "{id}: {} m/s^2", r.peak_acceleration);
+        assert!(r.peak_jerk <= panda::MAX_JERK, "{id}: peak jerk {} m/s^3", r.peak_jerk);
     }
     // Both carries go past the red peg without touching it with the ring.
     for key in ["panda/carry-static", "panda/carry-dynamic"] {

@@ -14,7 +14,9 @@
 //! | the youBot with a perception node over Zenoh | `perception.rs` |
 //! | three youBots on one phase, walls and cubes | `youbots.rs` |
 //! | fitting an ellipse to a point cloud | `ellipse_fit.rs` |
+//! | synthetic demonstrations: constant-speed line, minimum jerk | `demonstration.rs` |
 
+pub mod demonstration;
 pub mod ellipse_fit;
 pub mod panda;
 pub mod perception;

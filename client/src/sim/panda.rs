@@ -15,17 +15,21 @@
 //! (`(r/a)^2 + (h/c)^4 = 1` with `a^2 c` least: `a = r / sqrt(0.8)`, `c = h / 0.2^(1/4)`); the board a rounded box
 //! of exponent 2 through its corners (`a_i = h_i 3^(1/4)`). While moving to the ring they are inflated by
 //! [`GRIPPER_MARGIN`]; while carrying, by the ring's radius, and the green peg (the target, which the ring goes onto)
-//! is left out. Primitives: null weights (straight lines), `K = 3050`, `alpha = 4`, `D = 2 sqrt(K)`.
+//! is left out. Primitives: `K = 3050`, `alpha = 4`, `D = 2 sqrt(K)` (the paper's), learned by the server from
+//! straight minimum-jerk demonstrations of [`TAU_REACH`] and [`TAU_CARRY`] seconds. (The paper's null weights, a
+//! straight line whose speed peaks at the start, would ask the Panda for 19 m/s^2 at the start of each motion.)
 //! Moving to the ring uses the dynamic potential (`lambda = 10, eta = 2, beta = 2`); carrying is run twice, with
 //! the static (`A = 10, eta = 2`) and the dynamic potential.
 //!
 //! # The true world
 //! The gripper's centre is a point while moving to the ring; while carrying, the ring is the ball of radius
-//! [`RING_RADIUS`] around it. Clearance is measured with parry against the true box and cylinders.
+//! [`RING_RADIUS`] around it. Clearance is measured with parry against the true box and cylinders. The setpoints
+//! must also stay within the Panda's Cartesian limits ([`MAX_SPEED`], [`MAX_ACCELERATION`], [`MAX_JERK`]), which
+//! the report's peaks are checked against.
 
-use dmp::Primitive;
 use dmp_proto::v1;
 
+use super::demonstration::min_jerk;
 use super::report::{Figure, SimReport, measure, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
@@ -40,8 +44,17 @@ pub const DT: f64 = 1e-3;
 pub const RING_RADIUS: f64 = 0.025;
 /// Inflation of the obstacles while the bare gripper moves.
 pub const GRIPPER_MARGIN: f64 = 0.01;
-/// Time scale of each motion, seconds.
-pub const TAU: f64 = 1.5;
+/// Time scale of the move to the ring (the duration of its demonstration), seconds.
+pub const TAU_REACH: f64 = 2.0;
+/// Time scale of the carry, seconds: slow enough that going round the red peg stays within the Panda's limits
+/// (the path does not depend on `tau`, accelerations scale as `1 / tau^2`: 2 s gives 49 m/s^2, 3 s 20 m/s^2).
+pub const TAU_CARRY: f64 = 4.5;
+/// The Panda's Cartesian limits of its end effector (Franka Control Interface): speed, m/s.
+pub const MAX_SPEED: f64 = 1.7;
+/// Acceleration, m/s^2.
+pub const MAX_ACCELERATION: f64 = 13.0;
+/// Jerk, m/s^3.
+pub const MAX_JERK: f64 = 6500.0;
 
 const HOME: [f64; 3] = [0.30, -0.40, 0.35];
 const RING: [f64; 3] = [0.45, -0.17, 0.06];
@@ -76,15 +89,25 @@ fn world() -> Vec<Body> {
     ]
 }
 
-fn line(start: &[f64], goal: &[f64]) -> Result<Primitive, ClientError> {
-    Primitive::straight_line(50, 4.0, vec![3050.0; 3], None, TAU, start.to_vec(), goal.to_vec())
-        .map_err(|e| ClientError::argument("primitive", e.to_string()))
+/// Learns `name` on the server from a straight minimum-jerk demonstration from `start` to `goal`, `tau` long.
+async fn learn(
+    client: &DmpClient,
+    name: &str,
+    start: &[f64],
+    goal: &[f64],
+    tau: f64,
+) -> Result<(), ClientError> {
+    let (t, rows) = min_jerk(start, goal, tau, 0.0, 0.01);
+    let parameters = v1::LearnParameters { n_basis: 50, k: vec![3050.0], d: Vec::new(), alpha: 4.0 };
+    within("learn", client.learn(ROBOT, name, &t, &rows, parameters)).await??;
+    Ok(())
 }
 
 struct Motion {
     key: &'static str,
     title: &'static str,
     primitive: &'static str,
+    tau: f64,
     start: Vec<f64>,
     goal: Vec<f64>,
     method: Method,
@@ -113,7 +136,7 @@ impl Motion {
             dt: DT,
             segment_s: 0.01,
             pacing: pacing(options.realtime),
-            max_duration_s: 4.0 * TAU,
+            max_duration_s: 4.0 * self.tau,
             ..Default::default()
         };
         execute(client, request, options.realtime, |_| {}).await
@@ -154,13 +177,14 @@ impl Motion {
 
 /// Runs the pick and place: the move to the ring, then both carries (at once: they are alternatives).
 pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, ClientError> {
-    within("put", client.put_primitive(ROBOT, "move-to-ring", &line(&HOME, &RING)?)).await??;
-    within("put", client.put_primitive(ROBOT, "carry", &line(&RING, &PLACE)?)).await??;
+    learn(client, "move-to-ring", &HOME, &RING, TAU_REACH).await?;
+    learn(client, "carry", &RING, &PLACE, TAU_CARRY).await?;
     let dynamic = Method::Dynamic { lambda: 10.0, beta: 2.0, eta: 2.0 };
     let to_ring = Motion {
         key: "move-to-ring",
         title: "Panda: move to ring (dynamic potential)",
         primitive: "move-to-ring",
+        tau: TAU_REACH,
         start: HOME.to_vec(),
         goal: RING.to_vec(),
         method: dynamic,
@@ -177,6 +201,10 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
          pegs planned as superquadrics (1, 1, 2), board as a rounded box of exponent 2)"
             .into(),
     );
+    report.notes.push(format!(
+        "the Panda's Cartesian limits: {MAX_SPEED} m/s, {MAX_ACCELERATION} m/s^2, {MAX_JERK} m/s^3 \
+         (peak_speed, peak_acceleration and peak_jerk must stay within them)"
+    ));
     let moved = to_ring.run(client, options).await?;
     to_ring.record(client, options, &moved, &mut report).await?;
     // Carry from where the gripper actually stopped.
@@ -188,6 +216,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
         key,
         title,
         primitive: "carry",
+        tau: TAU_CARRY,
         start: grasp.clone(),
         goal: PLACE.to_vec(),
         method,

@@ -3,7 +3,7 @@
 //! # Set-up (metres, the youBot's start frame)
 //! - The youBot (a 0.58 x 0.38 rectangle, its centre controlled, heading fixed along `x`) drives from `(0, 0)` to
 //!   `(2, 0)` on a 2-D primitive learned by the server from a synthetic straight drive at a constant
-//!   [`CRUISE_SPEED`] between smooth ramps of [`RAMP_S`] ([`super::youbots::ramped_line`]), so `tau =` [`TAU`];
+//!   [`CRUISE_SPEED`] between smooth ramps of [`RAMP_S`] ([`super::demonstration::ramped_line`]), so `tau =` [`TAU`];
 //!   `K =` [`STIFFNESS`], `D = 2 sqrt(K)`, `alpha = 4`; integrated and streamed at 1 kHz ([`DT`]).
 //!   - Not null weights: a null-weight DMP is fastest at its start, so within the youBot's 0.8 m/s it would need
 //!     `tau` near 8 s for 2 m, most of it spent creeping to the goal (and the test runs in real time).
@@ -39,11 +39,11 @@ use dmp::scenario::ObstacleSpec;
 use dmp_proto::v1;
 use tokio::sync::watch;
 
+use super::demonstration::{ramped_duration, ramped_line, ramped_time_at};
 use super::ellipse_fit::Ellipse;
 use super::report::{Figure, SimReport, measure, position, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
-use super::youbots::{ramped_duration, ramped_line, ramped_time_at};
 use super::{Method, SimOptions, avoidance, execute, free_plan, within};
 use crate::convert::JsonObstacle;
 use crate::error::ClientError;

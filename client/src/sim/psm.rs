@@ -58,6 +58,7 @@
 use dmp::{Agent, Shape, Superquadric, Trajectory};
 use dmp_proto::v1;
 
+use super::demonstration::min_jerk;
 use super::report::{CONTACT_M, Figure, Other, RobotReport, SimReport, measure, position, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
@@ -168,21 +169,10 @@ fn footprint() -> v1::Superquadric {
     v1::Superquadric { semi_axes: footprint_semi_axes().to_vec(), exponents: vec![1.0; 3] }
 }
 
-/// The demonstration of a motion from `start` to `goal`: minimum jerk with a lift, [`TAU`] long, at 100 Hz.
+/// The demonstration of a motion from `start` to `goal`: minimum jerk with a lift of [`LIFT`], [`TAU`] long, at
+/// 100 Hz.
 pub fn demonstration(start: &[f64], goal: &[f64]) -> (Vec<f64>, Vec<Vec<f64>>) {
-    let n = (TAU / 0.01).round() as usize;
-    let mut t = Vec::with_capacity(n + 1);
-    let mut rows = Vec::with_capacity(n + 1);
-    for k in 0..=n {
-        let u = k as f64 / n as f64;
-        let s = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
-        let lift = 16.0 * u * u * (1.0 - u) * (1.0 - u) * LIFT;
-        let row: Vec<f64> =
-            (0..3).map(|i| start[i] + (goal[i] - start[i]) * s + if i == 2 { lift } else { 0.0 }).collect();
-        t.push(u * TAU);
-        rows.push(row);
-    }
-    (t, rows)
+    min_jerk(start, goal, TAU, LIFT, 0.01)
 }
 
 /// One arm's part of a stage.

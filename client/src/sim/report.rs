@@ -36,6 +36,8 @@ pub struct RobotReport {
     pub peak_acceleration: f64,
     /// Largest speed of the executed setpoints.
     pub peak_speed: f64,
+    /// Largest jerk norm of the executed setpoints (differences of consecutive accelerations).
+    pub peak_jerk: f64,
     /// Setpoints that arrived after their time (real time only).
     pub late_setpoints: u64,
     /// Setpoints executed.
@@ -190,6 +192,7 @@ pub fn measure(
         collisions,
         peak_acceleration: checks.peak_acceleration,
         peak_speed: checks.peak_speed,
+        peak_jerk: checks.peak_jerk,
         late_setpoints: exec.late_setpoints,
         setpoints: traj.len() as u64,
         segments: exec.segments,

@@ -154,6 +154,8 @@ pub struct Checks {
     pub peak_acceleration: f64,
     /// Largest speed.
     pub peak_speed: f64,
+    /// Largest jerk norm, from the accelerations of consecutive rows (`|a_{k+1} - a_k| / dt`).
+    pub peak_jerk: f64,
     /// Time of the first discontinuous step, if any.
     pub first_discontinuity_s: Option<f64>,
 }
@@ -191,6 +193,12 @@ pub fn check(traj: &Trajectory, dt: f64) -> Checks {
     }
     for k in 0..n.saturating_sub(1) {
         let h = traj.t[k + 1] - traj.t[k];
+        let da: Vec<f64> =
+            row(&traj.xdd, d, k + 1).iter().zip(row(&traj.xdd, d, k)).map(|(a, b)| a - b).collect();
+        let j = norm(&da) / h;
+        if j.is_finite() {
+            c.peak_jerk = c.peak_jerk.max(j);
+        }
         let mut bad = (h - dt).abs() > 1e-6 * dt;
         let lo = k.saturating_sub(1);
         let hi = (k + 2).min(n - 1);

@@ -36,7 +36,7 @@
 //! - `line`: null weights (a straight line). Such a DMP is fastest at its start: `tau` is chosen so that the
 //!   longest drive peaks at [`NULL_PEAK_SPEED`] without obstacles.
 //! - `constant-speed`: learned by the server from a synthetic demonstration per robot, a straight line at constant
-//!   speed between smooth ramps ([`ramped_line`], [`RAMP_S`]), all three of the same duration so that they share
+//!   speed between smooth ramps ([`ramped_line`](super::demonstration::ramped_line), [`RAMP_S`]), all three of the same duration so that they share
 //!   `tau`; the longest drive cruises at [`CRUISE_SPEED`].
 //!
 //! The youBot's top speed is 0.8 m/s; the speeds are lower so that avoiding at speed stays within a plausible
@@ -55,6 +55,7 @@ use dmp::scenario::ObstacleSpec;
 use dmp::{Agent, Integrator, Motion, NoPerturbation, Primitive, Shape, State, Superquadric, Trajectory};
 use dmp_proto::v1;
 
+use super::demonstration::{ramped_duration, ramped_line};
 use super::report::{CONTACT_M, Figure, Other, RobotReport, SimReport, measure, position, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, point3, robot_body};
@@ -136,72 +137,6 @@ impl Kind {
             Kind::ConstantSpeed => "constant-speed",
         }
     }
-}
-
-/// Fraction of the way covered at time `t` by a drive of `duration` seconds that cruises at constant speed between
-/// two ramps of `ramp_s` (at most half the duration). On a ramp the speed follows `6u^5 - 15u^4 + 10u^3`,
-/// `u = t / ramp_s`, so the acceleration is continuous and zero at both ends of the ramp (peak acceleration
-/// `1.875 v / ramp_s` for the cruise speed `v`).
-pub fn ramped_way(t: f64, duration: f64, ramp_s: f64) -> f64 {
-    let ramp = ramp_s.min(0.5 * duration);
-    let v = 1.0 / (duration - ramp);
-    let up = |t: f64| {
-        if t <= 0.0 {
-            0.0
-        } else if t < ramp {
-            let u = t / ramp;
-            v * ramp * u.powi(4) * (u * u - 3.0 * u + 2.5)
-        } else {
-            v * (t - 0.5 * ramp)
-        }
-    };
-    if t >= duration {
-        1.0
-    } else if t <= 0.5 * duration {
-        up(t)
-    } else {
-        1.0 - up(duration - t)
-    }
-}
-
-/// The time at which a drive of [`ramped_way`] has covered the fraction `way` of its length.
-pub fn ramped_time_at(way: f64, duration: f64, ramp_s: f64) -> f64 {
-    let (mut lo, mut hi) = (0.0, duration);
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if ramped_way(mid, duration, ramp_s) < way {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
-}
-
-/// Duration of a ramped drive of `length` metres cruising at `speed`.
-pub const fn ramped_duration(length: f64, speed: f64, ramp_s: f64) -> f64 {
-    length / speed + ramp_s
-}
-
-/// A synthetic demonstration: the straight line from `start` to `goal` driven as [`ramped_way`], sampled every
-/// `dt` (times, rows).
-pub fn ramped_line(
-    start: &[f64],
-    goal: &[f64],
-    duration: f64,
-    ramp_s: f64,
-    dt: f64,
-) -> (Vec<f64>, Vec<Vec<f64>>) {
-    let n = (duration / dt).round().max(2.0) as usize;
-    let t: Vec<f64> = (0..=n).map(|k| duration * k as f64 / n as f64).collect();
-    let rows = t
-        .iter()
-        .map(|&t| {
-            let w = ramped_way(t, duration, ramp_s);
-            start.iter().zip(goal).map(|(a, b)| a + w * (b - a)).collect()
-        })
-        .collect();
-    (t, rows)
 }
 
 /// Peak speed of a null-weight DMP over a unit distance with `tau = 1` (so `peak * length / tau` in general).
@@ -529,21 +464,6 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn ramped_drive() {
-        let (d, r) = (5.0, 1.0);
-        assert_eq!(ramped_way(0.0, d, r), 0.0);
-        assert_eq!(ramped_way(d, d, r), 1.0);
-        assert!((ramped_way(0.5 * d, d, r) - 0.5).abs() < 1e-12);
-        // Cruise speed 1 / (d - r) of the way per second, reached at the end of the ramp.
-        let v = (ramped_way(2.0, d, r) - ramped_way(1.5, d, r)) / 0.5;
-        assert!((v - 0.25).abs() < 1e-12, "{v}");
-        // Continuous at the end of the ramp.
-        assert!((ramped_way(r - 1e-9, d, r) - ramped_way(r + 1e-9, d, r)).abs() < 1e-8);
-        let t = ramped_time_at(0.3, d, r);
-        assert!((ramped_way(t, d, r) - 0.3).abs() < 1e-12);
-    }
 
     #[test]
     fn clearance_is_the_exact_minimum() {
