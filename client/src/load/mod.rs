@@ -4,7 +4,8 @@
 //!
 //! | concept | file |
 //! | --- | --- |
-//! | the flags, their validation, the run | `mod.rs` |
+//! | the run | `mod.rs` |
+//! | the flags and their validation | `args.rs` |
 //! | cells, paths that cross, fixed obstacles, the primitive | `layout.rs` |
 //! | obstacles, primitives and session starts on the server | `setup.rs` |
 //! | one robot's session and the accounting of its setpoints | `robot.rs` |
@@ -30,6 +31,7 @@
 
 #[cfg(test)]
 mod accuracy;
+pub mod args;
 pub mod layout;
 pub mod monitor;
 pub mod report;
@@ -39,13 +41,13 @@ pub mod setup;
 pub mod stats;
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use tokio::task::JoinSet;
 use tokio::time::Instant;
 
+pub use self::args::{DEFAULT_INTEGRATION_STEP_MS, LoadArgs, Params};
 use self::report::{ErrorCount, LATENESS_DEFINITION, LoadReport};
 use self::robot::{Ledger, RobotOutcome, RobotTask, STOP_TIMEOUT, Shared};
 use self::scene::{CellProbe, Updates};
@@ -70,191 +72,6 @@ pub const ZENOH_MATCH_TIMEOUT: Duration = Duration::from_secs(10);
 const LEAD_IN: Duration = Duration::from_millis(300);
 /// A stream's `max_duration_s` is the measurement plus this, a bound should the stop get lost.
 pub(crate) const MAX_DURATION_SLACK_S: f64 = 10.0;
-
-const DEFAULT_ROBOTS: usize = 100;
-const DEFAULT_RATE: f64 = 1000.0;
-const DEFAULT_SEGMENT_MS: f64 = 10.0;
-const DEFAULT_DURATION: f64 = 10.0;
-const DEFAULT_CELL_SIZE: usize = 10;
-const DEFAULT_DIM: usize = 3;
-const DEFAULT_TAU: f64 = 2.0;
-const DEFAULT_PREFIX: &str = "load";
-/// The server's internal RK4 step the load asks for by default, milliseconds: the largest step at which a load
-/// robot stays within 1e-3 of the engine's RK4 at 1 ms (`accuracy.rs`: 5e-4 at 5 ms, 3.5e-3 at 10 ms).
-pub const DEFAULT_INTEGRATION_STEP_MS: f64 = 5.0;
-
-/// `dmpctl load`: the server is `--server` (default http://127.0.0.1:50051), its Zenoh endpoint `--zenoh-connect`
-/// (default tcp/127.0.0.1:7447).
-#[derive(Debug, Clone, PartialEq, clap::Args)]
-pub struct LoadArgs {
-    /// Robots streaming at once.
-    #[arg(long, default_value_t = DEFAULT_ROBOTS, value_name = "N")]
-    pub robots: usize,
-    /// Setpoints per second per robot (dt = 1 / rate).
-    #[arg(long, default_value_t = DEFAULT_RATE, value_name = "HZ", allow_hyphen_values = true)]
-    pub rate: f64,
-    /// Segment length, milliseconds (a whole number of setpoints).
-    #[arg(long = "segment-ms", default_value_t = DEFAULT_SEGMENT_MS, value_name = "MS", allow_hyphen_values = true)]
-    pub segment_ms: f64,
-    /// Length of the measurement, seconds, from the first robot's start to the stops.
-    #[arg(long, default_value_t = DEFAULT_DURATION, value_name = "S", allow_hyphen_values = true)]
-    pub duration: f64,
-    /// Obstacle updates per second over Zenoh, round-robin over the cells (0: none).
-    #[arg(long = "scene-updates", default_value_t = 0.0, value_name = "HZ", allow_hyphen_values = true)]
-    pub scene_updates: f64,
-    /// Robots per cell (each avoids its cell-mates and its cell's five fixed obstacles).
-    #[arg(long = "cell-size", default_value_t = DEFAULT_CELL_SIZE, value_name = "N")]
-    pub cell_size: usize,
-    /// Dimension of the motions: 2 or 3.
-    #[arg(long, default_value_t = DEFAULT_DIM)]
-    pub dim: usize,
-    /// The primitives' time scale, seconds; each robot changes its goal every tau.
-    #[arg(long, default_value_t = DEFAULT_TAU, value_name = "S", allow_hyphen_values = true)]
-    pub tau: f64,
-    /// The server's internal RK4 step, milliseconds, with the output points interpolated exactly (quintic
-    /// Hermite) in between: 5 ms keeps a load robot within 1e-3 of RK4 at 1 ms (`load/accuracy.rs`); 0 asks
-    /// for the server's default (1 ms).
-    #[arg(
-        long = "integration-step-ms",
-        default_value_t = DEFAULT_INTEGRATION_STEP_MS,
-        value_name = "MS",
-        allow_hyphen_values = true
-    )]
-    pub integration_step_ms: f64,
-    /// HTTP/2 connections [default: one per cell, at most 16, and at least one per 100 robots].
-    #[arg(long, value_name = "N")]
-    pub connections: Option<usize>,
-    /// Worker threads of the generator's runtime. One keeps up with 1,000 robots at 1 kHz in a third of a core
-    /// and leaves the rest of a small machine to the server under test; more spread it over more cores.
-    #[arg(long, default_value_t = DEFAULT_THREADS, value_name = "N")]
-    pub threads: usize,
-    /// Prefix of the cells (`<prefix>-<c>`) and robots (`<prefix>-<c>-<k>`).
-    #[arg(long, default_value = DEFAULT_PREFIX)]
-    pub prefix: String,
-    /// Also write the JSON report to this file.
-    #[arg(long, value_name = "FILE")]
-    pub out: Option<PathBuf>,
-}
-
-impl Default for LoadArgs {
-    fn default() -> Self {
-        Self {
-            robots: DEFAULT_ROBOTS,
-            rate: DEFAULT_RATE,
-            segment_ms: DEFAULT_SEGMENT_MS,
-            duration: DEFAULT_DURATION,
-            scene_updates: 0.0,
-            cell_size: DEFAULT_CELL_SIZE,
-            dim: DEFAULT_DIM,
-            tau: DEFAULT_TAU,
-            integration_step_ms: DEFAULT_INTEGRATION_STEP_MS,
-            connections: None,
-            threads: DEFAULT_THREADS,
-            prefix: DEFAULT_PREFIX.into(),
-            out: None,
-        }
-    }
-}
-
-/// Validated flags and what follows from them.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Params {
-    /// The flags.
-    pub args: LoadArgs,
-    /// Cells.
-    pub cells: usize,
-    /// Connections.
-    pub connections: usize,
-    /// Setpoint step, seconds.
-    pub dt: f64,
-    /// Seconds the starts are spread over.
-    pub stagger_s: f64,
-}
-
-fn bad(flag: &str, message: impl Into<String>) -> ClientError {
-    ClientError::argument(flag, message)
-}
-
-fn in_range(flag: &str, x: f64, lo: f64, hi: f64, unit: &str) -> Result<(), ClientError> {
-    if x.is_finite() && x >= lo && x <= hi {
-        Ok(())
-    } else {
-        Err(bad(flag, format!("{x} is not between {lo} and {hi}{unit}")))
-    }
-}
-
-impl LoadArgs {
-    /// Checks every flag (the error names it) and derives the run's parameters.
-    pub fn validate(&self) -> Result<Params, ClientError> {
-        if !(self.integration_step_ms.is_finite() && (0.0..=100.0).contains(&self.integration_step_ms)) {
-            return Err(bad(
-                "--integration-step-ms",
-                format!("{} is not between 0 and 100", self.integration_step_ms),
-            ));
-        }
-        if !(1..=100_000).contains(&self.robots) {
-            return Err(bad("--robots", format!("{} is not between 1 and 100000", self.robots)));
-        }
-        in_range("--rate", self.rate, 10.0, 10_000.0, " Hz")?;
-        let dt = 1.0 / self.rate;
-        in_range("--segment-ms", self.segment_ms, 0.0, 10_000.0, " ms")?;
-        let points = self.segment_ms * 1e-3 / dt;
-        if points.round() < 1.0 || (points - points.round()).abs() > 1e-6 {
-            return Err(bad(
-                "--segment-ms",
-                format!(
-                    "{} ms is not a whole number (at least one) of setpoints of {} ms (--rate {})",
-                    self.segment_ms,
-                    dt * 1e3,
-                    self.rate
-                ),
-            ));
-        }
-        in_range("--duration", self.duration, 0.1, 86_400.0, " s")?;
-        let steps = (self.duration + MAX_DURATION_SLACK_S) * self.rate;
-        if steps > dmp::rollout::MAX_ROLLOUT_STEPS as f64 {
-            return Err(bad(
-                "--duration",
-                format!(
-                    "{} s at {} Hz (plus {MAX_DURATION_SLACK_S} s for the stop) exceeds the server's limit of {} steps \
-                     per stream",
-                    self.duration,
-                    self.rate,
-                    dmp::rollout::MAX_ROLLOUT_STEPS
-                ),
-            ));
-        }
-        in_range("--scene-updates", self.scene_updates, 0.0, 1_000.0, " Hz")?;
-        if !(1..=1_000).contains(&self.cell_size) {
-            return Err(bad("--cell-size", format!("{} is not between 1 and 1000", self.cell_size)));
-        }
-        if !matches!(self.dim, 2 | 3) {
-            return Err(bad("--dim", format!("{} is neither 2 nor 3", self.dim)));
-        }
-        in_range("--tau", self.tau, 0.1, 3_600.0, " s")?;
-        if let Some(c) = self.connections
-            && !(1..=1_024).contains(&c)
-        {
-            return Err(bad("--connections", format!("{c} is not between 1 and 1024")));
-        }
-        if !(1..=256).contains(&self.threads) {
-            return Err(bad("--threads", format!("{} is not between 1 and 256", self.threads)));
-        }
-        let p = &self.prefix;
-        if p.is_empty()
-            || p.len() > 64
-            || !p.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '.' | '-'))
-        {
-            return Err(bad("--prefix", format!("`{p}` is not 1 to 64 characters of [A-Za-z0-9_.-]")));
-        }
-        let cells = layout::cell_count(self.robots, self.cell_size);
-        let connections = self.connections.unwrap_or_else(|| {
-            cells.min(MAX_DEFAULT_CONNECTIONS).max(self.robots.div_ceil(STREAMS_PER_CONNECTION))
-        });
-        let stagger_s = (self.duration / 4.0).min(MAX_STAGGER_S);
-        Ok(Params { args: self.clone(), cells, connections, dt, stagger_s })
-    }
-}
 
 /// Messages of what went wrong, counted (shared by every task; rare, so a mutex).
 #[derive(Debug, Default)]
@@ -492,45 +309,6 @@ pub async fn run(args: &LoadArgs, server: &str, zenoh_connect: &[String]) -> Res
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn check(f: impl FnOnce(&mut LoadArgs)) -> Result<Params, String> {
-        let mut a = LoadArgs::default();
-        f(&mut a);
-        a.validate().map_err(|e| e.to_string())
-    }
-
-    #[test]
-    fn flags_are_validated_with_their_name() {
-        let p = check(|_| {}).unwrap();
-        assert_eq!((p.cells, p.connections, p.dt, p.stagger_s), (10, 10, 0.001, 1.0));
-        let p = check(|a| a.robots = 1000).unwrap();
-        assert_eq!((p.cells, p.connections), (100, 16));
-        let p = check(|a| (a.robots, a.cell_size, a.duration) = (5000, 1000, 2.0)).unwrap();
-        assert_eq!((p.cells, p.connections, p.stagger_s), (5, 50, 0.5));
-        type Edit = fn(&mut LoadArgs);
-        let cases: [(&str, Edit); 13] = [
-            ("--robots", |a| a.robots = 0),
-            ("--rate", |a| a.rate = f64::NAN),
-            ("--rate", |a| a.rate = -5.0),
-            ("--segment-ms", |a| a.segment_ms = 0.5),
-            ("--segment-ms", |a| a.segment_ms = 10.5),
-            ("--duration", |a| a.duration = 0.0),
-            ("--duration", |a| a.duration = 2000.0),
-            ("--scene-updates", |a| a.scene_updates = -1.0),
-            ("--cell-size", |a| a.cell_size = 0),
-            ("--dim", |a| a.dim = 4),
-            ("--tau", |a| a.tau = 0.0),
-            ("--prefix", |a| a.prefix = "a/b".into()),
-            ("--threads", |a| a.threads = 0),
-        ];
-        for (flag, f) in cases {
-            let e = check(f).unwrap_err();
-            assert!(e.starts_with(flag), "{flag}: {e}");
-        }
-        assert!(check(|a| a.connections = Some(0)).unwrap_err().starts_with("--connections"));
-        // 2 ms segments at 500 Hz are one setpoint each.
-        assert!(check(|a| (a.rate, a.segment_ms) = (500.0, 2.0)).is_ok());
-    }
 
     #[tokio::test(flavor = "multi_thread")]
     async fn bad_flags_fail_before_connecting_and_a_missing_server_fails_fast() {

@@ -9,6 +9,8 @@
 //! | a robot's controller: supersession, clock, lateness, continuity | `robot.rs` |
 //! | true shapes and distances (parry3d-f64) | `world.rs` |
 //! | `report.json` and figures | `report.rs` |
+//! | clearance along a whole run, robots side by side, closest approach | `clearance.rs` |
+//! | clearance along a whole run, robots side by side, closest approach | `clearance.rs` |
 //! | the Panda pick and place | `panda.rs` |
 //! | two da Vinci PSMs: ring transfer with a handover, one 6-D phase | `psm.rs` |
 //! | the youBot with a perception node over Zenoh | `perception.rs` |
@@ -16,6 +18,7 @@
 //! | fitting an ellipse to a point cloud | `ellipse_fit.rs` |
 //! | synthetic demonstrations: constant-speed line, minimum jerk | `demonstration.rs` |
 
+pub mod clearance;
 pub mod demonstration;
 pub mod ellipse_fit;
 pub mod panda;

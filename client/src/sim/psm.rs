@@ -58,6 +58,7 @@
 use dmp::{Agent, Shape, Superquadric, Trajectory};
 use dmp_proto::v1;
 
+use super::clearance::{closest_approach, side_by_side};
 use super::demonstration::min_jerk;
 use super::report::{CONTACT_M, Figure, Other, RobotReport, SimReport, measure, position, write_figure};
 use super::robot::Executed;
@@ -295,29 +296,6 @@ fn distance(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt()
 }
 
-/// The two arms' trajectories side by side (6-D), over the rows both have.
-fn side_by_side(a: &Trajectory, b: &Trajectory) -> Trajectory {
-    let n = a.len().min(b.len());
-    let mut t = Trajectory::with_capacity(6, n);
-    for k in 0..n {
-        let cat = |f: fn(&Trajectory, usize) -> &[f64]| [f(a, k), f(b, k)].concat();
-        t.push(
-            a.t[k],
-            &cat(Trajectory::position),
-            &cat(Trajectory::velocity),
-            &cat(Trajectory::acceleration),
-        );
-    }
-    t
-}
-
-/// Time (of the stage) at which the two arms are closest, and that distance between their controlled points.
-fn closest_approach(a: &Trajectory, b: &Trajectory) -> (f64, f64) {
-    (0..a.len().min(b.len()))
-        .map(|k| (a.t[k], distance(position(a, k), position(b, k))))
-        .fold((0.0, f64::INFINITY), |best, x| if x.1 < best.1 { x } else { best })
-}
-
 /// Largest distance between the executed and the free path at the same times.
 fn deviation(adapted: &Trajectory, free: &Trajectory) -> f64 {
     (0..adapted.len().min(free.len()))
@@ -413,7 +391,7 @@ fn record(
             deviation(&runs[i].traj, &free[i].traj),
         );
     }
-    let (t_close, d_close) = closest_approach(&runs[0].traj, &runs[1].traj);
+    let (t_close, d_close) = closest_approach(&[&runs[0].traj, &runs[1].traj]);
     report.metrics.insert(format!("{key}/closest_approach_m"), d_close);
     report.metrics.insert(format!("{key}/closest_approach_time_s"), clock + t_close);
     report.metrics.insert(format!("{key}/start_time_s"), clock);
@@ -438,8 +416,8 @@ fn record(
         _ => {}
     }
     // The figure: both arms' paths in 3-D projections, with the pegs as the planner sees them.
-    let adapted = side_by_side(&runs[0].traj, &runs[1].traj);
-    let free6 = side_by_side(&free[0].traj, &free[1].traj);
+    let adapted = side_by_side(&[&runs[0].traj, &runs[1].traj]);
+    let free6 = side_by_side(&[&free[0].traj, &free[1].traj]);
     let engine: Vec<dmp::Obstacle> = stage
         .obstacles
         .iter()

@@ -22,12 +22,7 @@ use crate::executor::stream::{Batch, Control, StreamConfig, run_stream};
 use crate::scene::{SceneState, now_unix_s};
 use crate::state::AppState;
 
-/// Default output step.
-const DEFAULT_DT: f64 = 0.001;
-/// Default segment length, seconds.
-const DEFAULT_SEGMENT_S: f64 = 0.01;
-/// Default real-time lookahead, seconds.
-const DEFAULT_LOOKAHEAD_S: f64 = 0.05;
+use super::stream_request::{DEFAULT_DT, StreamRequest, history_len};
 
 /// Implements `dmp.v1.MotionService`.
 #[derive(Debug, Clone)]
@@ -44,29 +39,6 @@ impl MotionServiceImpl {
 
 type SegmentStream = Pin<Box<dyn Stream<Item = Result<v1::Segment, Status>> + Send + 'static>>;
 type GroupStream = Pin<Box<dyn Stream<Item = Result<v1::GroupSegment, Status>> + Send + 'static>>;
-
-/// How a stream was asked to run: the fields ExecuteRequest and ExecuteGroupRequest share (0 means the default).
-struct StreamRequest {
-    dt: f64,
-    segment_s: f64,
-    pacing: i32,
-    lookahead_s: f64,
-    max_duration_s: f64,
-    integration_step_s: f64,
-}
-
-impl StreamRequest {
-    fn of(r: &v1::ExecuteRequest) -> Self {
-        Self {
-            dt: r.dt,
-            segment_s: r.segment_s,
-            pacing: r.pacing,
-            lookahead_s: r.lookahead_s,
-            max_duration_s: r.max_duration_s,
-            integration_step_s: r.integration_step_s,
-        }
-    }
-}
 
 /// A motion request resolved against the store: the primitive, the motion, the avoidance.
 struct Resolved {
@@ -156,59 +128,7 @@ impl MotionServiceImpl {
     }
 
     fn stream_config(&self, p: StreamRequest, tau: f64) -> Result<(f64, StreamConfig), ServerError> {
-        let StreamRequest { dt, segment_s, pacing, lookahead_s, max_duration_s, integration_step_s } = p;
-        let dt = if dt == 0.0 { DEFAULT_DT } else { dt };
-        if !(dt.is_finite() && dt > 0.0 && dt <= 0.1) {
-            return Err(ServerError::invalid("dt", "must be greater than 0 and at most 0.1 s"));
-        }
-        let segment_s = if segment_s == 0.0 { DEFAULT_SEGMENT_S } else { segment_s };
-        if !(segment_s.is_finite() && segment_s >= dt && segment_s <= 10.0) {
-            return Err(ServerError::invalid("segment_s", "must be between dt and 10 s"));
-        }
-        let lookahead_s = if lookahead_s == 0.0 { DEFAULT_LOOKAHEAD_S } else { lookahead_s };
-        if !(lookahead_s.is_finite() && (0.0..=10.0).contains(&lookahead_s)) {
-            return Err(ServerError::invalid("lookahead_s", "must be between 0 and 10 s"));
-        }
-        let max_duration = if max_duration_s == 0.0 { 3.0 * tau } else { max_duration_s };
-        if !(max_duration.is_finite() && max_duration > 0.0) {
-            return Err(ServerError::invalid("max_duration_s", "must be a finite number >= 0"));
-        }
-        if max_duration / dt > self.state.config.limits.max_steps as f64 {
-            return Err(ServerError::ResourceExhausted(format!(
-                "max_duration_s / dt exceeds the limit of {} steps",
-                self.state.config.limits.max_steps
-            )));
-        }
-        let realtime = match v1::Pacing::try_from(pacing) {
-            Ok(v1::Pacing::Realtime) => true,
-            Ok(v1::Pacing::Unspecified | v1::Pacing::AsFastAsRead) => false,
-            Err(_) => return Err(ServerError::invalid("pacing", format!("unknown value {pacing}"))),
-        };
-        let segment_points = (segment_s / dt).round().max(1.0) as usize;
-        let step = if integration_step_s == 0.0 {
-            self.state.config.defaults.integration_step_s
-        } else {
-            integration_step_s
-        };
-        if !(step.is_finite() && step > 0.0 && step <= 0.1) {
-            return Err(ServerError::invalid(
-                "integration_step_s",
-                "must be greater than 0 and at most 0.1 s",
-            ));
-        }
-        // A whole number of output steps, at least one, at most one segment.
-        let step_points = ((step / dt).round() as usize).clamp(1, segment_points);
-        Ok((
-            dt,
-            StreamConfig {
-                dt,
-                segment_points,
-                step_points,
-                realtime,
-                lookahead: Duration::from_secs_f64(lookahead_s),
-                max_duration,
-            },
-        ))
+        p.config(tau, &self.state.config)
     }
 
     fn single_runner(
@@ -260,14 +180,6 @@ impl MotionServiceImpl {
         });
         Ok(rx)
     }
-}
-
-/// States kept for rollbacks: everything a stream can have sent ahead of the robot (the lookahead, one refill and
-/// one segment), plus a margin.
-fn history_len(dt: f64, cfg: &StreamConfig) -> usize {
-    let refill = if cfg.realtime { crate::executor::stream::REFILL.as_secs_f64() } else { 0.0 };
-    let ahead = cfg.lookahead.as_secs_f64() + refill + cfg.segment_points as f64 * dt;
-    ((ahead / dt).ceil() as usize + 2).max(16)
 }
 
 fn single(rx: mpsc::Receiver<Result<Batch, Status>>) -> SegmentStream {
