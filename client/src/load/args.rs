@@ -58,7 +58,7 @@ pub struct LoadArgs {
         allow_hyphen_values = true
     )]
     pub integration_step_ms: f64,
-    /// HTTP/2 connections [default: one per cell, at most 16, and at least one per 100 robots].
+    /// HTTP/2 connections [default: one per cell, at most 8, and at least one per 125 robots].
     #[arg(long, value_name = "N")]
     pub connections: Option<usize>,
     /// Worker threads of the generator's runtime. One keeps up with 1,000 robots at 1 kHz in a third of a core
@@ -206,11 +206,11 @@ mod tests {
     #[test]
     fn flags_are_validated_with_their_name() {
         let p = check(|_| {}).unwrap();
-        assert_eq!((p.cells, p.connections, p.dt, p.stagger_s), (10, 10, 0.001, 1.0));
+        assert_eq!((p.cells, p.connections, p.dt, p.stagger_s), (10, 8, 0.001, 1.0));
         let p = check(|a| a.robots = 1000).unwrap();
-        assert_eq!((p.cells, p.connections), (100, 16));
+        assert_eq!((p.cells, p.connections), (100, 8));
         let p = check(|a| (a.robots, a.cell_size, a.duration) = (5000, 1000, 2.0)).unwrap();
-        assert_eq!((p.cells, p.connections, p.stagger_s), (5, 50, 0.5));
+        assert_eq!((p.cells, p.connections, p.stagger_s), (5, 40, 0.5));
         type Edit = fn(&mut LoadArgs);
         let cases: [(&str, Edit); 13] = [
             ("--robots", |a| a.robots = 0),

@@ -192,8 +192,8 @@ pub(crate) fn pow(x: f64, p: f64) -> f64 {
     Exponent::new(p).pow(x)
 }
 
-/// An exponent classified once, so that raising to it in a hot loop costs no classification: integers use
-/// `powi`, halves `powi` and one square root, the rest `powf`.
+/// An exponent classified once, so that raising to it in a hot loop costs no classification: integers are the
+/// small powers written out or `powi`, halves that times one square root, the rest `powf`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Exponent {
     Int(i32),
@@ -215,10 +215,24 @@ impl Exponent {
     #[inline]
     pub(crate) fn pow(self, x: f64) -> f64 {
         match self {
-            Exponent::Int(k) => x.powi(k),
-            Exponent::Half(k) => x.powi(k) * x.sqrt(),
+            Exponent::Int(k) => int_pow(x, k),
+            Exponent::Half(k) => int_pow(x, k) * x.sqrt(),
             Exponent::Real(p) => x.powf(p),
         }
+    }
+}
+
+/// `x^k`, with the powers the avoidance parameters use most (`beta - 1 = 1`, `-eta = -1, -2`) written out: a
+/// runtime `powi` is a call into the compiler's runtime on every evaluation.
+#[inline]
+fn int_pow(x: f64, k: i32) -> f64 {
+    match k {
+        0 => 1.0,
+        1 => x,
+        2 => x * x,
+        -1 => 1.0 / x,
+        -2 => 1.0 / (x * x),
+        _ => x.powi(k),
     }
 }
 
