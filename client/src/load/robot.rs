@@ -24,6 +24,7 @@ use tokio_stream::StreamExt;
 
 use super::layout::RobotPlan;
 use super::scene::CellProbe;
+use super::segment_view::SegmentView;
 use super::stats::{Histogram, SignedHistogram};
 use super::{unix_now, unix_now_ns};
 use crate::grpc::DmpClient;
@@ -109,7 +110,7 @@ impl Ledger {
 
     /// Accounts for `seg`, which arrived at `arrival_unix`. Fails on a segment that cannot be placed in time (not
     /// real-time paced, or without a valid step).
-    pub fn push(&mut self, seg: &v1::Segment, arrival_unix: f64) -> Result<SegmentFacts, String> {
+    pub fn push(&mut self, seg: &SegmentView, arrival_unix: f64) -> Result<SegmentFacts, String> {
         if !(seg.start_unix_s > 0.0 && seg.dt > 0.0 && seg.dt.is_finite()) {
             return Err(format!(
                 "segment {} has start_unix_s {} and dt {}: not real-time paced",
@@ -118,8 +119,7 @@ impl Ledger {
         }
         let origin = *self.origin_unix.get_or_insert(seg.start_unix_s - seg.start_time);
         self.dt = seg.dt;
-        let dim = (seg.dim as usize).max(1);
-        let len = (seg.positions.len() / dim) as i64;
+        let len = seg.points() as i64;
         let mut first = (seg.start_time / seg.dt).round() as i64;
         let behind = arrival_unix - seg.start_unix_s;
         // Points k with start_unix_s + k dt < arrival are late.
@@ -270,13 +270,13 @@ async fn stream(
     ledger: &mut Ledger,
     out: &mut RobotOutcome,
 ) -> Result<(), String> {
-    let session = match tokio::time::timeout(OPEN_TIMEOUT, client.session(task.start.clone())).await {
+    let opened = client.session_decoded::<SegmentView>(task.start.clone());
+    let (sender, mut segments) = match tokio::time::timeout(OPEN_TIMEOUT, opened).await {
         Err(_) => return Err(format!("opening the session timed out after {OPEN_TIMEOUT:?}")),
         Ok(Err(e)) => return Err(format!("opening the session: {e}")),
         Ok(Ok(s)) => s,
     };
     out.started = true;
-    let (sender, mut segments) = session.into_parts();
     let retarget = tokio::time::sleep_until(task.start_at + task.retarget_every);
     let end = tokio::time::sleep_until(task.end_at);
     tokio::pin!(retarget, end);
@@ -356,13 +356,13 @@ mod tests {
     const T0: f64 = 1_000.0;
 
     /// A 1-D segment of `n` points from run time `start` (real time, origin T0).
-    fn seg(sequence: u64, start: f64, n: usize) -> v1::Segment {
-        v1::Segment {
+    fn seg(sequence: u64, start: f64, n: usize) -> SegmentView {
+        SegmentView {
             sequence,
             start_time: start,
             dt: DT,
             dim: 1,
-            positions: vec![0.0; n],
+            positions: vec![0u8; 8 * n].into(),
             start_unix_s: T0 + start,
             ..Default::default()
         }
@@ -427,9 +427,9 @@ mod tests {
     fn a_robot_without_segments_expects_from_its_schedule() {
         assert_eq!(Ledger::new(T0 + 2.0).finish(T0 + 0.5, 1000.0), (1500, 0));
         let mut l = Ledger::new(T0);
-        let e = l.push(&v1::Segment { dt: DT, ..seg(0, 0.0, 10) }, T0).map(|_| ());
+        let e = l.push(&SegmentView { dt: DT, ..seg(0, 0.0, 10) }, T0).map(|_| ());
         assert_eq!(e, Ok(()));
-        let e = l.push(&v1::Segment { start_unix_s: 0.0, ..seg(1, 0.01, 10) }, T0).unwrap_err();
+        let e = l.push(&SegmentView { start_unix_s: 0.0, ..seg(1, 0.01, 10) }, T0).unwrap_err();
         assert!(e.contains("not real-time"), "{e}");
     }
 }
