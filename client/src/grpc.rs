@@ -45,8 +45,11 @@ pub const MAX_MESSAGE_BYTES: usize = 256 * 1024 * 1024;
 /// Messages a session may queue before [`SessionSender`] waits for the server to read.
 const SESSION_QUEUE: usize = 64;
 
+/// Messages of a server stream, each decoded as `T`.
+pub type DecodedStream<T> = Pin<Box<dyn Stream<Item = Result<T, ClientError>> + Send>>;
+
 /// Segments of an Execute or Session call.
-pub type SegmentStream = Pin<Box<dyn Stream<Item = Result<v1::Segment, ClientError>> + Send>>;
+pub type SegmentStream = DecodedStream<v1::Segment>;
 
 /// Steps of an ExecuteGroup call.
 pub type GroupStream = Pin<Box<dyn Stream<Item = Result<v1::GroupSegment, ClientError>> + Send>>;
@@ -261,12 +264,8 @@ impl DmpClient {
     /// Opens a session started by `start`: commands go through the returned [`Session`]'s sender, segments come
     /// from its stream.
     pub async fn session(&self, start: v1::ExecuteRequest) -> Result<Session, ClientError> {
-        let (tx, rx) = mpsc::channel(SESSION_QUEUE);
-        // The start message is queued before the call, so the server has it as soon as the stream opens.
-        tx.try_send(v1::SessionRequest { message: Some(Message::Start(start)) })
-            .map_err(|_| ClientError::Closed("the session queue".into()))?;
-        let segments = boxed(self.motion.clone().session(ReceiverStream::new(rx)).await?.into_inner());
-        Ok(Session { sender: SessionSender { tx }, segments })
+        let (sender, segments) = self.session_decoded::<v1::Segment>(start).await?;
+        Ok(Session { sender, segments })
     }
 
     /// A session whose segments are decoded as `T`: any message with `dmp.v1.Segment`'s field numbers, such as a
@@ -275,11 +274,12 @@ impl DmpClient {
     pub async fn session_decoded<T>(
         &self,
         start: v1::ExecuteRequest,
-    ) -> Result<(SessionSender, Pin<Box<dyn Stream<Item = Result<T, ClientError>> + Send>>), ClientError>
+    ) -> Result<(SessionSender, DecodedStream<T>), ClientError>
     where
         T: prost::Message + Default + Send + 'static,
     {
         let (tx, rx) = mpsc::channel(SESSION_QUEUE);
+        // The start message is queued before the call, so the server has it as soon as the stream opens.
         tx.try_send(v1::SessionRequest { message: Some(Message::Start(start)) })
             .map_err(|_| ClientError::Closed("the session queue".into()))?;
         let mut grpc = tonic::client::Grpc::new(self.channel.clone())

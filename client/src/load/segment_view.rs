@@ -1,5 +1,6 @@
-//! A segment as the load's robots read it: every field `dmp.v1.Segment` has except the setpoint arrays, which stay
-//! undecoded. The robots only time the segments, and decoding 90 numbers a segment was a quarter of the
+//! A segment as the load's robots read it: the fields of `dmp.v1.Segment` that time and place it, with the
+//! positions kept as raw bytes (their count is the segment's length) and the robot id, velocities and
+//! accelerations skipped. The robots only time the segments, and decoding 90 numbers a segment was a quarter of the
 //! generator's CPU at 1,000 robots, taken from the server it shares the machine with.
 
 use dmp_proto::v1;

@@ -7,6 +7,11 @@ use super::report::{CONTACT_M, Other, RobotReport, measure, position};
 use super::robot::Executed;
 use super::world::{Body, point3};
 
+/// Euclidean distance between two points.
+pub fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt()
+}
+
 /// Trajectories of the same times side by side (the shared DMP's rows).
 pub fn side_by_side(parts: &[&Trajectory]) -> Trajectory {
     let n = parts.iter().map(|p| p.len()).min().unwrap_or(0);
@@ -44,10 +49,7 @@ pub fn clearance(traj: &Trajectory, body: &Body, other: &Body, other_traj: Optio
         let offset = other_traj.map_or(parry3d_f64::math::Vector::ZERO, |o| point3(position(o, k)));
         body.distance(point3(position(traj, k)), other, offset)
     };
-    let step = |t: &Trajectory, k: usize| {
-        let (a, b) = (position(t, k), position(t, k + 1));
-        a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt()
-    };
+    let step = |t: &Trajectory, k: usize| distance(position(t, k), position(t, k + 1));
     let lipschitz =
         (0..n - 1).map(|k| step(traj, k) + other_traj.map_or(0.0, |o| step(o, k))).fold(0.0, f64::max);
     let mut best = f64::INFINITY;
@@ -103,8 +105,7 @@ pub fn closest_approach(trajs: &[&Trajectory]) -> (f64, f64) {
     for k in 0..n {
         for (i, a) in trajs.iter().enumerate() {
             for b in &trajs[i + 1..] {
-                let (p, q) = (position(a, k), position(b, k));
-                let d = p.iter().zip(q).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt();
+                let d = distance(position(a, k), position(b, k));
                 if d < best.1 {
                     best = (a.t[k], d);
                 }

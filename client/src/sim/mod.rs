@@ -10,7 +10,6 @@
 //! | true shapes and distances (parry3d-f64) | `world.rs` |
 //! | `report.json` and figures | `report.rs` |
 //! | clearance along a whole run, robots side by side, closest approach | `clearance.rs` |
-//! | clearance along a whole run, robots side by side, closest approach | `clearance.rs` |
 //! | the Panda pick and place | `panda.rs` |
 //! | two da Vinci PSMs: ring transfer with a handover, one 6-D phase | `psm.rs` |
 //! | the youBot with a perception node over Zenoh | `perception.rs` |
@@ -61,6 +60,12 @@ pub fn superquadric(
         nested: None,
     };
     dmp_proto::obstacle_json::JsonObstacle { spec, margin, ttl_s: 0.0 }
+}
+
+/// The simulations' learning parameters: `N = 50` basis functions, `alpha = 4`, stiffness `k` (the paper's 3050 for
+/// the arms) and critical damping `D = 2 sqrt(K)` (the server's default).
+pub fn learn_parameters(k: f64) -> v1::LearnParameters {
+    v1::LearnParameters { n_basis: 50, k: vec![k], d: Vec::new(), alpha: 4.0 }
 }
 
 /// Longest wait for any one answer of the server (a segment, a put).

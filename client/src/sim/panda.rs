@@ -16,8 +16,8 @@
 //! of exponent 2 through its corners (`a_i = h_i 3^(1/4)`). While moving to the ring they are inflated by
 //! [`GRIPPER_MARGIN`]; while carrying, by the ring's radius, and the green peg (the target, which the ring goes onto)
 //! is left out. Primitives: `K = 3050`, `alpha = 4`, `D = 2 sqrt(K)` (the paper's), learned by the server from
-//! straight minimum-jerk demonstrations of [`TAU_REACH`] and [`TAU_CARRY`] seconds. (The paper's null weights, a
-//! straight line whose speed peaks at the start, would ask the Panda for 19 m/s^2 at the start of each motion.)
+//! straight minimum-jerk demonstrations of [`TAU_REACH`] and [`TAU_CARRY`] seconds. (The paper's null weights give a
+//! straight line whose speed peaks right at its start; these start and end at rest.)
 //! Moving to the ring uses the dynamic potential (`lambda = 10, eta = 2, beta = 2`); carrying is run twice, with
 //! the static (`A = 10, eta = 2`) and the dynamic potential.
 //!
@@ -46,8 +46,9 @@ pub const RING_RADIUS: f64 = 0.025;
 pub const GRIPPER_MARGIN: f64 = 0.01;
 /// Time scale of the move to the ring (the duration of its demonstration), seconds.
 pub const TAU_REACH: f64 = 2.0;
-/// Time scale of the carry, seconds: slow enough that going round the red peg stays within the Panda's limits
-/// (the path does not depend on `tau`, accelerations scale as `1 / tau^2`: 2 s gives 49 m/s^2, 3 s 20 m/s^2).
+/// Time scale of the carry, seconds: slow enough that going round the red peg stays within the Panda's limits.
+/// The path hardly depends on `tau` and accelerations scale about as `1 / tau^2`: the carry with the dynamic
+/// potential peaked at 49 m/s^2 with a 2 s carry, 20 m/s^2 with 3 s and 9.7 m/s^2 with 4.5 s.
 pub const TAU_CARRY: f64 = 4.5;
 /// The Panda's Cartesian limits of its end effector (Franka Control Interface): speed, m/s.
 pub const MAX_SPEED: f64 = 1.7;
@@ -98,7 +99,7 @@ async fn learn(
     tau: f64,
 ) -> Result<(), ClientError> {
     let (t, rows) = min_jerk(start, goal, tau, 0.0, 0.01);
-    let parameters = v1::LearnParameters { n_basis: 50, k: vec![3050.0], d: Vec::new(), alpha: 4.0 };
+    let parameters = super::learn_parameters(3050.0);
     within("learn", client.learn(ROBOT, name, &t, &rows, parameters)).await??;
     Ok(())
 }

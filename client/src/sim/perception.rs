@@ -3,8 +3,8 @@
 //! # Set-up (metres, the youBot's start frame)
 //! - The youBot (a 0.58 x 0.38 rectangle, its centre controlled, heading fixed along `x`) drives from `(0, 0)` to
 //!   `(2, 0)` on a 2-D primitive learned by the server from a synthetic straight drive at a constant
-//!   [`CRUISE_SPEED`] between smooth ramps of [`RAMP_S`] ([`super::demonstration::ramped_line`]), so `tau =` [`TAU`];
-//!   `K =` [`STIFFNESS`], `D = 2 sqrt(K)`, `alpha = 4`; integrated and streamed at 1 kHz ([`DT`]).
+//!   [`CRUISE_SPEED`] between smooth ramps of [`RAMP_S`] ([`super::demonstration::ramped_line`]), so
+//!   `tau =` [`TAU`]; `K =` [`STIFFNESS`], `D = 2 sqrt(K)`, `alpha = 4`; integrated and streamed at 1 kHz ([`DT`]).
 //!   - Not null weights: a null-weight DMP is fastest at its start, so within the youBot's 0.8 m/s it would need
 //!     `tau` near 8 s for 2 m, most of it spent creeping to the goal (and the test runs in real time).
 //!   - Not the paper's `K = 3050`: the box is straight ahead, so the robot goes round it for a long while with the
@@ -229,7 +229,7 @@ async fn wait_absent(client: &DmpClient, id: &str) -> Result<(), ClientError> {
 /// Runs both scenarios, each with both potentials.
 pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, ClientError> {
     let (t, rows) = ramped_line(&START, &GOAL, TAU, RAMP_S, DT);
-    let parameters = v1::LearnParameters { n_basis: 50, k: vec![STIFFNESS], d: Vec::new(), alpha: 4.0 };
+    let parameters = super::learn_parameters(STIFFNESS);
     within("learn", client.learn("youbot", "corridor", &t, &rows, parameters)).await??;
     let publisher =
         within("zenoh open", ObstaclePublisher::open(&options.cell, &options.zenoh_connect, &[])).await??;

@@ -58,7 +58,7 @@
 use dmp::{Agent, Shape, Superquadric, Trajectory};
 use dmp_proto::v1;
 
-use super::clearance::{closest_approach, side_by_side};
+use super::clearance::{closest_approach, distance, side_by_side};
 use super::demonstration::min_jerk;
 use super::report::{CONTACT_M, Figure, Other, RobotReport, SimReport, measure, position, write_figure};
 use super::robot::Executed;
@@ -219,10 +219,6 @@ fn stages() -> Vec<Stage> {
     ]
 }
 
-fn learn_parameters() -> v1::LearnParameters {
-    v1::LearnParameters { n_basis: 50, k: vec![3050.0], d: Vec::new(), alpha: 4.0 }
-}
-
 /// What a run of a stage avoids.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Avoid {
@@ -292,10 +288,6 @@ fn last(exec: &Executed) -> Result<Vec<f64>, ClientError> {
     row_of(exec, usize::MAX)
 }
 
-fn distance(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt()
-}
-
 /// Largest distance between the executed and the free path at the same times.
 fn deviation(adapted: &Trajectory, free: &Trajectory) -> f64 {
     (0..adapted.len().min(free.len()))
@@ -331,7 +323,8 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     for stage in &stages {
         for leg in &stage.legs {
             let (t, rows) = demonstration(&leg.start, &leg.goal);
-            within("learn", client.learn(leg.robot, stage.key, &t, &rows, learn_parameters())).await??;
+            within("learn", client.learn(leg.robot, stage.key, &t, &rows, super::learn_parameters(3050.0)))
+                .await??;
         }
     }
     let mut report = SimReport::new("psm", options.realtime);

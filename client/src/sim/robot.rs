@@ -154,7 +154,7 @@ pub struct Checks {
     pub peak_acceleration: f64,
     /// Largest speed.
     pub peak_speed: f64,
-    /// Largest jerk norm, from the accelerations of consecutive rows (`|a_{k+1} - a_k| / dt`).
+    /// Largest jerk norm, from the accelerations of consecutive rows (`|a_{k+1} - a_k| / (t_{k+1} - t_k)`).
     pub peak_jerk: f64,
     /// Time of the first discontinuous step, if any.
     pub first_discontinuity_s: Option<f64>,
@@ -193,9 +193,9 @@ pub fn check(traj: &Trajectory, dt: f64) -> Checks {
     }
     for k in 0..n.saturating_sub(1) {
         let h = traj.t[k + 1] - traj.t[k];
-        let da: Vec<f64> =
-            row(&traj.xdd, d, k + 1).iter().zip(row(&traj.xdd, d, k)).map(|(a, b)| a - b).collect();
-        let j = norm(&da) / h;
+        let da2: f64 =
+            row(&traj.xdd, d, k + 1).iter().zip(row(&traj.xdd, d, k)).map(|(a, b)| (a - b).powi(2)).sum();
+        let j = da2.sqrt() / h;
         if j.is_finite() {
             c.peak_jerk = c.peak_jerk.max(j);
         }
@@ -251,5 +251,19 @@ mod tests {
         c.push(&seg(1, 0.02, &[0.5, 0.51], 1.0)).unwrap();
         let e = c.finish();
         assert_eq!(check(&e.traj, 0.01).discontinuities, 1);
+    }
+
+    #[test]
+    fn peaks_of_speed_acceleration_and_jerk() {
+        // 2-D, 1 ms apart: the acceleration steps from (0, 0) to (3, 4) between the second and third rows.
+        let mut t = Trajectory::with_capacity(2, 4);
+        for (k, a) in [[0.0, 0.0], [0.0, 0.0], [3.0, 4.0], [3.0, 4.0]].iter().enumerate() {
+            let s = k as f64 * 1e-3;
+            t.push(s, &[0.0, 0.0], &[0.5 * s, 0.0], a);
+        }
+        let c = check(&t, 1e-3);
+        assert_eq!(c.peak_acceleration, 5.0);
+        assert!((c.peak_jerk - 5000.0).abs() < 1e-6, "{}", c.peak_jerk);
+        assert!((c.peak_speed - 1.5e-3).abs() < 1e-15);
     }
 }
