@@ -1,7 +1,7 @@
 //! The bound in the load's own situation: a robot of a load cell, streamed with RK4 every 5 ms and quintic
 //! Hermite output at 1 kHz (what `dmpctl load` asks for by default, `--integration-step-ms 5`), stays within 1e-3
-//! of the engine's RK4 at 1 ms, past the cell's five fixed obstacles and its nine cell-mates, with the server's default avoidance for
-//! both and a new goal halfway. The cell-mates drive their own primitives (without avoiding anything, so that
+//! of the engine's RK4 at 1 ms, past the cell's five fixed obstacles and its nine cell-mates, with the server's
+//! default avoidance for both and a new goal halfway. The cell-mates drive their own primitives (without avoiding anything, so that
 //! their motion is the same in both runs) and are seen as the server sees them: a state every refill (`stream::REFILL`),
 //! extrapolated with its velocity in between.
 
@@ -18,9 +18,9 @@ const TAU: f64 = 2.0;
 /// The internal step, in output points: 5 ms. At 10 ms the same runs deviate by up to 3.5e-3 (the dynamic
 /// potential's switch, where `cos theta` crosses zero, costs RK4 an order), at 5 ms by 5e-4, at 2 ms by 2e-5.
 const STEP_POINTS: usize = 5;
+const DT: f64 = 1e-3;
 // The step this test checks is the load's default.
 const _: () = assert!(super::DEFAULT_INTEGRATION_STEP_MS * 1e-3 == STEP_POINTS as f64 * DT);
-const DT: f64 = 1e-3;
 /// Seconds simulated: two legs of `tau`, the second to the robot's start.
 const DURATION: f64 = 2.0 * TAU;
 

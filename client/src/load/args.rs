@@ -2,10 +2,7 @@
 
 use std::path::PathBuf;
 
-use super::{
-    DEFAULT_THREADS, MAX_DEFAULT_CONNECTIONS, MAX_DURATION_SLACK_S, MAX_STAGGER_S, STREAMS_PER_CONNECTION,
-    layout,
-};
+use super::{MAX_DURATION_SLACK_S, MAX_STAGGER_S, layout};
 use crate::error::ClientError;
 
 const DEFAULT_ROBOTS: usize = 100;
@@ -16,6 +13,14 @@ const DEFAULT_CELL_SIZE: usize = 10;
 const DEFAULT_DIM: usize = 3;
 const DEFAULT_TAU: f64 = 2.0;
 const DEFAULT_PREFIX: &str = "load";
+/// Worker threads of the generator by default.
+pub const DEFAULT_THREADS: usize = 1;
+/// Most connections by default (one per cell up to this, and at least one per 125 robots). In one pair of 20 s
+/// runs of 1,000 robots on two cores, 8 connections instead of 16 took on time from 97.0 to 99.8 % and the server
+/// from 152 to 146 % of a core (BENCHMARKS.md).
+pub const MAX_DEFAULT_CONNECTIONS: usize = 8;
+/// Robots per connection the default aims at most (HTTP/2 servers often allow 100 to 250 concurrent streams).
+pub const STREAMS_PER_CONNECTION: usize = 125;
 /// The server's internal RK4 step the load asks for by default, milliseconds: the largest step at which a load
 /// robot stays within 1e-3 of the engine's RK4 at 1 ms (`accuracy.rs`: 5e-4 at 5 ms, 3.5e-3 at 10 ms).
 pub const DEFAULT_INTEGRATION_STEP_MS: f64 = 5.0;

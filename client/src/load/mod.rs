@@ -49,7 +49,10 @@ use std::time::Duration;
 use tokio::task::JoinSet;
 use tokio::time::Instant;
 
-pub use self::args::{DEFAULT_INTEGRATION_STEP_MS, LoadArgs, Params};
+pub use self::args::{
+    DEFAULT_INTEGRATION_STEP_MS, DEFAULT_THREADS, LoadArgs, MAX_DEFAULT_CONNECTIONS, Params,
+    STREAMS_PER_CONNECTION,
+};
 use self::report::{ErrorCount, LATENESS_DEFINITION, LoadReport};
 use self::robot::{Ledger, RobotOutcome, RobotTask, STOP_TIMEOUT, Shared};
 use self::scene::{CellProbe, Updates};
@@ -60,14 +63,6 @@ use crate::zenoh_pub::ObstaclePublisher;
 
 /// The Zenoh endpoint of a server on this machine.
 pub const DEFAULT_ZENOH: &str = "tcp/127.0.0.1:7447";
-/// Worker threads of the generator by default.
-pub const DEFAULT_THREADS: usize = 1;
-/// Most connections by default (one per cell up to this, and at least one per 125 robots). At 1,000 robots on
-/// two cores, 8 connections took the server 4 % less CPU than 16 (more frames per write), and on time went from
-/// 97.0 to 99.8 % in the same session (BENCHMARKS.md).
-pub const MAX_DEFAULT_CONNECTIONS: usize = 8;
-/// Robots per connection the default aims at most (HTTP/2 servers often allow 100 to 250 concurrent streams).
-pub const STREAMS_PER_CONNECTION: usize = 125;
 /// The robots' starts are spread over this long at most.
 pub const MAX_STAGGER_S: f64 = 1.0;
 /// Longest wait for the server's Zenoh subscriber.

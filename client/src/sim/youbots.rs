@@ -267,7 +267,8 @@ async fn run_one(
             .collect();
         report.add(&format!("{}/{key}", b.id), measure_fast(exec, DT, &b.goal, &bodies[i], &world, &others));
     }
-    let (when, closest) = closest_approach(&runs.iter().map(|r| &r.traj).collect::<Vec<_>>());
+    let executed: Vec<&Trajectory> = runs.iter().map(|r| &r.traj).collect();
+    let (when, closest) = closest_approach(&executed);
     report.metrics.insert(format!("youbots/{key}/tau_s"), tau);
     report.metrics.insert(format!("youbots/{key}/closest_centres_m"), closest);
     report.metrics.insert(format!("youbots/{key}/closest_centres_time_s"), when);
@@ -300,7 +301,7 @@ async fn run_one(
     }
     report.metrics.insert(format!("youbots/{key}/free_min_robot_clearance_m"), free_robots);
     let free = side_by_side(&free.iter().collect::<Vec<_>>());
-    let adapted = side_by_side(&runs.iter().map(|r| &r.traj).collect::<Vec<_>>());
+    let adapted = side_by_side(&executed);
     let obstacles: Vec<dmp::Obstacle> = BLOCKS
         .iter()
         .map(|b| planned(b).to_engine())

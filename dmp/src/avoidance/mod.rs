@@ -222,18 +222,11 @@ impl Exponent {
     }
 }
 
-/// `x^k`, with the powers the avoidance parameters use most (`beta - 1 = 1`, `-eta = -1, -2`) written out: a
-/// runtime `powi` is a call into the compiler's runtime on every evaluation.
+/// `x^k` for any integer `k`, inlined (a runtime `powi` is a call into the compiler's runtime on every evaluation).
 #[inline]
 fn int_pow(x: f64, k: i32) -> f64 {
-    match k {
-        0 => 1.0,
-        1 => x,
-        2 => x * x,
-        -1 => 1.0 / x,
-        -2 => 1.0 / (x * x),
-        _ => x.powi(k),
-    }
+    let p = crate::isopotential::ipow(x, k.unsigned_abs());
+    if k < 0 { 1.0 / p } else { p }
 }
 
 #[cfg(test)]

@@ -6,6 +6,16 @@ use proptest::prelude::*;
 use super::*;
 
 #[test]
+fn integer_powers_are_a_runtime_powi_to_the_bit() {
+    for k in -7..=7 {
+        for x in [0.01f64, 0.5, 0.7, 1.0, 3.0, 123.456] {
+            let want = x.powi(std::hint::black_box(k));
+            assert_eq!(int_pow(x, k).to_bits(), want.to_bits(), "{x}^{k}");
+        }
+    }
+}
+
+#[test]
 fn pow_matches_powf() {
     for p in [-3.0, -2.0, -1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 0.3, 2.7] {
         for x in [0.01, 0.5, 1.0, 3.0] {

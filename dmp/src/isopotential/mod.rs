@@ -4,6 +4,8 @@
 mod nested;
 mod superquadric;
 
+pub(crate) use superquadric::ipow;
+
 pub use nested::NestedSuperquadric;
 pub use superquadric::Superquadric;
 

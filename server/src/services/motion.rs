@@ -127,10 +127,6 @@ impl MotionServiceImpl {
         })
     }
 
-    fn stream_config(&self, p: StreamRequest, tau: f64) -> Result<(f64, StreamConfig), ServerError> {
-        p.config(tau, &self.state.config)
-    }
-
     fn single_runner(
         &self,
         r: Resolved,
@@ -255,11 +251,11 @@ impl MotionService for MotionServiceImpl {
     ) -> Result<Response<Self::ExecuteStream>, Status> {
         let req = request.into_inner();
         let r = self.resolve(req.motion.as_ref(), "motion").await?;
-        let (dt, cfg) = self.stream_config(StreamRequest::of(&req), r.motion.tau)?;
+        let cfg = StreamRequest::of(&req).config(r.motion.tau, &self.state.config)?;
         info!(robot = %r.robot_id, cell = r.cell.cell(), realtime = cfg.realtime, "execute");
         self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
         let cell = r.cell.clone();
-        let runner = self.single_runner(r, dt, cfg.step_points, history_len(dt, &cfg))?;
+        let runner = self.single_runner(r, cfg.dt, cfg.step_points, history_len(&cfg))?;
         Ok(Response::new(single(self.spawn(runner, cell, cfg, None)?)))
     }
 
@@ -280,13 +276,14 @@ impl MotionService for MotionServiceImpl {
             );
         };
         let r = self.resolve(req.motion.as_ref(), "start.motion").await?;
-        let (dt, cfg) =
-            self.stream_config(StreamRequest::of(&req), r.motion.tau).map_err(|e| e.within("start"))?;
+        let cfg = StreamRequest::of(&req)
+            .config(r.motion.tau, &self.state.config)
+            .map_err(|e| e.within("start"))?;
         let robot_id = r.robot_id.clone();
         let dim = r.primitive.dim;
         self.check_message_size("start.segment_s", cfg.segment_points * dim)?;
         let cell = r.cell.clone();
-        let runner = self.single_runner(r, dt, cfg.step_points, history_len(dt, &cfg))?;
+        let runner = self.single_runner(r, cfg.dt, cfg.step_points, history_len(&cfg))?;
         let (ctl_tx, ctl_rx) = mpsc::channel(64);
         let rx = self.spawn(runner, cell, cfg, Some(ctl_rx))?;
         let shutdown = self.state.shutdown.clone();
@@ -390,17 +387,7 @@ impl MotionService for MotionServiceImpl {
         if !(tau.is_finite() && tau > 0.0) {
             return Err(ServerError::invalid("tau", "must be a finite number greater than zero").into());
         }
-        let (dt, cfg) = self.stream_config(
-            StreamRequest {
-                dt: req.dt,
-                segment_s: req.segment_s,
-                pacing: req.pacing,
-                lookahead_s: req.lookahead_s,
-                max_duration_s: req.max_duration_s,
-                integration_step_s: req.integration_step_s,
-            },
-            tau,
-        )?;
+        let cfg = StreamRequest::of_group(&req).config(tau, &self.state.config)?;
         let cell = first.cell.clone();
         // One DMP: the members' primitives side by side (the paper's 6-D youBot DMP).
         let mut primitive = first.primitive.clone();
@@ -440,8 +427,8 @@ impl MotionService for MotionServiceImpl {
         }
         info!(robots = members.len(), realtime = cfg.realtime, "execute group");
         self.check_message_size("segment_s", cfg.segment_points * primitive.dim)?;
-        let history = history_len(dt, &cfg);
-        let runner = Runner::new(members, primitive, motion, dt, cfg.step_points, avoidance, history)?;
+        let runner =
+            Runner::new(members, primitive, motion, cfg.dt, cfg.step_points, avoidance, history_len(&cfg))?;
         let rx = self.spawn(runner, cell, cfg, None)?;
         let stream = ReceiverStream::new(rx).map(|r| {
             r.map(|segments| v1::GroupSegment {

@@ -38,9 +38,20 @@ impl StreamRequest {
         }
     }
 
-    /// Fills in the defaults and checks every field (the error names it): the output step and the stream's
-    /// configuration for a motion of time scale `tau`.
-    pub(super) fn config(self, tau: f64, config: &Config) -> Result<(f64, StreamConfig), ServerError> {
+    pub(super) fn of_group(r: &v1::ExecuteGroupRequest) -> Self {
+        Self {
+            dt: r.dt,
+            segment_s: r.segment_s,
+            pacing: r.pacing,
+            lookahead_s: r.lookahead_s,
+            max_duration_s: r.max_duration_s,
+            integration_step_s: r.integration_step_s,
+        }
+    }
+
+    /// Fills in the defaults and checks every field (the error names it): the stream's configuration for a motion
+    /// of time scale `tau`.
+    pub(super) fn config(self, tau: f64, config: &Config) -> Result<StreamConfig, ServerError> {
         let StreamRequest { dt, segment_s, pacing, lookahead_s, max_duration_s, integration_step_s } = self;
         let dt = if dt == 0.0 { DEFAULT_DT } else { dt };
         if !(dt.is_finite() && dt > 0.0 && dt <= 0.1) {
@@ -80,23 +91,21 @@ impl StreamRequest {
         }
         // A whole number of output steps, at least one, at most one segment.
         let step_points = ((step / dt).round() as usize).clamp(1, segment_points);
-        Ok((
+        Ok(StreamConfig {
             dt,
-            StreamConfig {
-                dt,
-                segment_points,
-                step_points,
-                realtime,
-                lookahead: Duration::from_secs_f64(lookahead_s),
-                max_duration,
-            },
-        ))
+            segment_points,
+            step_points,
+            realtime,
+            lookahead: Duration::from_secs_f64(lookahead_s),
+            max_duration,
+        })
     }
 }
 
 /// States kept for rollbacks: everything a stream can have sent ahead of the robot (the lookahead, one refill and
 /// one segment), plus a margin.
-pub(super) fn history_len(dt: f64, cfg: &StreamConfig) -> usize {
+pub(super) fn history_len(cfg: &StreamConfig) -> usize {
+    let dt = cfg.dt;
     let refill = if cfg.realtime { crate::executor::stream::REFILL.as_secs_f64() } else { 0.0 };
     let ahead = cfg.lookahead.as_secs_f64() + refill + cfg.segment_points as f64 * dt;
     ((ahead / dt).ceil() as usize + 2).max(16)
