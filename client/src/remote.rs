@@ -170,6 +170,7 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Client
         lookahead_s: a.lookahead.unwrap_or(0.0),
         max_duration_s: a.max_duration.unwrap_or(0.0),
         integration_step_s: 0.0,
+        integration_tolerance: 0.0,
     };
     let mut segments = client.execute(request).await?;
     let mut s = Setpoints::new();

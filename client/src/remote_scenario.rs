@@ -243,6 +243,7 @@ async fn group(
         tau: p.motion.tau,
         // RK4 at the output rate, as offline (the server's default interpolates between coarser steps).
         integration_step_s: p.dt,
+        integration_tolerance: 0.0,
     };
     let dims: Vec<&[usize]> = s.robots.iter().map(|r| r.dims.as_slice()).collect();
     let (adapted, free) =

@@ -393,6 +393,16 @@ async fn bad_input_gets_a_clear_status_and_the_server_keeps_serving() {
     let request = v1::ExecuteRequest { motion: Some(spec("r", "line")), dt: -1.0, ..Default::default() };
     let e = within("execute bad dt", client.execute(request)).await.err().expect("refused");
     assert!(e.to_string().contains("dt"), "{e}");
+    for tol in [-1e-6, f64::NAN, 0.5] {
+        let request = v1::ExecuteRequest {
+            motion: Some(spec("r", "line")),
+            integration_tolerance: tol,
+            ..Default::default()
+        };
+        let e = within("execute bad tolerance", client.execute(request)).await.err().expect("refused");
+        assert_eq!(e.code(), Some(tonic::Code::InvalidArgument), "{e}");
+        assert!(e.to_string().contains("integration_tolerance"), "{tol}: {e}");
+    }
     // An unstable step is refused before anything is computed, and so is a method that cannot work.
     let e = within(
         "plan unstable",
@@ -601,7 +611,8 @@ async fn a_coarse_internal_step_stays_within_1e3_of_the_engines_1ms_rollout() {
         let reference = dmp::rollout(&primitive, &dmp::Motion::of(&primitive), &mut field, 1e-3, 1500)
             .unwrap()
             .trajectory;
-        for step in [0.005, 0.01] {
+        // Fixed RK4 steps, and the adaptive step (Dormand-Prince 5(4), at most 30 ms).
+        for (step, tolerance) in [(0.005, 0.0), (0.01, 0.0), (0.03, 3e-6)] {
             let mut motion = spec("arm", "curve");
             motion.avoidance = Some(avoidance);
             motion.extra_obstacles = vec![still.clone(), moving.clone()];
@@ -612,6 +623,7 @@ async fn a_coarse_internal_step_stays_within_1e3_of_the_engines_1ms_rollout() {
                 segment_s: 0.01,
                 max_duration_s: 1.5,
                 integration_step_s: step,
+                integration_tolerance: tolerance,
                 ..Default::default()
             };
             let stream = within("execute", client.execute(request)).await.unwrap();
@@ -627,7 +639,8 @@ async fn a_coarse_internal_step_stays_within_1e3_of_the_engines_1ms_rollout() {
             );
             let worst = positions.iter().zip(&reference.x).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
             println!(
-                "{method:?}, internal step {step} s: largest deviation from the 1 ms rollout {worst:.3e}"
+                "{method:?}, internal step {step} s, tolerance {tolerance}: largest deviation from the 1 ms \
+                 rollout {worst:.3e}"
             );
             assert!(worst <= 1e-3, "{method:?} at a {step} s step: {worst}");
             assert!(worst > 0.0, "a coarse step is not the 1 ms rollout itself");

@@ -106,11 +106,21 @@ fn load_takes_its_flags_and_the_global_server() {
     assert_eq!(a, expected);
     let Command::Load(a) = parse(&["load"]).command else { panic!() };
     assert_eq!(a, crate::load::LoadArgs::default());
-    // The server's RK4 every 5 ms unless told otherwise; 0 leaves the server's default.
-    assert_eq!(a.integration_step_ms, 5.0);
+    // The server's adaptive step (at most 30 ms, tolerance 3e-6) unless told otherwise; a zero tolerance asks
+    // for a fixed RK4 step, and a zero step for the server's default.
+    assert_eq!((a.integration_step_ms, a.integration_tolerance), (30.0, 3e-6));
+    let Command::Load(a) =
+        parse(&["load", "--integration-step-ms", "5", "--integration-tolerance", "0"]).command
+    else {
+        panic!()
+    };
+    assert_eq!((a.integration_step_ms, a.integration_tolerance), (5.0, 0.0));
+    assert!(a.validate().is_ok());
     let Command::Load(a) = parse(&["load", "--integration-step-ms", "0"]).command else { panic!() };
     assert_eq!(a.integration_step_ms, 0.0);
     assert!(a.validate().is_ok());
+    let Command::Load(a) = parse(&["load", "--integration-tolerance", "0.5"]).command else { panic!() };
+    assert!(a.validate().unwrap_err().to_string().contains("--integration-tolerance"));
     assert!(refused(&["load", "--robots", "many"]).contains("--robots"));
     // Numbers clap accepts are checked by the load itself, naming the flag.
     let Command::Load(a) = parse(&["load", "--rate", "-1"]).command else { panic!() };

@@ -50,8 +50,8 @@ use tokio::task::JoinSet;
 use tokio::time::Instant;
 
 pub use self::args::{
-    DEFAULT_INTEGRATION_STEP_MS, DEFAULT_THREADS, LoadArgs, MAX_DEFAULT_CONNECTIONS, Params,
-    STREAMS_PER_CONNECTION,
+    DEFAULT_INTEGRATION_STEP_MS, DEFAULT_INTEGRATION_TOLERANCE, DEFAULT_THREADS, LoadArgs,
+    MAX_DEFAULT_CONNECTIONS, Params, STREAMS_PER_CONNECTION,
 };
 use self::report::{ErrorCount, LATENESS_DEFINITION, LoadReport};
 use self::robot::{Ledger, RobotOutcome, RobotTask, STOP_TIMEOUT, Shared};

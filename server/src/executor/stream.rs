@@ -21,9 +21,10 @@ use crate::state::AppState;
 const REMOTE_MAX_AGE_S: f64 = 0.5;
 
 /// Real time: how far beyond the lookahead one wake-up computes (the producer sleeps about this long between two
-/// wake-ups). 50 ms took 7 - 10 % less CPU at 1,000 robots but the update-to-segment p99 at 100 robots rose from
-/// 1.0 - 1.55 ms to 1.3 - 2.2 ms (BENCHMARKS.md).
-pub const REFILL: Duration = Duration::from_millis(30);
+/// wake-ups). Each wake-up costs a timer, the cell-mates' states, a state published and writes to the connection
+/// whatever it computes: at 500 robots with the adaptive step, 60 ms instead of 30 took the server from 108 to 70 %
+/// of a core (BENCHMARKS.md).
+pub const REFILL: Duration = Duration::from_millis(60);
 
 /// Real time: how long after the request the run's first point is due.
 pub const FIRST_POINT_DELAY: Duration = Duration::from_millis(20);
@@ -41,8 +42,10 @@ pub struct StreamConfig {
     pub dt: f64,
     /// Points per segment.
     pub segment_points: usize,
-    /// Internal RK4 step, in output steps.
+    /// Internal RK4 step, in output steps (with a tolerance: the largest adaptive step).
     pub step_points: usize,
+    /// The adaptive step's local error tolerance (None: RK4 at `step_points`).
+    pub tolerance: Option<f64>,
     /// Real time (true) or as fast as the client reads.
     pub realtime: bool,
     /// Real-time: how far ahead of the wall clock segments are computed.
@@ -231,6 +234,13 @@ async fn produce(
         //    segment goes out as soon as it is computed). The last one ends with the point at exactly max_duration.
         //    The cell-mates are read once per wake-up (above): within a refill they move along their velocities.
         let horizon = (start.elapsed() + cfg.lookahead + REFILL).as_secs_f64();
+        if cfg.realtime {
+            // This wake-up ends with the first segment that reaches the horizon: the next change applies there
+            // at the earliest.
+            let seg = cfg.segment_points as f64 * dt;
+            let segments = ((horizon - runner.time()) / seg).ceil().max(1.0);
+            runner.limit_knots_to(runner.time() + segments * seg);
+        }
         let mut first_of_wake = true;
         loop {
             let remaining = ((cfg.max_duration - runner.time()) / dt).round().max(0.0) as usize + 1;

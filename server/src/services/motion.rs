@@ -144,6 +144,11 @@ impl MotionServiceImpl {
         Runner::new(vec![member], r.primitive, r.motion, dt, step_points, r.avoidance, history)
     }
 
+    /// The runner of a stream of one robot.
+    fn stream_runner(&self, r: Resolved, cfg: &StreamConfig) -> Result<Runner, ServerError> {
+        with_tolerance(self.single_runner(r, cfg.dt, cfg.step_points, history_len(cfg))?, cfg)
+    }
+
     /// Refuses, before any work, an answer that would exceed the message size: `values` numbers of position,
     /// velocity and acceleration (8 bytes each).
     fn check_message_size(&self, field: &str, values: usize) -> Result<(), ServerError> {
@@ -255,7 +260,7 @@ impl MotionService for MotionServiceImpl {
         info!(robot = %r.robot_id, cell = r.cell.cell(), realtime = cfg.realtime, "execute");
         self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
         let cell = r.cell.clone();
-        let runner = self.single_runner(r, cfg.dt, cfg.step_points, history_len(&cfg))?;
+        let runner = self.stream_runner(r, &cfg)?;
         Ok(Response::new(single(self.spawn(runner, cell, cfg, None)?)))
     }
 
@@ -283,7 +288,7 @@ impl MotionService for MotionServiceImpl {
         let dim = r.primitive.dim;
         self.check_message_size("start.segment_s", cfg.segment_points * dim)?;
         let cell = r.cell.clone();
-        let runner = self.single_runner(r, cfg.dt, cfg.step_points, history_len(&cfg))?;
+        let runner = self.stream_runner(r, &cfg)?;
         let (ctl_tx, ctl_rx) = mpsc::channel(64);
         let rx = self.spawn(runner, cell, cfg, Some(ctl_rx))?;
         let shutdown = self.state.shutdown.clone();
@@ -429,6 +434,7 @@ impl MotionService for MotionServiceImpl {
         self.check_message_size("segment_s", cfg.segment_points * primitive.dim)?;
         let runner =
             Runner::new(members, primitive, motion, cfg.dt, cfg.step_points, avoidance, history_len(&cfg))?;
+        let runner = with_tolerance(runner, &cfg)?;
         let rx = self.spawn(runner, cell, cfg, None)?;
         let stream = ReceiverStream::new(rx).map(|r| {
             r.map(|segments| v1::GroupSegment {
@@ -459,4 +465,12 @@ struct PlanPoints {
     x: Vec<f64>,
     xd: Vec<f64>,
     xdd: Vec<f64>,
+}
+
+/// The runner with the adaptive step, when the stream's request set a tolerance.
+fn with_tolerance(runner: Runner, cfg: &StreamConfig) -> Result<Runner, ServerError> {
+    match cfg.tolerance {
+        Some(tol) => runner.with_tolerance(tol),
+        None => Ok(runner),
+    }
 }

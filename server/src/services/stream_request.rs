@@ -15,6 +15,8 @@ pub(super) const DEFAULT_DT: f64 = 0.001;
 const DEFAULT_SEGMENT_S: f64 = 0.01;
 /// Default real-time lookahead, seconds.
 const DEFAULT_LOOKAHEAD_S: f64 = 0.05;
+/// Largest adaptive-step tolerance accepted (a looser one would not be an accurate trajectory).
+const MAX_TOLERANCE: f64 = 1e-2;
 
 /// How a stream was asked to run: the fields ExecuteRequest and ExecuteGroupRequest share (0 means the default).
 pub(super) struct StreamRequest {
@@ -24,6 +26,7 @@ pub(super) struct StreamRequest {
     pub(super) lookahead_s: f64,
     pub(super) max_duration_s: f64,
     pub(super) integration_step_s: f64,
+    pub(super) integration_tolerance: f64,
 }
 
 impl StreamRequest {
@@ -35,6 +38,7 @@ impl StreamRequest {
             lookahead_s: r.lookahead_s,
             max_duration_s: r.max_duration_s,
             integration_step_s: r.integration_step_s,
+            integration_tolerance: r.integration_tolerance,
         }
     }
 
@@ -46,13 +50,22 @@ impl StreamRequest {
             lookahead_s: r.lookahead_s,
             max_duration_s: r.max_duration_s,
             integration_step_s: r.integration_step_s,
+            integration_tolerance: r.integration_tolerance,
         }
     }
 
     /// Fills in the defaults and checks every field (the error names it): the stream's configuration for a motion
     /// of time scale `tau`.
     pub(super) fn config(self, tau: f64, config: &Config) -> Result<StreamConfig, ServerError> {
-        let StreamRequest { dt, segment_s, pacing, lookahead_s, max_duration_s, integration_step_s } = self;
+        let StreamRequest {
+            dt,
+            segment_s,
+            pacing,
+            lookahead_s,
+            max_duration_s,
+            integration_step_s,
+            integration_tolerance,
+        } = self;
         let dt = if dt == 0.0 { DEFAULT_DT } else { dt };
         if !(dt.is_finite() && dt > 0.0 && dt <= 0.1) {
             return Err(ServerError::invalid("dt", "must be greater than 0 and at most 0.1 s"));
@@ -89,12 +102,26 @@ impl StreamRequest {
                 "must be greater than 0 and at most 0.1 s",
             ));
         }
-        // A whole number of output steps, at least one, at most one segment.
-        let step_points = ((step / dt).round() as usize).clamp(1, segment_points);
+        let tolerance = match integration_tolerance {
+            0.0 => None,
+            tol if tol.is_finite() && tol > 0.0 && tol <= MAX_TOLERANCE => Some(tol),
+            _ => {
+                return Err(ServerError::invalid(
+                    "integration_tolerance",
+                    format!("must be 0 (a fixed step) or above 0 and at most {MAX_TOLERANCE}"),
+                ));
+            }
+        };
+        // A whole number of output steps, at least one; at most one segment for a fixed step.
+        let step_points = match tolerance {
+            None => ((step / dt).round() as usize).clamp(1, segment_points),
+            Some(_) => ((step / dt).round() as usize).max(1),
+        };
         Ok(StreamConfig {
             dt,
             segment_points,
             step_points,
+            tolerance,
             realtime,
             lookahead: Duration::from_secs_f64(lookahead_s),
             max_duration,

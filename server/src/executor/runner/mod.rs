@@ -4,9 +4,14 @@
 //!
 //! RK4 runs on an internal grid of `step_points` output steps; the output points in between are the quintic
 //! Hermite interpolant of the two knots around them ([`dmp::dense`]). Every change restarts the grid at the next
-//! output point, so a change takes effect exactly where it would with RK4 at the output rate.
+//! output point, so a change takes effect exactly where it would with RK4 at the output rate. With a tolerance
+//! ([`Runner::with_tolerance`]) the grid adapts instead: Dormand–Prince 5(4) steps of a whole number of output
+//! steps, at most `step_points`, each accepted when its error estimate is within the tolerance
+//! ([`dmp::integrate::dormand_prince`]), and never beyond the limit the caller sets ([`Runner::limit_knots_to`]:
+//! where its next change can apply, so that no step is computed past it for nothing).
 
 mod fields;
+mod grid;
 mod hold;
 
 use std::collections::VecDeque;
@@ -18,7 +23,7 @@ use dmp::{Avoidance, Integrator, Motion, Obstacle, Perturbation, Primitive, Stat
 use dmp_proto::v1;
 
 use self::fields::{agents, build_field, build_remote};
-use self::hold::{hold_acc, hold_step};
+pub use self::grid::Work;
 use crate::error::ServerError;
 
 /// Distance to the goal and speed under which a robot has arrived.
@@ -133,8 +138,14 @@ pub struct Runner {
     /// Time of the next output point.
     out_t: f64,
     dt: f64,
-    /// Internal RK4 step, in output steps.
+    /// Internal RK4 step, in output steps (with a tolerance: the largest adaptive step).
     step_points: usize,
+    /// Adaptive step: the local error tolerance (None: RK4 at `step_points`).
+    tolerance: Option<f64>,
+    /// Adaptive step: the next step to try, in output steps.
+    next_points: usize,
+    /// No knot beyond this time (adaptive step).
+    knot_limit: f64,
     avoidance: AvoidanceSpec,
     /// The scene's obstacles and the group's robots.
     field: RepulsiveField,
@@ -151,6 +162,8 @@ pub struct Runner {
     c0: Vec<f64>,
     /// Everything touched so far: obstacle ids and robot ids.
     touched: std::collections::BTreeSet<String>,
+    /// What the integration cost so far.
+    work: Work,
 }
 
 impl Runner {
@@ -197,6 +210,9 @@ impl Runner {
             out_t: 0.0,
             dt,
             step_points,
+            tolerance: None,
+            next_points: step_points,
+            knot_limit: f64::INFINITY,
             avoidance,
             field,
             remote,
@@ -208,7 +224,34 @@ impl Runner {
             contacts: Vec::new(),
             c0: Vec::new(),
             touched: Default::default(),
+            work: Work::default(),
         })
+    }
+
+    /// Adapts the internal step to `tolerance` (the local error tolerance of Dormand–Prince 5(4), metres on
+    /// positions and metres per second on velocities, relative to `1 + |value|`), with steps of at most
+    /// `step_points` output steps. Fails unless the tolerance is finite and above zero.
+    pub fn with_tolerance(mut self, tolerance: f64) -> Result<Self, ServerError> {
+        if !(tolerance.is_finite() && tolerance > 0.0) {
+            return Err(ServerError::invalid(
+                "integration_tolerance",
+                "must be a finite number greater than zero",
+            ));
+        }
+        self.tolerance = Some(tolerance);
+        Ok(self)
+    }
+
+    /// Adaptive step: no knot is placed after run time `t` (where the caller's next change can apply: a change
+    /// restarts the grid there, and a step past it would be computed for nothing). Ignored when `t` is less than
+    /// one output step ahead of the current knot.
+    pub fn limit_knots_to(&mut self, t: f64) {
+        self.knot_limit = t;
+    }
+
+    /// What the integration cost so far.
+    pub fn work(&self) -> Work {
+        self.work
     }
 
     /// The members.
@@ -328,41 +371,6 @@ impl Runner {
         self.spare = Some(k1);
     }
 
-    /// Computes the knot after `knot0` (one RK4 step of `step_points` output steps, or the exact holding
-    /// deceleration), and the acceleration at `knot0` under the current field and motion.
-    fn next_knot(&mut self) {
-        let h = self.dt * self.step_points as f64;
-        let s = &mut self.scratch;
-        s.t = self.knot0.t;
-        s.s = self.knot0.s;
-        s.x.clone_from(&self.knot0.x);
-        s.xd.clone_from(&self.knot0.xd);
-        let mut k1 = self
-            .knot1
-            .take()
-            .or_else(|| self.spare.take())
-            .unwrap_or_else(|| Knot::zeros(self.primitive.dim));
-        if self.holding {
-            hold_step(&self.primitive, self.motion.tau, s, h, &mut self.knot0.xdd);
-            hold_acc(&self.primitive, self.motion.tau, &s.xd, &mut k1.xdd);
-        } else {
-            let mut both = Both(&mut self.field, &mut self.remote);
-            let known = self.acc0_current;
-            self.integrator.step_from(&self.motion, &mut both, s, h, &mut self.knot0.xdd, known);
-            if self.step_points > 1 {
-                s.t = (s.t / self.dt).round() * self.dt;
-                self.integrator.acceleration(&self.motion, &mut both, s.t, s.s, &s.x, &s.xd, &mut k1.xdd);
-            }
-        }
-        // Times are whole multiples of dt, not a drifting sum.
-        s.t = (s.t / self.dt).round() * self.dt;
-        k1.t = s.t;
-        k1.s = s.s;
-        k1.x.clone_from(&s.x);
-        k1.xd.clone_from(&s.xd);
-        self.knot1 = Some(k1);
-    }
-
     /// Every obstacle or robot touched so far.
     pub fn touched(&self) -> &std::collections::BTreeSet<String> {
         &self.touched
@@ -412,7 +420,7 @@ impl Runner {
                     self.knot1 = Some(old);
                     // Its acceleration was evaluated at its exact state (a coarse step) under the field and
                     // motion still in force (a change would have rebased and dropped it).
-                    self.acc0_current = self.step_points > 1 && !self.holding;
+                    self.acc0_current = (self.step_points > 1 || self.tolerance.is_some()) && !self.holding;
                 }
                 self.next_knot();
             }

@@ -1,4 +1,7 @@
-//! Integration of the transformation system: classical RK4 with the phase in closed form.
+//! Integration of the transformation system: classical RK4 at a fixed step, or Dormand–Prince 5(4) with an error
+//! estimate for an adaptive step ([`dormand_prince`]), both with the phase in closed form.
+
+pub mod dormand_prince;
 
 use crate::basis::{ForcingTerm, GaussianBasis};
 use crate::canonical::phase_after;
@@ -92,6 +95,7 @@ pub struct Integrator {
     cache: [(f64, Vec<f64>); 2],
     cache_next: usize,
     b: Buffers,
+    dp: dormand_prince::Stages,
 }
 
 #[derive(Debug, Clone)]
@@ -127,6 +131,7 @@ impl Integrator {
                 kx: [z(), z(), z(), z()],
                 ka: [z(), z(), z(), z()],
             },
+            dp: dormand_prince::Stages::new(dim),
         })
     }
 
