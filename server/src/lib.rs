@@ -13,6 +13,7 @@
 //! | robots' states: local scene and `dmp/<cell>/robots/<id>/state` | [`robots`] |
 //! | the Zenoh session and the subscribers that feed the scene | [`zenoh_bridge`] |
 //! | the gRPC services, one file each | [`services`] |
+//! | many streams' segments in one write on a connection | [`write_batching`] |
 
 pub mod cells;
 pub mod cli;
@@ -26,4 +27,5 @@ pub mod scene;
 pub mod services;
 pub mod state;
 pub mod store;
+pub mod write_batching;
 pub mod zenoh_bridge;

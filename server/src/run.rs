@@ -26,6 +26,7 @@ use crate::services::scene::SceneServiceImpl;
 use crate::services::server::ServerServiceImpl;
 use crate::state::AppState;
 use crate::store::Store;
+use crate::write_batching::BatchedWrites;
 use crate::zenoh_bridge::{ZenohBridge, locators, open_session};
 
 /// How long a shutdown waits for connections to drain before closing them.
@@ -133,8 +134,12 @@ pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
                 .max_encoding_message_size(max),
         )
         .add_service(ServerServiceServer::new(ServerServiceImpl::new(state.clone())));
-    // Segments are small and latency-critical: no Nagle delay on accepted connections.
-    let incoming = tonic::transport::server::TcpIncoming::from(listener).with_nodelay(Some(true));
+    // Segments are small and latency-critical: no Nagle delay on accepted connections; the server batches its
+    // own writes instead, and writes at once what cannot wait (`write_batching`).
+    let incoming = tokio_stream::StreamExt::map(
+        tonic::transport::server::TcpIncoming::from(listener).with_nodelay(Some(true)),
+        |conn| conn.map(BatchedWrites::new),
+    );
     let stop = shutdown.clone();
     let task = tokio::spawn(async move {
         // On shutdown: NOT_SERVING first, so that balancers stop sending, then drain (streams end on the same

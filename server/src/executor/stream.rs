@@ -272,6 +272,10 @@ async fn produce(
             });
             let batch = split(runner, points, seq, status, cfg.realtime.then_some(start_unix));
             let members = batch.len() as u64;
+            // A segment that supersedes points already sent cannot wait for the connection's batched write.
+            if changes_plan && first_of_wake && cfg.realtime {
+                crate::write_batching::write_now();
+            }
             // The robot first: publishing the states may wait on Zenoh (a robot's first state declares its
             // publisher).
             tokio::select! {
