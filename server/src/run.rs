@@ -57,7 +57,7 @@ impl ServerHandle {
 
     /// Streams currently open.
     pub fn open_streams(&self) -> usize {
-        self.state.config.limits.max_streams - self.state.streams.available_permits()
+        self.state.open_streams()
     }
 
     /// Stops: streams end, gRPC drains, Zenoh closes. Returns once everything is down.

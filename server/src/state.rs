@@ -47,6 +47,11 @@ impl Default for Counters {
 }
 
 impl AppState {
+    /// Streams open now.
+    pub fn open_streams(&self) -> usize {
+        self.config.limits.max_streams.saturating_sub(self.streams.available_permits())
+    }
+
     /// A stream permit, or ResourceExhausted when every one is taken.
     pub fn stream_permit(&self) -> Result<tokio::sync::OwnedSemaphorePermit, ServerError> {
         if self.shutdown.is_cancelled() {

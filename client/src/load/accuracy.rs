@@ -4,19 +4,21 @@
 //! 1e-3 of the engine's RK4 at 1 ms, past the cell's five fixed obstacles and its nine cell-mates, with the server's
 //! default avoidance for both and a new goal halfway. The cell-mates drive their own primitives (without avoiding
 //! anything, so that their motion is the same in both runs) and are seen as the server sees them: a state every
-//! refill (`stream::REFILL`), extrapolated with its velocity in between; and as in the server, no knot is placed
-//! past the end of a refill.
+//! refill (`stream::refill`, from `MIN_REFILL` with few streams to `MAX_REFILL` with many: both are checked),
+//! extrapolated with its velocity in between; and as in the server, no knot is placed past the end of a refill.
 //!
-//! Measured (three robots, `REFILL` 60 ms): the default within 6.1e-5 - 1.4e-4 for 1,400 - 1,466 evaluations of
-//! the field over the 4 s, the fixed 5 ms step within 3.7e-4 - 4.2e-4 for 3,268. A tolerance of 1e-5 gave
-//! 4.1e-4 - 4.2e-4 for about 1,100; with a 30 ms refill it came within 9.6e-4 of the bound, and a fixed 10 ms
-//! RK4 step deviates by 3.5e-3.
+//! Measured (three robots): the default within 1.8e-4 - 2.2e-4 with 30 ms refills and 6.1e-5 - 1.4e-4 with 60 ms,
+//! for 1,400 - 1,600 evaluations of the field over the 4 s; the fixed 5 ms step within 3.7e-4 - 5.0e-4 for about
+//! 3,300. A tolerance of 1e-5 came within 9.6e-4 of the bound (30 ms refills), and a fixed 10 ms RK4 step deviates
+//! by 3.5e-3.
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use dmp_proto::v1;
 use dmp_server::config::Defaults;
 use dmp_server::executor::runner::{AvoidanceSpec, Member, Runner, Work};
+use dmp_server::executor::stream::{MAX_REFILL, MIN_REFILL};
 use dmp_server::scene::RemoteRobot;
 
 use super::layout::{self, FOOTPRINT_RADIUS, OBSTACLE_RADIUS};
@@ -77,9 +79,13 @@ fn ball(r: f64) -> dmp::Shape {
 }
 
 /// The positions of robot `me` of a load cell over [`DURATION`] with RK4 at `step_points` ms, or the adaptive
-/// step of at most `step_points` ms with `tolerance`; the smallest distance from it to a cell-mate's centre, the
+/// step of at most `step_points` ms with `tolerance`, the cell-mates seen every `refill`; the smallest distance from it to a cell-mate's centre, the
 /// largest from where it would be without anything to avoid, and the integration's work.
-fn run(me: usize, (step_points, tolerance): (usize, Option<f64>)) -> (Vec<f64>, f64, f64, Work) {
+fn run(
+    me: usize,
+    (step_points, tolerance): (usize, Option<f64>),
+    refill: Duration,
+) -> (Vec<f64>, f64, f64, Work) {
     let robots = layout::robots(10, 10, 3, "acc");
     let robot = &robots[me];
     let primitive = layout::primitive(robot, TAU).unwrap();
@@ -116,7 +122,7 @@ fn run(me: usize, (step_points, tolerance): (usize, Option<f64>)) -> (Vec<f64>, 
             runner.set_goal(robot.goals[1].clone()).unwrap();
         }
         // A cell-mate's state is read once per refill of the stream (the server's cadence).
-        let refill_points = (dmp_server::executor::stream::REFILL.as_secs_f64() / DT).round() as usize;
+        let refill_points = (refill.as_secs_f64() / DT).round() as usize;
         if k % refill_points == 0 {
             let t = k as f64 * DT;
             let seen: Vec<Arc<RemoteRobot>> = mates.iter().map(|m| m.seen_at(k, t)).collect();
@@ -144,26 +150,28 @@ fn run(me: usize, (step_points, tolerance): (usize, Option<f64>)) -> (Vec<f64>, 
 #[test]
 fn a_load_robot_with_the_adaptive_step_or_a_5ms_step_stays_within_1e3_of_rk4_at_1ms() {
     let mut worst_all = [0.0f64; 2];
-    for me in [0, 3, 7] {
-        let (reference, closest, detour, _) = run(me, (1, None));
-        // The avoidance is at work: the cell-mates push the robot far off its own straight line.
-        assert!(detour > 0.1, "robot {me} hardly avoided anything ({detour} m)");
-        let mut evaluations = [0; 2];
-        for (k, step) in [ADAPTIVE, FIXED].into_iter().enumerate() {
-            let (coarse, _, _, work) = run(me, step);
-            assert_eq!(reference.len(), coarse.len());
-            let worst = reference.iter().zip(&coarse).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-            println!(
-                "robot {me}, step {step:?}: largest deviation from RK4 at 1 ms {worst:.3e}, {work:?}, closest \
-                 cell-mate {closest:.3} m, detour {detour:.3} m"
-            );
-            assert!(worst <= 1e-3, "robot {me}, {step:?}: {worst}");
-            assert!(worst > 0.0, "a coarse step is not the 1 ms rollout itself");
-            worst_all[k] = worst_all[k].max(worst);
-            evaluations[k] = work.evaluations;
+    for refill in [MIN_REFILL, MAX_REFILL] {
+        for me in [0, 3, 7] {
+            let (reference, closest, detour, _) = run(me, (1, None), refill);
+            // The avoidance is at work: the cell-mates push the robot far off its own straight line.
+            assert!(detour > 0.1, "robot {me} hardly avoided anything ({detour} m)");
+            let mut evaluations = [0; 2];
+            for (k, step) in [ADAPTIVE, FIXED].into_iter().enumerate() {
+                let (coarse, _, _, work) = run(me, step, refill);
+                assert_eq!(reference.len(), coarse.len());
+                let worst = reference.iter().zip(&coarse).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+                println!(
+                    "refill {refill:?}, robot {me}, step {step:?}: largest deviation from RK4 at 1 ms \
+                     {worst:.3e}, {work:?}, closest cell-mate {closest:.3} m, detour {detour:.3} m"
+                );
+                assert!(worst <= 1e-3, "robot {me}, {step:?}, refill {refill:?}: {worst}");
+                assert!(worst > 0.0, "a coarse step is not the 1 ms rollout itself");
+                worst_all[k] = worst_all[k].max(worst);
+                evaluations[k] = work.evaluations;
+            }
+            // What the adaptive step is for: at least twice fewer evaluations of the field than RK4 at 5 ms.
+            assert!(2 * evaluations[0] < evaluations[1], "robot {me}: {evaluations:?}");
         }
-        // What the adaptive step is for: at least twice fewer evaluations of the field than RK4 at 5 ms.
-        assert!(2 * evaluations[0] < evaluations[1], "robot {me}: {evaluations:?}");
     }
     println!("largest deviation over the robots: adaptive {:.3e}, 5 ms {:.3e}", worst_all[0], worst_all[1]);
 }

@@ -1,6 +1,6 @@
 //! The producer task of a streamed execution: one task and one bounded channel per stream (the bound is the
 //! backpressure: a slow reader holds the producer, never grows memory). Real-time pacing keeps the segments sent
-//! between `lookahead` and `lookahead + REFILL` ahead of the wall clock, waking once per refill rather than once
+//! between `lookahead` and `lookahead + refill` ahead of the wall clock, waking once per refill rather than once
 //! per segment; a scene change or a command is applied from the robot's current time by rolling back and sending a
 //! segment that supersedes the points already sent.
 
@@ -21,10 +21,25 @@ use crate::state::AppState;
 const REMOTE_MAX_AGE_S: f64 = 0.5;
 
 /// Real time: how far beyond the lookahead one wake-up computes (the producer sleeps about this long between two
-/// wake-ups). Each wake-up costs a timer, the cell-mates' states, a state published and writes to the connection
-/// whatever it computes: at 500 robots with the adaptive step, 60 ms instead of 30 took the server from 108 to 70 %
-/// of a core (BENCHMARKS.md).
-pub const REFILL: Duration = Duration::from_millis(60);
+/// wake-ups), with few streams. A longer refill means fewer wake-ups (each costs a timer, the cell-mates' states, a
+/// state published and a write to the connection) but longer ones, which a change must wait behind: at 100 robots
+/// the update-to-segment p99 was 1.5 - 1.6 ms with 30 ms and 2.2 - 2.9 ms with 60 ms; at 1,000 robots 30 ms took
+/// the server to 146 % of a core and 98 % on time, 60 ms to 118 % and 99.9998 % (BENCHMARKS.md).
+pub const MIN_REFILL: Duration = Duration::from_millis(30);
+
+/// Real time: the longest refill, with many streams (and what buffers and histories are sized for).
+pub const MAX_REFILL: Duration = Duration::from_millis(60);
+
+/// Stream wake-ups per second beyond which refills grow (from [`MIN_REFILL`] at 300 streams to [`MAX_REFILL`]
+/// at 600).
+pub const WAKE_UPS_PER_SECOND: f64 = 10_000.0;
+
+/// The refill of a wake-up while the server carries `streams` streams: wake-ups stay under
+/// [`WAKE_UPS_PER_SECOND`] as long as the refill can grow.
+pub fn refill(streams: usize) -> Duration {
+    let s = (streams as f64 / WAKE_UPS_PER_SECOND).clamp(MIN_REFILL.as_secs_f64(), MAX_REFILL.as_secs_f64());
+    Duration::from_secs_f64(s)
+}
 
 /// Real time: how long after the request the run's first point is due.
 pub const FIRST_POINT_DELAY: Duration = Duration::from_millis(20);
@@ -32,7 +47,7 @@ pub const FIRST_POINT_DELAY: Duration = Duration::from_millis(20);
 /// Real time: the most segments one wake-up computes.
 pub fn refill_segments(cfg: &StreamConfig) -> usize {
     let seg = cfg.segment_points as f64 * cfg.dt;
-    (REFILL.as_secs_f64() / seg).ceil() as usize + 1
+    (MAX_REFILL.as_secs_f64() / seg).ceil() as usize + 1
 }
 
 /// How a stream is paced and bounded.
@@ -230,10 +245,10 @@ async fn produce(
                 Control::State(_) => {}
             }
         }
-        // 3. Compute and send segments: one as fast as read; in real time, up to REFILL beyond the lookahead (each
+        // 3. Compute and send segments: one as fast as read; in real time, up to a refill beyond the lookahead (each
         //    segment goes out as soon as it is computed). The last one ends with the point at exactly max_duration.
         //    The cell-mates are read once per wake-up (above): within a refill they move along their velocities.
-        let horizon = (start.elapsed() + cfg.lookahead + REFILL).as_secs_f64();
+        let horizon = (start.elapsed() + cfg.lookahead + refill(app.open_streams())).as_secs_f64();
         if cfg.realtime {
             // This wake-up ends with the first segment that reaches the horizon: the next change applies there
             // at the earliest.
@@ -380,5 +395,29 @@ async fn publish_states(
             footprint: m.footprint_proto.clone(),
         };
         app.robots.publish(cell, state, m.footprint.clone()).await;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn refills_grow_with_the_streams_between_their_bounds() {
+        assert_eq!(refill(0), MIN_REFILL);
+        assert_eq!(refill(100), MIN_REFILL);
+        assert_eq!(refill(450), Duration::from_millis(45));
+        assert_eq!(refill(600), MAX_REFILL);
+        assert_eq!(refill(1_000), MAX_REFILL);
+        let cfg = StreamConfig {
+            dt: 1e-3,
+            segment_points: 10,
+            step_points: 1,
+            tolerance: None,
+            realtime: true,
+            lookahead: Duration::from_millis(50),
+            max_duration: 1.0,
+        };
+        assert_eq!(refill_segments(&cfg), 7, "room for the longest refill");
     }
 }

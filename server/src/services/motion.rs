@@ -170,7 +170,7 @@ impl MotionServiceImpl {
         control: Option<mpsc::Receiver<Control>>,
     ) -> Result<mpsc::Receiver<Result<Batch, Status>>, ServerError> {
         let permit = self.state.stream_permit()?;
-        // Real time: room for every segment computed in one wake-up (see `stream::REFILL`).
+        // Real time: room for every segment computed in one wake-up (see `stream::MAX_REFILL`).
         let buffer = self.state.config.limits.stream_buffer.max(1)
             + if cfg.realtime { crate::executor::stream::refill_segments(&cfg) } else { 0 };
         let (tx, rx) = mpsc::channel(buffer);

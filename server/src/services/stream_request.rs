@@ -133,7 +133,7 @@ impl StreamRequest {
 /// one segment), plus a margin.
 pub(super) fn history_len(cfg: &StreamConfig) -> usize {
     let dt = cfg.dt;
-    let refill = if cfg.realtime { crate::executor::stream::REFILL.as_secs_f64() } else { 0.0 };
+    let refill = if cfg.realtime { crate::executor::stream::MAX_REFILL.as_secs_f64() } else { 0.0 };
     let ahead = cfg.lookahead.as_secs_f64() + refill + cfg.segment_points as f64 * dt;
     ((ahead / dt).ceil() as usize + 2).max(16)
 }
