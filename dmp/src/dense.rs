@@ -77,6 +77,76 @@ pub fn interpolate(a: &Knot, b: &Knot, t: f64, x: &mut [f64], xd: &mut [f64], xd
     if a.s > 0.0 && b.s > 0.0 { a.s * (b.s / a.s).powf(th) } else { a.s + th * (b.s - a.s) }
 }
 
+/// The quintic Hermite interpolant of two knots with its coefficients computed once, for the many output points
+/// between them: the same polynomial as [`interpolate`], which computes them at every point. The knots' values
+/// are returned exactly at their times, as by [`interpolate`].
+#[derive(Debug, Clone, Default)]
+pub struct Interpolant {
+    t0: f64,
+    t1: f64,
+    inv_h: f64,
+    /// `ln(s_b / s_a)`, when both phases are positive (the phase is then log-linear).
+    log_ratio: Option<f64>,
+    /// `c1 .. c5` of each dimension (`c0` is the first knot's position).
+    c: Vec<[f64; 5]>,
+}
+
+impl Interpolant {
+    /// Computes the coefficients between `a` and `b` (in place: no allocation once the dimension is known).
+    pub fn fit(&mut self, a: &Knot, b: &Knot) {
+        let h = b.t - a.t;
+        self.t0 = a.t;
+        self.t1 = b.t;
+        self.inv_h = if h > 0.0 { 1.0 / h } else { 0.0 };
+        self.log_ratio = (a.s > 0.0 && b.s > 0.0).then(|| (b.s / a.s).ln());
+        let h2 = h * h;
+        self.c.resize(a.x.len(), [0.0; 5]);
+        for (i, c) in self.c.iter_mut().enumerate() {
+            let (xa, va, aa) = (a.x[i], a.xd[i], a.xdd[i]);
+            let c1 = h * va;
+            let c2 = 0.5 * h2 * aa;
+            let dx = b.x[i] - xa - c1 - c2;
+            let dv = h * (b.xd[i] - va) - h2 * aa;
+            let da = h2 * (b.xdd[i] - aa);
+            *c = [
+                c1,
+                c2,
+                10.0 * dx - 4.0 * dv + 0.5 * da,
+                -15.0 * dx + 7.0 * dv - da,
+                6.0 * dx - 3.0 * dv + 0.5 * da,
+            ];
+        }
+    }
+
+    /// As [`interpolate`], for the knots `a` and `b` it was fitted to.
+    pub fn eval(&self, a: &Knot, b: &Knot, t: f64, x: &mut [f64], xd: &mut [f64], xdd: &mut [f64]) -> f64 {
+        debug_assert!(a.t == self.t0 && b.t == self.t1, "fitted to other knots");
+        if t == a.t || self.inv_h == 0.0 {
+            x.copy_from_slice(&a.x);
+            xd.copy_from_slice(&a.xd);
+            xdd.copy_from_slice(&a.xdd);
+            return a.s;
+        }
+        if t == b.t {
+            x.copy_from_slice(&b.x);
+            xd.copy_from_slice(&b.xd);
+            xdd.copy_from_slice(&b.xdd);
+            return b.s;
+        }
+        let th = (t - self.t0) * self.inv_h;
+        let (inv_h, inv_h2) = (self.inv_h, self.inv_h * self.inv_h);
+        for (i, [c1, c2, c3, c4, c5]) in self.c.iter().copied().enumerate() {
+            x[i] = a.x[i] + th * (c1 + th * (c2 + th * (c3 + th * (c4 + th * c5))));
+            xd[i] = (c1 + th * (2.0 * c2 + th * (3.0 * c3 + th * (4.0 * c4 + th * 5.0 * c5)))) * inv_h;
+            xdd[i] = (2.0 * c2 + th * (6.0 * c3 + th * (12.0 * c4 + th * 20.0 * c5))) * inv_h2;
+        }
+        match self.log_ratio {
+            Some(l) => a.s * (th * l).exp(),
+            None => a.s + th * (b.s - a.s),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -110,6 +180,27 @@ mod tests {
                 assert!((got[i] - want[i]).abs() < 1e-12 * (1.0 + want[i].abs()), "t {t} i {i}");
             }
             assert!((s - (-t).exp()).abs() < 1e-14, "the phase is log-linear");
+        }
+    }
+
+    #[test]
+    fn the_fitted_interpolant_is_the_same_polynomial() {
+        let f = |t: f64| [(3.0 * t).sin(), 3.0 * (3.0 * t).cos(), -9.0 * (3.0 * t).sin()];
+        let (a, b) = (knot(0.2, f), knot(0.27, f));
+        let mut fitted = Interpolant::default();
+        fitted.fit(&a, &b);
+        for k in 0..=7 {
+            let t = if k == 7 { b.t } else { 0.2 + 0.01 * k as f64 };
+            let (want, s_want) = at(&a, &b, t);
+            let (mut x, mut v, mut acc) = ([0.0], [0.0], [0.0]);
+            let s = fitted.eval(&a, &b, t, &mut x, &mut v, &mut acc);
+            for (g, w) in [x[0], v[0], acc[0]].iter().zip(want) {
+                assert!((g - w).abs() <= 1e-13 * (1.0 + w.abs()), "t {t}: {g} vs {w}");
+            }
+            assert!((s - s_want).abs() <= 1e-15, "t {t}: phase {s} vs {s_want}");
+            if k == 0 || k == 7 {
+                assert_eq!(([x[0], v[0], acc[0]], s), (want, s_want), "a knot's own values");
+            }
         }
     }
 

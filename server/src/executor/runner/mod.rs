@@ -16,7 +16,7 @@ mod hold;
 
 use std::collections::VecDeque;
 
-use dmp::dense::{Knot, interpolate};
+use dmp::dense::{Interpolant, Knot, interpolate};
 use dmp::field::{Contact, RepulsiveField};
 use dmp::stall::{StallConfig, StallDetector};
 use dmp::{Avoidance, Integrator, Motion, Obstacle, Perturbation, Primitive, State};
@@ -131,6 +131,8 @@ pub struct Runner {
     /// `knot0.xdd` is the acceleration at `knot0` under the current field and motion (it was computed as the
     /// previous step's end knot and nothing changed since): the next RK4 step reuses it as its first stage.
     acc0_current: bool,
+    /// The interpolant of `knot0` and `knot1`, fitted when `knot1` is computed.
+    interpolant: Interpolant,
     /// Scratch acceleration of an interpolated point.
     xdd: Vec<f64>,
     /// Where RK4 computes the next knot.
@@ -205,6 +207,7 @@ impl Runner {
             knot1: None,
             spare: None,
             acc0_current: false,
+            interpolant: Interpolant::default(),
             xdd: vec![0.0; dim],
             scratch: state,
             out_t: 0.0,
@@ -423,10 +426,12 @@ impl Runner {
                     self.acc0_current = (self.step_points > 1 || self.tolerance.is_some()) && !self.holding;
                 }
                 self.next_knot();
+                let k1 = self.knot1.as_ref().expect("computed above");
+                self.interpolant.fit(&self.knot0, k1);
             }
             let k1 = self.knot1.as_ref().expect("computed above");
             let range = k * d..(k + 1) * d;
-            let s = interpolate(
+            let s = self.interpolant.eval(
                 &self.knot0,
                 k1,
                 t,
