@@ -154,4 +154,71 @@ mod tests {
             }
         }
     }
+
+    /// The field (which takes this kernel for superquadrics in 3-D) gives the sum of the general path's terms,
+    /// each at the obstacle's centre at time `t` and with the relative velocity `v - tau v_obstacle`.
+    #[test]
+    fn the_field_sums_the_general_terms_of_moving_obstacles() {
+        use crate::field::{RepulsiveField, Scene};
+        use crate::integrate::Perturbation;
+        use crate::{Avoidance, Method};
+        let params = DynamicVolumetric { lambda: 10.0, beta: 2.0, eta: 0.5 };
+        let a = 0.4f64;
+        let rot = vec![vec![a.cos(), -a.sin(), 0.0], vec![a.sin(), a.cos(), 0.0], vec![0.0, 0.0, 1.0]];
+        let obstacles = vec![
+            Obstacle::new(
+                "box",
+                Shape::Superquadric(Superquadric::new(vec![0.3, 0.2, 0.4], vec![2.0, 2.0, 1.0]).unwrap()),
+                vec![0.5, 0.1, 0.0],
+                Some(rot),
+                Some(vec![0.2, -0.1, 0.05]),
+            )
+            .unwrap(),
+            Obstacle::new(
+                "ball",
+                Shape::Superquadric(Superquadric::ellipsoid(vec![0.1; 3]).unwrap()),
+                vec![-0.2, 0.6, 0.1],
+                None,
+                Some(vec![-0.3, 0.0, 0.1]),
+            )
+            .unwrap(),
+            Obstacle::new(
+                "still",
+                Shape::Superquadric(Superquadric::ellipsoid(vec![0.2, 0.1, 0.3]).unwrap()),
+                vec![0.9, 0.9, 0.9],
+                None,
+                None,
+            )
+            .unwrap(),
+        ];
+        let scene =
+            Scene::with_obstacles(obstacles.clone(), Avoidance::new(Method::DynamicVolumetric(params)), 0);
+        let mut field = RepulsiveField::new(scene, 3).unwrap();
+        let tau = 1.5;
+        let mut active = 0;
+        for k in 0..30 {
+            let t = 0.1 * k as f64;
+            let x: Vec<f64> = (0..3).map(|i| ((k * 3 + i) as f64 * 0.61).sin()).collect();
+            let v: Vec<f64> = (0..3).map(|i| ((k * 7 + i) as f64 * 0.93).cos()).collect();
+            let mut got = vec![0.0; 3];
+            field.add(t, &x, &v, tau, &mut got);
+            let mut want = vec![0.0; 3];
+            for o in &obstacles {
+                let mut c = vec![0.0; 3];
+                o.center_at(t, &mut c);
+                let moved = o.with_center(c);
+                let u: Vec<f64> = (0..3).map(|i| v[i] - tau * o.velocity()[i]).collect();
+                for (w, f) in want.iter_mut().zip(general(&moved, &x, &u, &params)) {
+                    *w += f;
+                }
+            }
+            let norm = want.iter().map(|w| w * w).sum::<f64>().sqrt();
+            assert!(norm < crate::field::DEFAULT_MAX_PERTURBATION, "the cap would change the sum");
+            active += usize::from(norm > 0.0);
+            for (g, w) in got.iter().zip(&want) {
+                assert!((g - w).abs() <= 1e-10 * (1.0 + w.abs()), "t {t}: {got:?} vs {want:?}");
+            }
+        }
+        assert!(active >= 10, "only {active} points where a term is active");
+    }
 }
