@@ -9,13 +9,16 @@
 //! - a connection that has not written for [`HOLD`] writes at once (an idle client's answer is never held);
 //! - a real-time segment is sent far ahead of its points (the stream's lookahead), so holding it costs nothing;
 //! - what cannot wait (a segment that supersedes points already sent, after a scene change or a command) calls
-//!   [`write_now`] before it is sent: every connection writes at its next flush;
+//!   [`Urgency::write_now`] on its connection's [`Urgency`] (which a request finds in its extensions, in
+//!   [`BatchedConnectInfo`]) before it is sent: for the next [`HOLD`] that connection writes at every flush, long
+//!   enough for the segment to reach it through the stream's channel and HTTP/2, whatever flushes come first;
 //! - more than [`HIGH_WATER`] bytes held are written at once, and at most [`MAX_HELD`] are held (then the writer
 //!   waits for the socket, as it would without the batching).
 
 use std::io::{self, IoSlice};
 use std::pin::Pin;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, OnceLock};
 use std::task::{Context, Poll, ready};
 use std::time::Duration;
 
@@ -31,12 +34,37 @@ pub const HIGH_WATER: usize = 64 * 1024;
 /// Most bytes held: a write beyond waits for the socket.
 pub const MAX_HELD: usize = 256 * 1024;
 
-/// Bumped by [`write_now`]: a connection that has not seen the current value writes at its next flush.
-static URGENT: AtomicU64 = AtomicU64::new(0);
+/// A connection's urgency: while it lasts, every flush of the connection writes at once.
+#[derive(Debug, Clone, Default)]
+pub struct Urgency(Arc<AtomicU64>);
 
-/// Something that cannot wait is about to be sent: every connection writes what it holds at its next flush.
-pub fn write_now() {
-    URGENT.fetch_add(1, Ordering::Release);
+impl Urgency {
+    /// Something that cannot wait is about to be sent on the connection: for the next [`HOLD`] its flushes write
+    /// at once.
+    pub fn write_now(&self) {
+        let until = nanos_now().saturating_add(HOLD.as_nanos() as u64);
+        self.0.fetch_max(until, Ordering::AcqRel);
+    }
+
+    fn active(&self) -> bool {
+        nanos_now() < self.0.load(Ordering::Acquire)
+    }
+}
+
+/// Nanoseconds since the first call (a monotonic clock of this process).
+fn nanos_now() -> u64 {
+    static EPOCH: OnceLock<std::time::Instant> = OnceLock::new();
+    EPOCH.get_or_init(std::time::Instant::now).elapsed().as_nanos() as u64
+}
+
+/// What a request on a [`BatchedWrites`] connection knows of it (tonic puts it in the request's extensions): the
+/// wrapped connection's own information and the connection's [`Urgency`].
+#[derive(Debug, Clone)]
+pub struct BatchedConnectInfo<C> {
+    /// The wrapped connection's information.
+    pub inner: C,
+    /// The connection's urgency.
+    pub urgency: Urgency,
 }
 
 /// A connection whose flushes are batched (see the module).
@@ -48,36 +76,39 @@ pub struct BatchedWrites<T> {
     written: usize,
     /// When the connection last wrote to the socket.
     last_write: Option<Instant>,
-    /// The [`URGENT`] value the last write saw.
-    urgent_seen: u64,
     /// Wakes the connection to write what it holds.
     timer: Option<Pin<Box<Sleep>>>,
-    /// Where [`write_now`] is counted.
-    urgent: &'static AtomicU64,
+    urgency: Urgency,
+    /// Longest a flushed write is held ([`HOLD`]).
+    hold: Duration,
 }
 
 impl<T> BatchedWrites<T> {
     /// Wraps a connection.
     pub fn new(io: T) -> Self {
-        Self::with_urgency(io, &URGENT)
+        Self::with_hold(io, HOLD)
     }
 
-    /// Wraps a connection that writes at once when `urgent` changes (instead of on [`write_now`]).
-    fn with_urgency(io: T, urgent: &'static AtomicU64) -> Self {
+    fn with_hold(io: T, hold: Duration) -> Self {
         Self {
             io,
             held: Vec::new(),
             written: 0,
             last_write: None,
-            urgent_seen: urgent.load(Ordering::Acquire),
             timer: None,
-            urgent,
+            urgency: Urgency::default(),
+            hold,
         }
     }
 
     /// The wrapped connection.
     pub fn get_ref(&self) -> &T {
         &self.io
+    }
+
+    /// The connection's urgency.
+    pub fn urgency(&self) -> &Urgency {
+        &self.urgency
     }
 }
 
@@ -92,6 +123,10 @@ impl<T: AsyncWrite + Unpin> BatchedWrites<T> {
             self.written += n;
         }
         self.held.clear();
+        if self.held.capacity() > HIGH_WATER {
+            // After a burst: do not keep its buffer for the connection's life.
+            self.held.shrink_to(HIGH_WATER);
+        }
         self.written = 0;
         self.last_write = Some(Instant::now());
         self.timer = None;
@@ -100,16 +135,12 @@ impl<T: AsyncWrite + Unpin> BatchedWrites<T> {
 
     /// Whether a flush must write now.
     fn due(&mut self, cx: &mut Context<'_>) -> bool {
-        let urgent = self.urgent.load(Ordering::Acquire);
-        if urgent != self.urgent_seen {
-            self.urgent_seen = urgent;
-            return true;
-        }
-        if self.held.len() - self.written >= HIGH_WATER {
+        // A drain the socket cut short goes on; so do urgent writes and large ones.
+        if self.written > 0 || self.urgency.active() || self.held.len() >= HIGH_WATER {
             return true;
         }
         let Some(last) = self.last_write else { return true };
-        let at = last + HOLD;
+        let at = last + self.hold;
         if Instant::now() >= at {
             return true;
         }
@@ -178,10 +209,10 @@ impl<T: AsyncWrite + Unpin> AsyncWrite for BatchedWrites<T> {
 }
 
 impl<T: tonic::transport::server::Connected> tonic::transport::server::Connected for BatchedWrites<T> {
-    type ConnectInfo = T::ConnectInfo;
+    type ConnectInfo = BatchedConnectInfo<T::ConnectInfo>;
 
     fn connect_info(&self) -> Self::ConnectInfo {
-        self.io.connect_info()
+        BatchedConnectInfo { inner: self.io.connect_info(), urgency: self.urgency.clone() }
     }
 }
 
@@ -190,19 +221,20 @@ mod tests {
     use super::*;
     use tokio::io::{AsyncReadExt, AsyncWriteExt};
 
-    /// A connection with its own urgency counter (other tests' urgent writes do not reach it) and its reader.
-    async fn pair(
-        urgent: &'static AtomicU64,
-    ) -> (BatchedWrites<tokio::net::TcpStream>, tokio::net::TcpStream) {
+    /// A long hold, so that a slow machine does not write before it by accident.
+    const TEST_HOLD: Duration = Duration::from_millis(400);
+
+    /// A connection holding for [`TEST_HOLD`], and its reader.
+    async fn pair() -> (BatchedWrites<tokio::net::TcpStream>, tokio::net::TcpStream) {
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
         let addr = listener.local_addr().unwrap();
         let (a, b) = tokio::join!(tokio::net::TcpStream::connect(addr), listener.accept());
-        (BatchedWrites::with_urgency(a.unwrap(), urgent), b.unwrap().0)
+        (BatchedWrites::with_hold(a.unwrap(), TEST_HOLD), b.unwrap().0)
     }
 
-    async fn read_now(r: &mut tokio::net::TcpStream) -> Vec<u8> {
+    async fn read_within(r: &mut tokio::net::TcpStream, wait: Duration) -> Vec<u8> {
         let mut buf = vec![0u8; 1 << 20];
-        match tokio::time::timeout(Duration::from_millis(200), r.read(&mut buf)).await {
+        match tokio::time::timeout(wait, r.read(&mut buf)).await {
             Ok(Ok(n)) => buf[..n].to_vec(),
             _ => Vec::new(),
         }
@@ -210,34 +242,32 @@ mod tests {
 
     #[tokio::test]
     async fn an_idle_connection_writes_at_once_a_busy_one_holds_until_its_timer_or_an_urgent_write() {
-        static URGENT_HERE: AtomicU64 = AtomicU64::new(0);
-        let (mut w, mut r) = pair(&URGENT_HERE).await;
+        let (mut w, mut r) = pair().await;
+        let long = Duration::from_secs(5);
         // Idle: written at the first flush.
         w.write_all(b"first").await.unwrap();
         w.flush().await.unwrap();
-        assert_eq!(read_now(&mut r).await, b"first");
-        // Just written: held, then written by the timer (the flush future is polled by the connection's task
-        // when the timer wakes it; here, by flushing again once the hold has passed).
+        assert_eq!(read_within(&mut r, long).await, b"first");
+        // Just written: held (nothing arrives for a while), then written by a flush once the hold has passed.
         w.write_all(b"second").await.unwrap();
         w.flush().await.unwrap();
-        let mut buf = [0u8; 64];
-        let early = tokio::time::timeout(Duration::from_micros(500), r.read(&mut buf)).await;
-        assert!(early.is_err(), "written before the hold: {early:?}");
-        tokio::time::sleep(HOLD).await;
+        assert!(read_within(&mut r, TEST_HOLD / 8).await.is_empty(), "written before the hold");
+        tokio::time::sleep(TEST_HOLD).await;
         w.flush().await.unwrap();
-        assert_eq!(read_now(&mut r).await, b"second");
-        // Urgent: written at the next flush, whatever the hold.
+        assert_eq!(read_within(&mut r, long).await, b"second");
+        // Urgent: written at the next flush, whatever the hold, and so is the next one within the window.
         w.write_all(b"third").await.unwrap();
-        URGENT_HERE.fetch_add(1, Ordering::Release);
+        let urgency = w.urgency().clone();
+        urgency.write_now();
         w.flush().await.unwrap();
-        assert_eq!(read_now(&mut r).await, b"third");
+        assert_eq!(read_within(&mut r, long).await, b"third");
         // A large write goes out at once; shutting down writes what is held.
         let big = vec![7u8; HIGH_WATER + 1];
         w.write_all(&big).await.unwrap();
         w.flush().await.unwrap();
         let mut got = Vec::new();
         while got.len() < big.len() {
-            let chunk = read_now(&mut r).await;
+            let chunk = read_within(&mut r, long).await;
             assert!(!chunk.is_empty(), "only {} of {} bytes", got.len(), big.len());
             got.extend(chunk);
         }
@@ -251,11 +281,10 @@ mod tests {
 
     #[tokio::test]
     async fn the_timer_wakes_a_task_whose_flush_held_data() {
-        static URGENT_HERE: AtomicU64 = AtomicU64::new(0);
-        let (mut w, mut r) = pair(&URGENT_HERE).await;
+        let (mut w, mut r) = pair().await;
         w.write_all(b"a").await.unwrap();
         w.flush().await.unwrap();
-        assert_eq!(read_now(&mut r).await, b"a");
+        assert_eq!(read_within(&mut r, Duration::from_secs(5)).await, b"a");
         // A task that flushes on every wake-up, as HTTP/2's connection task does, and otherwise waits.
         w.write_all(b"held").await.unwrap();
         let writer = tokio::spawn(async move {
@@ -267,8 +296,30 @@ mod tests {
             })
             .await
         });
-        let got = tokio::time::timeout(Duration::from_secs(2), writer).await.expect("woken").unwrap();
+        let got = tokio::time::timeout(Duration::from_secs(5), writer).await.expect("woken").unwrap();
         assert!(got >= 2, "held at the first flush, written when the timer woke the task ({got} polls)");
-        assert_eq!(read_now(&mut r).await, b"held");
+        assert_eq!(read_within(&mut r, Duration::from_secs(5)).await, b"held");
+    }
+
+    #[tokio::test]
+    async fn a_request_finds_its_connections_urgency() {
+        use tonic::transport::server::Connected;
+        let (w, _r) = pair().await;
+        let info = w.connect_info();
+        assert!(info.inner.remote_addr().is_some());
+        info.urgency.write_now();
+        assert!(w.urgency().active(), "the request's urgency is the connection's");
+    }
+
+    #[test]
+    fn an_urgency_lasts_one_hold() {
+        let u = Urgency::default();
+        assert!(!u.active());
+        u.write_now();
+        assert!(u.active());
+        let clone = u.clone();
+        assert!(clone.active(), "shared by the connection and its requests");
+        std::thread::sleep(HOLD + Duration::from_millis(1));
+        assert!(!u.active(), "over after one hold");
     }
 }

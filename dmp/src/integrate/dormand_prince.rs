@@ -102,12 +102,10 @@ impl Integrator {
             }
             let scale_x = tol * (1.0 + state.x[k].abs().max(st.xs[k].abs()));
             let scale_v = tol * (1.0 + state.xd[k].abs().max(st.xds[k].abs()));
-            let e = (h * ex).abs() / scale_x;
-            let e = if e.is_nan() { f64::INFINITY } else { e };
-            err = err.max(e).max((h * ev).abs() / scale_v);
-            if !st.xs[k].is_finite() || !st.xds[k].is_finite() {
-                err = f64::INFINITY;
-            }
+            // A NaN anywhere (which `max` would drop) is an infinite error: the step is retried shorter.
+            let (e_x, e_v) = ((h * ex).abs() / scale_x, (h * ev).abs() / scale_v);
+            let finite = [e_x, e_v, st.xs[k], st.xds[k], st.ka[6][k]].iter().all(|v| v.is_finite());
+            err = if finite { err.max(e_x).max(e_v) } else { f64::INFINITY };
         }
         acc_before[..d].copy_from_slice(&st.ka[0]);
         acc_after[..d].copy_from_slice(&st.ka[6]);

@@ -16,6 +16,7 @@ use super::runner::{Outcome, Runner};
 use crate::error::ServerError;
 use crate::scene::{RemoteRobot, SceneState, now_unix_s};
 use crate::state::AppState;
+use crate::write_batching::Urgency;
 
 /// Robot states older than this are ignored.
 const REMOTE_MAX_AGE_S: f64 = 0.5;
@@ -67,6 +68,8 @@ pub struct StreamConfig {
     pub lookahead: Duration,
     /// The run ends at this time (seconds of run time).
     pub max_duration: f64,
+    /// The connection's urgency (a superseding segment is written at once), when it batches its writes.
+    pub urgency: Option<Urgency>,
 }
 
 /// A command of a session.
@@ -288,8 +291,12 @@ async fn produce(
             let batch = split(runner, points, seq, status, cfg.realtime.then_some(start_unix));
             let members = batch.len() as u64;
             // A segment that supersedes points already sent cannot wait for the connection's batched write.
-            if changes_plan && first_of_wake && cfg.realtime {
-                crate::write_batching::write_now();
+            if changes_plan
+                && first_of_wake
+                && cfg.realtime
+                && let Some(urgency) = &cfg.urgency
+            {
+                urgency.write_now();
             }
             // The robot first: publishing the states may wait on Zenoh (a robot's first state declares its
             // publisher).
@@ -417,6 +424,7 @@ mod tests {
             realtime: true,
             lookahead: Duration::from_millis(50),
             max_duration: 1.0,
+            urgency: None,
         };
         assert_eq!(refill_segments(&cfg), 7, "room for the longest refill");
     }

@@ -10,6 +10,7 @@ use dmp_proto::v1::motion_service_server::MotionService;
 use tokio::sync::mpsc;
 use tokio_stream::wrappers::ReceiverStream;
 use tokio_stream::{Stream, StreamExt};
+use tonic::transport::server::TcpConnectInfo;
 use tonic::{Request, Response, Status, Streaming};
 use tracing::info;
 
@@ -21,6 +22,7 @@ use crate::executor::runner::{AvoidanceSpec, Member, Runner};
 use crate::executor::stream::{Batch, Control, StreamConfig, run_stream};
 use crate::scene::{SceneState, now_unix_s};
 use crate::state::AppState;
+use crate::write_batching::{BatchedConnectInfo, Urgency};
 
 use super::stream_request::{DEFAULT_DT, StreamRequest, history_len};
 
@@ -254,9 +256,11 @@ impl MotionService for MotionServiceImpl {
         &self,
         request: Request<v1::ExecuteRequest>,
     ) -> Result<Response<Self::ExecuteStream>, Status> {
+        let urgency = urgency_of(&request);
         let req = request.into_inner();
         let r = self.resolve(req.motion.as_ref(), "motion").await?;
-        let cfg = StreamRequest::of(&req).config(r.motion.tau, &self.state.config)?;
+        let mut cfg = StreamRequest::of(&req).config(r.motion.tau, &self.state.config)?;
+        cfg.urgency = urgency;
         info!(robot = %r.robot_id, cell = r.cell.cell(), realtime = cfg.realtime, "execute");
         self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
         let cell = r.cell.clone();
@@ -271,6 +275,7 @@ impl MotionService for MotionServiceImpl {
         request: Request<Streaming<v1::SessionRequest>>,
     ) -> Result<Response<Self::SessionStream>, Status> {
         use v1::session_request::Message as M;
+        let urgency = urgency_of(&request);
         let mut inbound = request.into_inner();
         let first = tokio::time::timeout(Duration::from_secs(10), inbound.message())
             .await
@@ -281,9 +286,10 @@ impl MotionService for MotionServiceImpl {
             );
         };
         let r = self.resolve(req.motion.as_ref(), "start.motion").await?;
-        let cfg = StreamRequest::of(&req)
+        let mut cfg = StreamRequest::of(&req)
             .config(r.motion.tau, &self.state.config)
             .map_err(|e| e.within("start"))?;
+        cfg.urgency = urgency;
         let robot_id = r.robot_id.clone();
         let dim = r.primitive.dim;
         self.check_message_size("start.segment_s", cfg.segment_points * dim)?;
@@ -336,6 +342,7 @@ impl MotionService for MotionServiceImpl {
         &self,
         request: Request<v1::ExecuteGroupRequest>,
     ) -> Result<Response<Self::ExecuteGroupStream>, Status> {
+        let urgency = urgency_of(&request);
         let req = request.into_inner();
         if req.members.len() < 2 {
             return Err(ServerError::invalid("members", "a group needs at least two members").into());
@@ -392,7 +399,8 @@ impl MotionService for MotionServiceImpl {
         if !(tau.is_finite() && tau > 0.0) {
             return Err(ServerError::invalid("tau", "must be a finite number greater than zero").into());
         }
-        let cfg = StreamRequest::of_group(&req).config(tau, &self.state.config)?;
+        let mut cfg = StreamRequest::of_group(&req).config(tau, &self.state.config)?;
+        cfg.urgency = urgency;
         let cell = first.cell.clone();
         // One DMP: the members' primitives side by side (the paper's 6-D youBot DMP).
         let mut primitive = first.primitive.clone();
@@ -465,6 +473,11 @@ struct PlanPoints {
     x: Vec<f64>,
     xd: Vec<f64>,
     xdd: Vec<f64>,
+}
+
+/// The urgency of the connection a request came on, when it batches its writes (`write_batching`).
+fn urgency_of<T>(request: &Request<T>) -> Option<Urgency> {
+    request.extensions().get::<BatchedConnectInfo<TcpConnectInfo>>().map(|c| c.urgency.clone())
 }
 
 /// The runner with the adaptive step, when the stream's request set a tolerance.

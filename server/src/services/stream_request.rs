@@ -125,6 +125,7 @@ impl StreamRequest {
             realtime,
             lookahead: Duration::from_secs_f64(lookahead_s),
             max_duration,
+            urgency: None,
         })
     }
 }
