@@ -224,7 +224,10 @@ async fn a_goal_change_mid_session_converges_with_continuous_motion() {
         .unwrap();
     let mut motion = spec("psm1", "reach");
     motion.ignore_scene = true;
-    let start = v1::ExecuteRequest { motion: Some(motion), max_duration_s: 4.0, ..Default::default() };
+    // Slow at first (tau 20 s): as fast as read, the server computes ahead as far as the buffers and HTTP/2's
+    // window let it, and the run must not reach its first goal before the change arrives.
+    motion.tau = 20.0;
+    let start = v1::ExecuteRequest { motion: Some(motion), max_duration_s: 30.0, ..Default::default() };
     let mut session = within("session", client.session(start)).await.unwrap();
     let mut segments = Vec::new();
     for _ in 0..20 {
@@ -232,6 +235,7 @@ async fn a_goal_change_mid_session_converges_with_continuous_motion() {
     }
     let new_goal = vec![0.05, 0.08, -0.02];
     within("set goal", session.set_goal(new_goal.clone())).await.unwrap();
+    within("set tau", session.set_tau(1.0)).await.unwrap();
     while let Some(s) = within("segment", session.next_segment()).await {
         segments.push(s.unwrap());
     }
