@@ -24,8 +24,9 @@ const REMOTE_MAX_AGE_S: f64 = 0.5;
 /// Real time: how far beyond the lookahead one wake-up computes (the producer sleeps about this long between two
 /// wake-ups), with few streams. A longer refill means fewer wake-ups (each costs a timer, the cell-mates' states, a
 /// state published and a write to the connection) but longer ones, which a change must wait behind: at 100 robots
-/// the update-to-segment p99 was 1.5 - 1.6 ms with 30 ms and 2.2 - 2.9 ms with 60 ms; at 1,000 robots 30 ms took
-/// the server to 146 % of a core and 98 % on time, 60 ms to 118 % and 99.9998 % (BENCHMARKS.md).
+/// the update-to-segment p99 was 1.47 - 2.67 ms (five 30 s runs) with 30 ms and 2.18 - 2.90 ms (three) with 60 ms;
+/// at 1,000 robots 30 ms took the server to 146 % of a core and 98 % on time, 60 ms to 118 % and 99.9998 %
+/// (BENCHMARKS.md).
 pub const MIN_REFILL: Duration = Duration::from_millis(30);
 
 /// Real time: the longest refill, with many streams (and what buffers and histories are sized for).
