@@ -101,11 +101,6 @@ impl<T> BatchedWrites<T> {
         }
     }
 
-    /// The wrapped connection.
-    pub fn get_ref(&self) -> &T {
-        &self.io
-    }
-
     /// The connection's urgency.
     pub fn urgency(&self) -> &Urgency {
         &self.urgency

@@ -25,8 +25,8 @@ pub const STREAMS_PER_CONNECTION: usize = 125;
 /// RK4 step is at most one segment).
 pub const DEFAULT_INTEGRATION_STEP_MS: f64 = 30.0;
 /// The local error tolerance of the server's adaptive step the load asks for by default. A load robot stays
-/// within 1.4e-4 of the engine's RK4 at 1 ms with it, for 2.3 times fewer evaluations of the field than a fixed
-/// 5 ms RK4 step (`accuracy.rs`; 1e-5 came within 9.6e-4 of the bound).
+/// within 2.2e-4 of the engine's RK4 at 1 ms with it (at either refill cadence), for 2.3 times fewer evaluations
+/// of the field than a fixed 5 ms RK4 step (`accuracy.rs`; with 1e-5 it deviated by up to 9.6e-4).
 pub const DEFAULT_INTEGRATION_TOLERANCE: f64 = 3e-6;
 
 /// `dmpctl load`: the server is `--server` (default http://127.0.0.1:50051), its Zenoh endpoint `--zenoh-connect`

@@ -78,6 +78,7 @@ impl Integrator {
         } else {
             self.acceleration(motion, perturbation, t0, s0, &state.x, &state.xd, &mut st.ka[0]);
         }
+        let mut s_end = s0;
         for i in 1..7 {
             for k in 0..d {
                 let (mut x, mut v) = (state.x[k], state.xd[k]);
@@ -91,6 +92,7 @@ impl Integrator {
             st.kx[i].copy_from_slice(&st.xds);
             let s = phase_after(s0, self.alpha, motion.tau, C[i] * h);
             self.acceleration(motion, perturbation, t0 + C[i] * h, s, &st.xs, &st.xds, &mut st.ka[i]);
+            s_end = s;
         }
         // The last stage's state is the fifth-order solution.
         let mut err: f64 = 0.0;
@@ -112,7 +114,8 @@ impl Integrator {
         state.x.copy_from_slice(&st.xs);
         state.xd.copy_from_slice(&st.xds);
         state.t = t0 + h;
-        state.s = phase_after(s0, self.alpha, motion.tau, h);
+        // The last stage is at the step's end (c = 1).
+        state.s = s_end;
         self.dp = st;
         err
     }

@@ -29,29 +29,28 @@ pub(super) struct StreamRequest {
     pub(super) integration_tolerance: f64,
 }
 
+/// The shared fields of an ExecuteRequest or an ExecuteGroupRequest (two messages with the same field names).
+macro_rules! stream_fields {
+    ($r:expr) => {
+        StreamRequest {
+            dt: $r.dt,
+            segment_s: $r.segment_s,
+            pacing: $r.pacing,
+            lookahead_s: $r.lookahead_s,
+            max_duration_s: $r.max_duration_s,
+            integration_step_s: $r.integration_step_s,
+            integration_tolerance: $r.integration_tolerance,
+        }
+    };
+}
+
 impl StreamRequest {
     pub(super) fn of(r: &v1::ExecuteRequest) -> Self {
-        Self {
-            dt: r.dt,
-            segment_s: r.segment_s,
-            pacing: r.pacing,
-            lookahead_s: r.lookahead_s,
-            max_duration_s: r.max_duration_s,
-            integration_step_s: r.integration_step_s,
-            integration_tolerance: r.integration_tolerance,
-        }
+        stream_fields!(r)
     }
 
     pub(super) fn of_group(r: &v1::ExecuteGroupRequest) -> Self {
-        Self {
-            dt: r.dt,
-            segment_s: r.segment_s,
-            pacing: r.pacing,
-            lookahead_s: r.lookahead_s,
-            max_duration_s: r.max_duration_s,
-            integration_step_s: r.integration_step_s,
-            integration_tolerance: r.integration_tolerance,
-        }
+        stream_fields!(r)
     }
 
     /// Fills in the defaults and checks every field (the error names it): the stream's configuration for a motion
