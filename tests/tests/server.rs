@@ -554,6 +554,9 @@ async fn a_smoke_load_streams_twenty_robots_in_two_cells() {
     assert!(report.segments as f64 > 0.8 * expected / 10.0, "{} segments", report.segments);
     assert!(report.late_segments <= report.segments);
     assert_eq!(report.lateness_ms.count, report.segments);
+    // Every late segment is in the series, by the second it arrived in (the stagger, the run and its end).
+    assert_eq!(report.late_segments_per_second.iter().sum::<u64>(), report.late_segments);
+    assert_eq!(report.late_segments_per_second.len(), (report.stagger_s + args.duration).ceil() as usize + 1);
     assert!(report.scene_updates_sent > 0);
     assert!(report.scene_update_latency_ms.count > 0, "no scene update reached a robot");
     assert!(

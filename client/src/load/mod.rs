@@ -35,6 +35,7 @@ mod accuracy;
 pub mod args;
 pub mod layout;
 pub mod monitor;
+pub mod per_second;
 pub mod report;
 pub mod robot;
 pub mod scene;
@@ -155,7 +156,8 @@ pub async fn run(args: &LoadArgs, server: &str, zenoh_connect: &[String]) -> Res
     let end = begin + Duration::from_secs_f64(a.duration);
     let end_unix = unix_of(end);
     let errors = Arc::new(Errors::default());
-    let shared = Arc::new(Shared::default());
+    let seconds = (p.stagger_s + a.duration).ceil() as usize + 1;
+    let shared = Arc::new(Shared::new(unix_of(begin), seconds));
     let probes: Vec<Arc<CellProbe>> = (0..p.cells).map(|_| Arc::new(CellProbe::default())).collect();
 
     let mut tasks = JoinSet::new();
@@ -280,6 +282,7 @@ pub async fn run(args: &LoadArgs, server: &str, zenoh_connect: &[String]) -> Res
         lateness_definition: LATENESS_DEFINITION,
         lateness_ms: Percentiles::clamped(&shared.lateness),
         superseding_lateness_ms: Percentiles::clamped(&shared.superseding_lateness),
+        late_segments_per_second: shared.late_per_second.counts(),
         arrival_minus_due_ms: SignedPercentiles::of(&shared.lateness),
         scene_updates_sent: updated.sent,
         scene_updates_unanswered: updated.unanswered,

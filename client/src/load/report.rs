@@ -79,6 +79,9 @@ pub struct LoadReport {
     pub lateness_ms: Percentiles,
     /// Lateness of the superseding segments, clamped at 0.
     pub superseding_lateness_ms: Percentiles,
+    /// Late segments by the second they arrived in, from the first robot's start (the last second also counts
+    /// the stops).
+    pub late_segments_per_second: Vec<u64>,
     /// Arrival minus due time of the segments, signed.
     pub arrival_minus_due_ms: SignedPercentiles,
     /// Scene updates put over Zenoh.

@@ -23,6 +23,7 @@ use tokio::time::{Instant, MissedTickBehavior};
 use tokio_stream::StreamExt;
 
 use super::layout::RobotPlan;
+use super::per_second::PerSecond;
 use super::scene::CellProbe;
 use super::segment_view::SegmentView;
 use super::stats::{Histogram, SignedHistogram};
@@ -185,14 +186,18 @@ pub struct Shared {
     pub superseding_lateness: SignedHistogram,
     /// Scene update to the first segment that accounts for it.
     pub scene_latency: Histogram,
+    /// Late segments by the second of their arrival.
+    pub late_per_second: PerSecond,
 }
 
-impl Default for Shared {
-    fn default() -> Self {
+impl Shared {
+    /// Histograms, and `seconds` seconds of late segments from `origin_unix_s`.
+    pub fn new(origin_unix_s: f64, seconds: usize) -> Self {
         Self {
             lateness: SignedHistogram::new(),
             superseding_lateness: SignedHistogram::new(),
             scene_latency: Histogram::new(),
+            late_per_second: PerSecond::new((origin_unix_s.max(0.0) * 1e9) as u64, seconds),
         }
     }
 }
@@ -305,6 +310,7 @@ async fn stream(
                         if facts.lateness_ns > 0 {
                             out.late_segments += 1;
                             out.late_first_segment |= seg.sequence == 0;
+                            shared.late_per_second.record(arrival_ns);
                         }
                         shared.lateness.record(facts.lateness_ns);
                         if facts.superseding {
