@@ -12,9 +12,8 @@
 
 mod fields;
 mod grid;
+mod history;
 mod hold;
-
-use std::collections::VecDeque;
 
 use dmp::dense::{Interpolant, Knot, interpolate};
 use dmp::field::{Contact, RepulsiveField};
@@ -24,6 +23,7 @@ use dmp_proto::v1;
 
 use self::fields::{agents, build_field, build_remote};
 pub use self::grid::Work;
+use self::history::History;
 use crate::error::ServerError;
 
 /// Distance to the goal and speed under which a robot has arrived.
@@ -155,8 +155,10 @@ pub struct Runner {
     remote: RepulsiveField,
     scene_version: u64,
     /// The recent output points (their states), for rollbacks.
-    history: VecDeque<State>,
-    history_len: usize,
+    history: History,
+    /// The times and phases of the points of an `advance`, for the history.
+    seg_t: Vec<f64>,
+    seg_s: Vec<f64>,
     holding: bool,
     stall: Vec<StallDetector>,
     contacts: Vec<Contact>,
@@ -220,8 +222,9 @@ impl Runner {
             field,
             remote,
             scene_version: 0,
-            history: VecDeque::with_capacity(history_len + 1),
-            history_len,
+            history: History::new(dim, history_len),
+            seg_t: Vec::new(),
+            seg_s: Vec::new(),
             holding: false,
             stall,
             contacts: Vec::new(),
@@ -330,16 +333,11 @@ impl Runner {
         if t >= self.out_t {
             return self.out_t;
         }
-        let mut restored = None;
-        while let Some(s) = self.history.back() {
-            if s.t + 0.5 * self.dt < t {
-                break;
-            }
-            restored = self.history.pop_back();
+        let mut restored = std::mem::replace(&mut self.scratch, State::at_rest(&[]));
+        if self.history.rollback_into(t, 0.5 * self.dt, &mut restored) {
+            self.restart_at(&restored);
         }
-        if let Some(s) = restored {
-            self.restart_at(&s);
-        }
+        self.scratch = restored;
         self.out_t
     }
 
@@ -381,10 +379,7 @@ impl Runner {
 
     /// The last output point (the start, before any).
     fn last(&self) -> (&[f64], &[f64]) {
-        match self.history.back() {
-            Some(s) => (&s.x, &s.xd),
-            None => (&self.knot0.x, &self.knot0.xd),
-        }
+        self.history.last().unwrap_or((&self.knot0.x, &self.knot0.xd))
     }
 
     /// Whether every member is at its goal and at rest (at the last output point).
@@ -414,6 +409,8 @@ impl Runner {
             outcome: None,
         };
         let mut worst = Outcome::Running;
+        self.seg_t.clear();
+        self.seg_s.clear();
         for k in 0..n {
             let t = self.out_t;
             if self.knot1.as_ref().is_none_or(|k1| t >= k1.t - 0.5 * self.dt) {
@@ -449,15 +446,8 @@ impl Runner {
                     "the integration diverged at t = {t:.3} s (no setpoint was sent from there)"
                 )));
             }
-            // Recycle the oldest entry's buffers: no allocation per point once the history is full.
-            let mut entry = match self.history.len() >= self.history_len {
-                true => self.history.pop_front().unwrap_or_else(|| State::at_rest(&self.knot0.x)),
-                false => State::at_rest(&self.knot0.x),
-            };
-            (entry.t, entry.s) = (t, s);
-            entry.x.copy_from_slice(&p.x[range.clone()]);
-            entry.xd.copy_from_slice(&p.xd[range.clone()]);
-            self.history.push_back(entry);
+            self.seg_t.push(t);
+            self.seg_s.push(s);
             self.out_t = ((t + self.dt) / self.dt).round() * self.dt;
 
             // Stalls at the point the robot is sent to (checked at its time); contacts below, for all points.
@@ -477,6 +467,7 @@ impl Runner {
                 }
             }
         }
+        self.history.push(&self.seg_t, &self.seg_s, &p.x, &p.xd);
         // Contacts at every point the robot is sent to (each checked at its time); obstacles no point can reach are
         // skipped as a whole.
         self.contacts.clear();

@@ -1,0 +1,175 @@
+//! The recent output points of a run, kept for rollbacks. One record per [`Runner::advance`](super::Runner::advance)
+//! (a segment): its points' times, phases, positions and velocities in flat arrays, copied once per array rather
+//! than once per point, into buffers that are recycled (no allocation once the history is full).
+
+use std::collections::VecDeque;
+
+use dmp::integrate::State;
+
+/// The points of one `advance`, in time order.
+#[derive(Debug, Default)]
+struct Record {
+    t: Vec<f64>,
+    s: Vec<f64>,
+    /// Row-major, `dim` per point.
+    x: Vec<f64>,
+    xd: Vec<f64>,
+}
+
+impl Record {
+    fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    fn truncate(&mut self, n: usize, dim: usize) {
+        self.t.truncate(n);
+        self.s.truncate(n);
+        self.x.truncate(n * dim);
+        self.xd.truncate(n * dim);
+    }
+}
+
+/// At least the last `keep` output points (whole records: up to one segment more).
+#[derive(Debug)]
+pub(super) struct History {
+    dim: usize,
+    keep: usize,
+    records: VecDeque<Record>,
+    /// Points in `records`.
+    points: usize,
+    /// Emptied records whose buffers the next pushes reuse.
+    spare: Vec<Record>,
+}
+
+impl History {
+    /// An empty history of `dim`-dimensional points that keeps at least `keep` of them.
+    pub(super) fn new(dim: usize, keep: usize) -> Self {
+        Self { dim, keep, records: VecDeque::new(), points: 0, spare: Vec::new() }
+    }
+
+    /// Appends the points at times `t` with phases `s`, positions `x` and velocities `xd` (`dim` per point), and
+    /// forgets the oldest records that are no longer needed to hold `keep` points.
+    pub(super) fn push(&mut self, t: &[f64], s: &[f64], x: &[f64], xd: &[f64]) {
+        debug_assert!(s.len() == t.len() && x.len() == t.len() * self.dim && xd.len() == x.len());
+        if t.is_empty() {
+            return;
+        }
+        let mut r = self.spare.pop().unwrap_or_default();
+        for (buf, from) in [(&mut r.t, t), (&mut r.s, s), (&mut r.x, x), (&mut r.xd, xd)] {
+            buf.clear();
+            buf.extend_from_slice(from);
+        }
+        self.points += t.len();
+        self.records.push_back(r);
+        while let Some(front) = self.records.front()
+            && self.points - front.len() >= self.keep
+        {
+            self.points -= front.len();
+            if let Some(old) = self.records.pop_front() {
+                self.spare.push(old);
+            }
+        }
+    }
+
+    /// Position and velocity of the last point.
+    pub(super) fn last(&self) -> Option<(&[f64], &[f64])> {
+        let r = self.records.back()?;
+        let from = (r.len() - 1) * self.dim;
+        Some((&r.x[from..], &r.xd[from..]))
+    }
+
+    /// Removes every point from the first one whose time is at or after `t - tol` on, and writes that point into
+    /// `out`; false (and nothing removed) when there is none.
+    pub(super) fn rollback_into(&mut self, t: f64, tol: f64, out: &mut State) -> bool {
+        let mut found = false;
+        while let Some(r) = self.records.back_mut() {
+            // The first point of this record at or after the time (the times increase).
+            let k = r.t.partition_point(|&tk| tk + tol < t);
+            if k == r.len() {
+                break;
+            }
+            let d = self.dim;
+            out.t = r.t[k];
+            out.s = r.s[k];
+            out.x.clear();
+            out.x.extend_from_slice(&r.x[k * d..(k + 1) * d]);
+            out.xd.clear();
+            out.xd.extend_from_slice(&r.xd[k * d..(k + 1) * d]);
+            found = true;
+            self.points -= r.len() - k;
+            if k > 0 {
+                r.truncate(k, d);
+                break;
+            }
+            if let Some(old) = self.records.pop_back() {
+                self.spare.push(old);
+            }
+        }
+        found
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DT: f64 = 0.001;
+
+    /// Pushes `n` 2-D points from index `from`: t = k dt, s = 1 - k/1000, x = (k, -k), xd = (10 k, 1).
+    fn push(h: &mut History, from: usize, n: usize) {
+        let ks: Vec<f64> = (from..from + n).map(|k| k as f64).collect();
+        let t: Vec<f64> = ks.iter().map(|k| k * DT).collect();
+        let s: Vec<f64> = ks.iter().map(|k| 1.0 - k / 1000.0).collect();
+        let x: Vec<f64> = ks.iter().flat_map(|&k| [k, -k]).collect();
+        let xd: Vec<f64> = ks.iter().flat_map(|&k| [10.0 * k, 1.0]).collect();
+        h.push(&t, &s, &x, &xd);
+    }
+
+    fn rollback(h: &mut History, t: f64) -> Option<State> {
+        let mut st = State::at_rest(&[0.0, 0.0]);
+        h.rollback_into(t, 0.5 * DT, &mut st).then_some(st)
+    }
+
+    #[test]
+    fn it_keeps_at_least_the_asked_points_in_whole_records() {
+        let mut h = History::new(2, 25);
+        assert_eq!(h.last(), None);
+        for seg in 0..10 {
+            push(&mut h, seg * 10, 10);
+            assert!(h.points >= 25.min(10 * (seg + 1)) && h.points < 35, "{}", h.points);
+        }
+        assert_eq!(h.records.len(), 3, "30 points hold 25, 20 do not");
+        assert_eq!(h.last(), Some((&[99.0, -99.0][..], &[990.0, 1.0][..])));
+    }
+
+    #[test]
+    fn a_rollback_restores_the_first_point_at_or_after_the_time_and_drops_the_rest() {
+        let mut h = History::new(2, 100);
+        for seg in 0..5 {
+            push(&mut h, seg * 10, 10);
+        }
+        // Inside a record: point 23 (t = 0.0228 rounds to it within half a step) is restored, 23.. are gone.
+        let st = rollback(&mut h, 0.0228).unwrap();
+        assert_eq!(
+            (st.t, st.s, st.x.as_slice(), st.xd.as_slice()),
+            (23.0 * DT, 1.0 - 0.023, &[23.0, -23.0][..], &[230.0, 1.0][..])
+        );
+        assert_eq!(h.points, 23);
+        assert_eq!(h.last().unwrap().0, &[22.0, -22.0]);
+        // At a record's first point: the whole record goes.
+        let st = rollback(&mut h, 0.020).unwrap();
+        assert_eq!(st.x, vec![20.0, -20.0]);
+        assert_eq!((h.points, h.records.len()), (20, 2));
+        // Past the end: nothing.
+        assert!(rollback(&mut h, 0.5).is_none());
+        assert_eq!(h.points, 20);
+        // Before the start: the oldest point, and the history is empty.
+        assert_eq!(rollback(&mut h, -1.0).unwrap().x, vec![0.0, 0.0]);
+        assert_eq!((h.points, h.last()), (0, None));
+        // The emptied records' buffers are reused.
+        let spare = h.spare.len();
+        assert_eq!(spare, 5);
+        push(&mut h, 0, 10);
+        assert_eq!(h.spare.len(), spare - 1);
+    }
+}
