@@ -79,8 +79,9 @@ fn ball(r: f64) -> dmp::Shape {
 }
 
 /// The positions of robot `me` of a load cell over [`DURATION`] with RK4 at `step_points` ms, or the adaptive
-/// step of at most `step_points` ms with `tolerance`, the cell-mates seen every `refill`; the smallest distance from it to a cell-mate's centre, the
-/// largest from where it would be without anything to avoid, and the integration's work.
+/// step of at most `step_points` ms with `tolerance`, the cell-mates seen every `refill`; the smallest distance
+/// from it to a cell-mate's centre, the largest from where it would be without anything to avoid, and the
+/// integration's work.
 fn run(
     me: usize,
     (step_points, tolerance): (usize, Option<f64>),

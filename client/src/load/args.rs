@@ -143,12 +143,8 @@ fn in_range(flag: &str, x: f64, lo: f64, hi: f64, unit: &str) -> Result<(), Clie
 impl LoadArgs {
     /// Checks every flag (the error names it) and derives the run's parameters.
     pub fn validate(&self) -> Result<Params, ClientError> {
-        if !(self.integration_step_ms.is_finite() && (0.0..=100.0).contains(&self.integration_step_ms)) {
-            return Err(bad(
-                "--integration-step-ms",
-                format!("{} is not between 0 and 100", self.integration_step_ms),
-            ));
-        }
+        in_range("--integration-step-ms", self.integration_step_ms, 0.0, 100.0, "")?;
+        // The server's own bound (it refuses a looser tolerance too).
         in_range("--integration-tolerance", self.integration_tolerance, 0.0, 1e-2, "")?;
         if !(1..=100_000).contains(&self.robots) {
             return Err(bad("--robots", format!("{} is not between 1 and 100000", self.robots)));

@@ -259,8 +259,7 @@ impl MotionService for MotionServiceImpl {
         let urgency = urgency_of(&request);
         let req = request.into_inner();
         let r = self.resolve(req.motion.as_ref(), "motion").await?;
-        let mut cfg = StreamRequest::of(&req).config(r.motion.tau, &self.state.config)?;
-        cfg.urgency = urgency;
+        let cfg = StreamRequest::of(&req).config(r.motion.tau, &self.state.config, urgency)?;
         info!(robot = %r.robot_id, cell = r.cell.cell(), realtime = cfg.realtime, "execute");
         self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
         let cell = r.cell.clone();
@@ -286,10 +285,9 @@ impl MotionService for MotionServiceImpl {
             );
         };
         let r = self.resolve(req.motion.as_ref(), "start.motion").await?;
-        let mut cfg = StreamRequest::of(&req)
-            .config(r.motion.tau, &self.state.config)
+        let cfg = StreamRequest::of(&req)
+            .config(r.motion.tau, &self.state.config, urgency)
             .map_err(|e| e.within("start"))?;
-        cfg.urgency = urgency;
         let robot_id = r.robot_id.clone();
         let dim = r.primitive.dim;
         self.check_message_size("start.segment_s", cfg.segment_points * dim)?;
@@ -399,8 +397,7 @@ impl MotionService for MotionServiceImpl {
         if !(tau.is_finite() && tau > 0.0) {
             return Err(ServerError::invalid("tau", "must be a finite number greater than zero").into());
         }
-        let mut cfg = StreamRequest::of_group(&req).config(tau, &self.state.config)?;
-        cfg.urgency = urgency;
+        let cfg = StreamRequest::of_group(&req).config(tau, &self.state.config, urgency)?;
         let cell = first.cell.clone();
         // One DMP: the members' primitives side by side (the paper's 6-D youBot DMP).
         let mut primitive = first.primitive.clone();

@@ -8,6 +8,7 @@ use dmp_proto::v1;
 use crate::config::Config;
 use crate::error::ServerError;
 use crate::executor::stream::StreamConfig;
+use crate::write_batching::Urgency;
 
 /// Default output step.
 pub(super) const DEFAULT_DT: f64 = 0.001;
@@ -54,8 +55,13 @@ impl StreamRequest {
     }
 
     /// Fills in the defaults and checks every field (the error names it): the stream's configuration for a motion
-    /// of time scale `tau`.
-    pub(super) fn config(self, tau: f64, config: &Config) -> Result<StreamConfig, ServerError> {
+    /// of time scale `tau`, sent on a connection of `urgency` (when it batches its writes).
+    pub(super) fn config(
+        self,
+        tau: f64,
+        config: &Config,
+        urgency: Option<Urgency>,
+    ) -> Result<StreamConfig, ServerError> {
         let StreamRequest {
             dt,
             segment_s,
@@ -124,7 +130,7 @@ impl StreamRequest {
             realtime,
             lookahead: Duration::from_secs_f64(lookahead_s),
             max_duration,
-            urgency: None,
+            urgency,
         })
     }
 }

@@ -21,6 +21,15 @@ impl Record {
         self.t.len()
     }
 
+    /// Point `k` into `out`.
+    fn write_point(&self, k: usize, dim: usize, out: &mut State) {
+        (out.t, out.s) = (self.t[k], self.s[k]);
+        out.x.clear();
+        out.x.extend_from_slice(&self.x[k * dim..(k + 1) * dim]);
+        out.xd.clear();
+        out.xd.extend_from_slice(&self.xd[k * dim..(k + 1) * dim]);
+    }
+
     fn truncate(&mut self, n: usize, dim: usize) {
         self.t.truncate(n);
         self.s.truncate(n);
@@ -81,31 +90,31 @@ impl History {
     /// Removes every point from the first one whose time is at or after `t - tol` on, and writes that point into
     /// `out`; false (and nothing removed) when there is none.
     pub(super) fn rollback_into(&mut self, t: f64, tol: f64, out: &mut State) -> bool {
-        let mut found = false;
+        // Whole records from that time on go; the point is the first of the last one to go, unless the record
+        // before it also reaches that time.
+        let mut dropped: Option<Record> = None;
         while let Some(r) = self.records.back_mut() {
             // The first point of this record at or after the time (the times increase).
             let k = r.t.partition_point(|&tk| tk + tol < t);
             if k == r.len() {
                 break;
             }
-            let d = self.dim;
-            out.t = r.t[k];
-            out.s = r.s[k];
-            out.x.clear();
-            out.x.extend_from_slice(&r.x[k * d..(k + 1) * d]);
-            out.xd.clear();
-            out.xd.extend_from_slice(&r.xd[k * d..(k + 1) * d]);
-            found = true;
-            self.points -= r.len() - k;
             if k > 0 {
-                r.truncate(k, d);
-                break;
+                self.points -= r.len() - k;
+                r.write_point(k, self.dim, out);
+                r.truncate(k, self.dim);
+                self.spare.extend(dropped);
+                return true;
             }
-            if let Some(old) = self.records.pop_back() {
-                self.spare.push(old);
+            if let Some(r) = self.records.pop_back() {
+                self.points -= r.len();
+                self.spare.extend(dropped.replace(r));
             }
         }
-        found
+        let Some(r) = dropped else { return false };
+        r.write_point(0, self.dim, out);
+        self.spare.push(r);
+        true
     }
 }
 
