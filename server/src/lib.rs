@@ -29,3 +29,4 @@ pub mod state;
 pub mod store;
 pub mod write_batching;
 pub mod zenoh_bridge;
+pub mod zenoh_threads;

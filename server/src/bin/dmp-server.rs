@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use dmp_server::cli::{Args, load_config};
+use dmp_server::zenoh_threads::{self, ZENOH_RUNTIME};
 use tokio::signal::unix::{SignalKind, signal};
 use tracing::{error, info, warn};
 use tracing_subscriber::EnvFilter;
@@ -37,6 +38,21 @@ fn main() -> ExitCode {
             }
         }
     }
+    // Zenoh's threads (`dmp_server::zenoh_threads`), before any thread starts: the operator's layout is checked
+    // (Zenoh would panic on a bad one), and without one the server re-executes itself with its own.
+    if let Some(value) = std::env::var_os(ZENOH_RUNTIME) {
+        let checked = value.to_str().ok_or_else(|| "not UTF-8".to_string()).and_then(zenoh_threads::check);
+        if let Err(e) = checked {
+            eprintln!("dmp-server: {ZENOH_RUNTIME}: {e}");
+            return ExitCode::from(2);
+        }
+    } else if !config.zenoh.disabled
+        && let Some(e) = zenoh_threads::reexec_with_layout()
+    {
+        eprintln!(
+            "dmp-server: cannot re-execute with {ZENOH_RUNTIME} set ({e}): Zenoh keeps its default threads"
+        );
+    }
 
     tracing_subscriber::fmt()
         .with_env_filter(EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("info")))
@@ -55,6 +71,7 @@ fn main() -> ExitCode {
         zenoh_listen = ?config.zenoh.listen,
         zenoh_connect = ?config.zenoh.connect,
         zenoh_multicast = config.zenoh.multicast_scouting,
+        zenoh_runtime = std::env::var(ZENOH_RUNTIME).unwrap_or_default(),
         config = %full,
         "effective configuration"
     );

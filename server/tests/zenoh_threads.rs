@@ -1,0 +1,108 @@
+//! The `dmp-server` binary's Zenoh threads: without `ZENOH_RUNTIME` it re-executes itself with the server's layout
+//! (one Zenoh thread), an operator's layout is kept, and a bad one is refused before anything starts.
+#![cfg(target_os = "linux")]
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+use dmp_server::zenoh_threads::{LAYOUT, ZENOH_RUNTIME};
+
+/// Longest wait for the server to open its Zenoh session.
+const STARTUP: Duration = Duration::from_secs(60);
+
+/// The server on loopback ports chosen by the system, `ZENOH_RUNTIME` as given (None: unset).
+fn server(zenoh_runtime: Option<&str>, data: &tempfile::TempDir) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_dmp-server"));
+    c.args([
+        "--grpc-addr",
+        "127.0.0.1:0",
+        "--zenoh-listen",
+        "tcp/127.0.0.1:0",
+        "--zenoh-no-multicast",
+        "--data-dir",
+    ])
+    .arg(data.path())
+    .env("RUST_LOG", "info")
+    .stdin(Stdio::null())
+    .stdout(Stdio::null())
+    .stderr(Stdio::piped());
+    match zenoh_runtime {
+        Some(v) => c.env(ZENOH_RUNTIME, v),
+        None => c.env_remove(ZENOH_RUNTIME),
+    };
+    c
+}
+
+/// A running server, killed when dropped.
+struct Running(Child);
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Starts the server and waits until its Zenoh session is open; its threads' names and its `ZENOH_RUNTIME`.
+fn started(zenoh_runtime: Option<&str>) -> (Vec<String>, Option<String>) {
+    let data = tempfile::tempdir().unwrap();
+    let mut child = Running(server(zenoh_runtime, &data).spawn().expect("the server starts"));
+    let stderr = child.0.stderr.take().unwrap();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            if line.contains("zenoh session open") {
+                let _ = tx.send(());
+            }
+        }
+    });
+    rx.recv_timeout(STARTUP).expect("the server opens its Zenoh session");
+    let pid = child.0.id();
+    let threads = std::fs::read_dir(format!("/proc/{pid}/task"))
+        .unwrap()
+        .map(|t| std::fs::read_to_string(t.unwrap().path().join("comm")).unwrap().trim().to_string())
+        .collect();
+    let environ = std::fs::read(format!("/proc/{pid}/environ")).unwrap();
+    let prefix = format!("{ZENOH_RUNTIME}=");
+    let value = environ
+        .split(|&b| b == 0)
+        .filter_map(|v| std::str::from_utf8(v).ok())
+        .find_map(|v| v.strip_prefix(&prefix).map(str::to_string));
+    (threads, value)
+}
+
+fn named(threads: &[String], name: &str) -> usize {
+    threads.iter().filter(|t| t.as_str() == name).count()
+}
+
+#[test]
+fn without_a_layout_the_server_runs_zenoh_on_one_thread() {
+    let (threads, value) = started(None);
+    assert_eq!(value.as_deref(), Some(LAYOUT), "re-executed with the layout");
+    // Zenoh starts a runtime's threads at its first use: once the session is open, `acc` and `net` have
+    // theirs (with Zenoh's default layout) and `rx` and `tx` wait for a link.
+    assert_eq!(named(&threads, "app-0"), 1, "{threads:?}");
+    for other in ["acc-0", "net-0", "rx-0", "tx-0"] {
+        assert_eq!(named(&threads, other), 0, "{other} in {threads:?}");
+    }
+}
+
+#[test]
+fn an_operators_layout_is_kept() {
+    let mine = "(acc: (handover: app))";
+    let (threads, value) = started(Some(mine));
+    assert_eq!(value.as_deref(), Some(mine));
+    assert_eq!(named(&threads, "acc-0"), 0, "acc handed over, as asked: {threads:?}");
+    assert_eq!(named(&threads, "net-0"), 1, "net kept, as asked: {threads:?}");
+}
+
+#[test]
+fn a_bad_layout_is_refused_with_the_reason() {
+    let data = tempfile::tempdir().unwrap();
+    let out = server(Some("(rx: (worker_threads: 0))"), &data).output().expect("the server runs");
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("ZENOH_RUNTIME: rx.worker_threads must be at least 1"), "{stderr}");
+}
