@@ -3,10 +3,9 @@
 //! Zenoh runs its work on runtimes of its own, six threads by default (`rx` two, `tx`, `acc`, `net` and `app`
 //! one each), and reads their layout only from the `ZENOH_RUNTIME` environment variable, once, at its first use
 //! ([RON](https://github.com/ron-rs/ron), e.g. `(rx: (handover: app))`). The server hands every runtime over to
-//! `app` ([`LAYOUT`]): an obstacle update then wakes one Zenoh thread instead of two before it reaches the
-//! streams. Measured with `dmpctl load --robots 100 --scene-updates 10` (BENCHMARKS.md): update to adapted
-//! segment p50 0.43 - 0.48 ms instead of 0.49 - 0.55 ms and p99 1.38 - 1.88 ms (seven 60 s runs) instead of
-//! 1.47 - 2.28 ms (eight), with no loss at 1,000 robots.
+//! `app` ([`LAYOUT`]): one thread instead of six. Measured with `dmpctl load --robots 100 --scene-updates 10`
+//! (BENCHMARKS.md): update to adapted segment p50 0.43 - 0.48 ms instead of 0.49 - 0.55 ms and p99 1.38 - 1.93 ms
+//! (ten 60 s runs) instead of 1.47 - 2.28 ms (eight), with no loss at 1,000 robots.
 //!
 //! Setting a variable of the running process is `unsafe` (other threads may read the environment), so the
 //! binary re-executes itself once with the variable set, before it starts any thread ([`reexec_with_layout`]).
