@@ -1,11 +1,12 @@
-//! Zenoh's threads in the server: all of Zenoh's work on one thread.
+//! Zenoh's threads in the server: all of Zenoh's runtimes on one worker thread.
 //!
 //! Zenoh runs its work on runtimes of its own, six threads by default (`rx` two, `tx`, `acc`, `net` and `app`
 //! one each), and reads their layout only from the `ZENOH_RUNTIME` environment variable, once, at its first use
 //! ([RON](https://github.com/ron-rs/ron), e.g. `(rx: (handover: app))`). The server hands every runtime over to
-//! `app` ([`LAYOUT`]): one thread instead of six. Measured with `dmpctl load --robots 100 --scene-updates 10`
+//! `app` ([`LAYOUT`]): one worker thread instead of six (blocking work still gets threads of its own). Measured with `dmpctl load --robots 100 --scene-updates 10`
 //! (BENCHMARKS.md): update to adapted segment p50 0.43 - 0.48 ms instead of 0.49 - 0.55 ms and p99 1.38 - 1.93 ms
-//! (ten 60 s runs) instead of 1.47 - 2.28 ms (eight), with no loss at 1,000 robots.
+//! (ten 60 s runs, five with the same layout for the load generator) instead of 1.47 - 2.28 ms (eight), with no
+//! loss at 1,000 robots.
 //!
 //! Setting a variable of the running process is `unsafe` (other threads may read the environment), so the
 //! binary re-executes itself once with the variable set, before it starts any thread ([`reexec_with_layout`]).
@@ -42,29 +43,36 @@ enum Runtime {
     Net,
 }
 
-/// One runtime's parameters, as Zenoh parses them (zenoh-runtime 1.10: every field optional, no other field).
+/// One runtime's parameters, as Zenoh parses them (zenoh-runtime 1.10's `RuntimeParamHelper`: plain counts, each
+/// defaulted, no other field; the struct's name may be written).
 #[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(rename = "RuntimeParamHelper", deny_unknown_fields, default)]
 struct Param {
-    worker_threads: Option<usize>,
-    max_blocking_threads: Option<usize>,
-    #[allow(dead_code)] // Parsed for its check only.
+    worker_threads: usize,
+    max_blocking_threads: usize,
     handover: Option<Runtime>,
 }
 
-/// The whole layout: any of the five runtimes.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Layout {
-    app: Option<Param>,
-    acc: Option<Param>,
-    tx: Option<Param>,
-    rx: Option<Param>,
-    net: Option<Param>,
+impl Default for Param {
+    fn default() -> Self {
+        Self { worker_threads: 1, max_blocking_threads: 50, handover: None }
+    }
 }
 
-/// Checks a `ZENOH_RUNTIME` value as Zenoh will read it (RON with implicit `Some`), and that every thread count
-/// is at least one (Zenoh panics otherwise); the error says what is wrong.
+/// The whole layout (Zenoh's `AbstractRuntimeParam`): any of the five runtimes, each defaulted.
+#[derive(Debug, Default, Deserialize)]
+#[serde(rename = "AbstractRuntimeParam", deny_unknown_fields, default)]
+struct Layout {
+    app: Param,
+    acc: Param,
+    tx: Param,
+    rx: Param,
+    net: Param,
+}
+
+/// Checks a `ZENOH_RUNTIME` value as Zenoh will read it (RON with implicit `Some`), and that every runtime Zenoh
+/// will build (one not handed over) has at least one thread of each kind (Zenoh panics otherwise); the error says
+/// what is wrong. Counts beyond what the system allows also make Zenoh panic, at its first use: not checked.
 pub fn check(value: &str) -> Result<(), String> {
     let layout: Layout = ron::Options::default()
         .with_default_extension(Extensions::IMPLICIT_SOME)
@@ -77,12 +85,14 @@ pub fn check(value: &str) -> Result<(), String> {
         ("rx", &layout.rx),
         ("net", &layout.net),
     ];
-    for (name, param) in runtimes {
-        let Some(p) = param else { continue };
+    for (name, p) in runtimes {
+        if p.handover.is_some() {
+            continue;
+        }
         for (field, count) in
             [("worker_threads", p.worker_threads), ("max_blocking_threads", p.max_blocking_threads)]
         {
-            if count == Some(0) {
+            if count == 0 {
                 return Err(format!("{name}.{field} must be at least 1"));
             }
         }
@@ -98,9 +108,14 @@ pub fn reexec_with_layout() -> Option<io::Error> {
     use std::os::unix::process::CommandExt;
 
     let layout = layout_to_set(std::env::var_os(ZENOH_RUNTIME).as_ref())?;
-    let exe = match std::env::current_exe() {
-        Ok(exe) => exe,
-        Err(e) => return Some(e),
+    // This very program, even if its file was replaced since it started.
+    let exe = if cfg!(target_os = "linux") {
+        std::path::PathBuf::from("/proc/self/exe")
+    } else {
+        match std::env::current_exe() {
+            Ok(exe) => exe,
+            Err(e) => return Some(e),
+        }
     };
     let mut args = std::env::args_os();
     let arg0 = args.next().unwrap_or_else(|| exe.clone().into_os_string());
@@ -130,6 +145,12 @@ mod tests {
         assert_eq!(check(LAYOUT), Ok(()));
         assert_eq!(check("()"), Ok(()), "Zenoh's default");
         assert_eq!(check("(rx: (worker_threads: 1, max_blocking_threads: 4), app: (handover: net))"), Ok(()));
+        assert_eq!(check("AbstractRuntimeParam(rx: RuntimeParamHelper(worker_threads: 2))"), Ok(()), "named");
+        assert_eq!(
+            check("(rx: (worker_threads: 0, handover: app))"),
+            Ok(()),
+            "a runtime handed over is not built"
+        );
         let refused = |value: &str, says: &str| {
             let e = check(value).expect_err(value);
             assert!(e.contains(says), "{value}: {e}");
@@ -141,5 +162,16 @@ mod tests {
         refused("(tx: (worker_threads: -1))", "not a Zenoh runtime layout");
         refused("(net: (worker_threads: 0))", "net.worker_threads must be at least 1");
         refused("(acc: (max_blocking_threads: 0))", "acc.max_blocking_threads must be at least 1");
+        // Zenoh's fields are plain: an explicit option, or a struct of another name, makes it panic.
+        for value in [
+            "(rx: (worker_threads: Some(2)))",
+            "(rx: (max_blocking_threads: None))",
+            "(rx: None)",
+            "(rx: Some((worker_threads: 1)))",
+            "Layout(rx: (worker_threads: 1))",
+            "(rx: Param(worker_threads: 1))",
+        ] {
+            refused(value, "not a Zenoh runtime layout");
+        }
     }
 }

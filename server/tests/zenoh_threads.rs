@@ -5,7 +5,7 @@
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use dmp_server::zenoh_threads::{LAYOUT, ZENOH_RUNTIME};
 
@@ -45,25 +45,43 @@ impl Drop for Running {
     }
 }
 
-/// Starts the server and waits until its Zenoh session is open; its threads' names and its `ZENOH_RUNTIME`.
-fn started(zenoh_runtime: Option<&str>) -> (Vec<String>, Option<String>) {
+/// Starts the server and waits until its Zenoh session is open and its Zenoh threads `expected` are running;
+/// then its threads' names and its `ZENOH_RUNTIME`.
+fn started(zenoh_runtime: Option<&str>, expected: &[&str]) -> (Vec<String>, Option<String>) {
     let data = tempfile::tempdir().unwrap();
     let mut child = Running(server(zenoh_runtime, &data).spawn().expect("the server starts"));
     let stderr = child.0.stderr.take().unwrap();
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {
         for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            if line.contains("zenoh session open") {
-                let _ = tx.send(());
+            let open = line.contains("zenoh session open");
+            if tx.send((open, line)).is_err() {
+                break;
             }
         }
     });
-    rx.recv_timeout(STARTUP).expect("the server opens its Zenoh session");
+    let deadline = Instant::now() + STARTUP;
+    let mut log = Vec::new();
+    loop {
+        match rx.recv_timeout(deadline.saturating_duration_since(Instant::now())) {
+            Ok((true, _)) => break,
+            Ok((false, line)) => log.push(line),
+            Err(e) => panic!("the server did not open its Zenoh session ({e}); its log:\n{}", log.join("\n")),
+        }
+    }
     let pid = child.0.id();
-    let threads = std::fs::read_dir(format!("/proc/{pid}/task"))
-        .unwrap()
-        .map(|t| std::fs::read_to_string(t.unwrap().path().join("comm")).unwrap().trim().to_string())
-        .collect();
+    // A thread names itself once it runs: wait (briefly) for the ones expected.
+    let threads = loop {
+        let threads: Vec<String> = std::fs::read_dir(format!("/proc/{pid}/task"))
+            .unwrap()
+            .filter_map(|t| std::fs::read_to_string(t.ok()?.path().join("comm")).ok())
+            .map(|name| name.trim().to_string())
+            .collect();
+        if expected.iter().all(|e| threads.iter().any(|t| t == e)) || Instant::now() > deadline {
+            break threads;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
     let environ = std::fs::read(format!("/proc/{pid}/environ")).unwrap();
     let prefix = format!("{ZENOH_RUNTIME}=");
     let value = environ
@@ -79,10 +97,10 @@ fn named(threads: &[String], name: &str) -> usize {
 
 #[test]
 fn without_a_layout_the_server_runs_zenoh_on_one_thread() {
-    let (threads, value) = started(None);
+    // Zenoh starts a runtime's threads at its first use: once the session is open, `acc` and `net` have theirs
+    // (see the next test) and `rx` and `tx` wait for a link.
+    let (threads, value) = started(None, &["app-0"]);
     assert_eq!(value.as_deref(), Some(LAYOUT), "re-executed with the layout");
-    // Zenoh starts a runtime's threads at its first use: once the session is open, `acc` and `net` have
-    // theirs (with Zenoh's default layout) and `rx` and `tx` wait for a link.
     assert_eq!(named(&threads, "app-0"), 1, "{threads:?}");
     for other in ["acc-0", "net-0", "rx-0", "tx-0"] {
         assert_eq!(named(&threads, other), 0, "{other} in {threads:?}");
@@ -91,8 +109,14 @@ fn without_a_layout_the_server_runs_zenoh_on_one_thread() {
 
 #[test]
 fn an_operators_layout_is_kept() {
+    // Zenoh's own default: its `acc` and `net` threads run once the session is open.
+    let (threads, value) = started(Some("()"), &["acc-0", "net-0"]);
+    assert_eq!(value.as_deref(), Some("()"));
+    assert_eq!(named(&threads, "acc-0"), 1, "{threads:?}");
+    assert_eq!(named(&threads, "net-0"), 1, "{threads:?}");
+    // One runtime handed over, as asked; the other kept.
     let mine = "(acc: (handover: app))";
-    let (threads, value) = started(Some(mine));
+    let (threads, value) = started(Some(mine), &["net-0"]);
     assert_eq!(value.as_deref(), Some(mine));
     assert_eq!(named(&threads, "acc-0"), 0, "acc handed over, as asked: {threads:?}");
     assert_eq!(named(&threads, "net-0"), 1, "net kept, as asked: {threads:?}");
@@ -101,8 +125,18 @@ fn an_operators_layout_is_kept() {
 #[test]
 fn a_bad_layout_is_refused_with_the_reason() {
     let data = tempfile::tempdir().unwrap();
-    let out = server(Some("(rx: (worker_threads: 0))"), &data).output().expect("the server runs");
-    assert_eq!(out.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let mut child =
+        Running(server(Some("(rx: (worker_threads: 0))"), &data).spawn().expect("the server starts"));
+    let deadline = Instant::now() + STARTUP;
+    let status = loop {
+        if let Some(status) = child.0.try_wait().unwrap() {
+            break status;
+        }
+        assert!(Instant::now() < deadline, "the server did not refuse the layout");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!(status.code(), Some(2));
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut child.0.stderr.take().unwrap(), &mut stderr).unwrap();
     assert!(stderr.contains("ZENOH_RUNTIME: rx.worker_threads must be at least 1"), "{stderr}");
 }

@@ -19,6 +19,16 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> ExitCode {
     let args = Args::parse();
+    // Without a layout of the operator's, the server re-executes itself with its own, first thing: before any
+    // thread starts, and before anything is read (a configuration file given as a pipe can be read only once).
+    if !args.no_zenoh
+        && !args.print_config
+        && let Some(e) = zenoh_threads::reexec_with_layout()
+    {
+        eprintln!(
+            "dmp-server: cannot re-execute with {ZENOH_RUNTIME} set ({e}): Zenoh keeps its default threads"
+        );
+    }
     let config = match load_config(&args) {
         Ok(c) => c,
         Err(e) => {
@@ -38,20 +48,16 @@ fn main() -> ExitCode {
             }
         }
     }
-    // Zenoh's threads (`dmp_server::zenoh_threads`), before any thread starts: the operator's layout is checked
-    // (Zenoh would panic on a bad one), and without one the server re-executes itself with its own.
-    if let Some(value) = std::env::var_os(ZENOH_RUNTIME) {
+    // Zenoh's threads (`dmp_server::zenoh_threads`): an operator's layout is checked (Zenoh would panic on a bad
+    // one).
+    if !config.zenoh.disabled
+        && let Some(value) = std::env::var_os(ZENOH_RUNTIME)
+    {
         let checked = value.to_str().ok_or_else(|| "not UTF-8".to_string()).and_then(zenoh_threads::check);
         if let Err(e) = checked {
             eprintln!("dmp-server: {ZENOH_RUNTIME}: {e}");
             return ExitCode::from(2);
         }
-    } else if !config.zenoh.disabled
-        && let Some(e) = zenoh_threads::reexec_with_layout()
-    {
-        eprintln!(
-            "dmp-server: cannot re-execute with {ZENOH_RUNTIME} set ({e}): Zenoh keeps its default threads"
-        );
     }
 
     tracing_subscriber::fmt()
