@@ -1,6 +1,9 @@
 //! The recent output points of a run, kept for rollbacks. One record per [`Runner::advance`](super::Runner::advance)
-//! (a segment): its points' times, phases, positions and velocities in flat arrays, copied once per array rather
-//! than once per point, into buffers that are recycled (no allocation once the history is full).
+//! (a segment): its points' phases, positions and velocities in flat arrays, copied once per array rather than
+//! once per point, into buffers that are recycled (no allocation once the history is full). The points lie on the
+//! run's output grid, one step apart (the runner's invariant, which `contacts_along` also relies on): a record
+//! keeps the grid index of its first point, and point `k` is at `(first + k) dt`, the very value the runner
+//! computed.
 
 use std::collections::VecDeque;
 
@@ -9,7 +12,8 @@ use dmp::integrate::State;
 /// The points of one `advance`, in time order.
 #[derive(Debug, Default)]
 struct Record {
-    t: Vec<f64>,
+    /// Grid index of the first point: its time over `dt`.
+    first: i64,
     s: Vec<f64>,
     /// Row-major, `dim` per point.
     x: Vec<f64>,
@@ -18,12 +22,27 @@ struct Record {
 
 impl Record {
     fn len(&self) -> usize {
-        self.t.len()
+        self.s.len()
+    }
+
+    /// Time of point `k`.
+    fn time(&self, k: usize, dt: f64) -> f64 {
+        (self.first + k as i64) as f64 * dt
+    }
+
+    /// The first point at or after `t - tol` (`len` if none).
+    fn first_at_or_after(&self, t: f64, tol: f64, dt: f64) -> usize {
+        let (mut lo, mut hi) = (0, self.len());
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if self.time(mid, dt) + tol < t { lo = mid + 1 } else { hi = mid }
+        }
+        lo
     }
 
     /// Point `k` into `out`.
-    fn write_point(&self, k: usize, dim: usize, out: &mut State) {
-        (out.t, out.s) = (self.t[k], self.s[k]);
+    fn write_point(&self, k: usize, dim: usize, dt: f64, out: &mut State) {
+        (out.t, out.s) = (self.time(k, dt), self.s[k]);
         out.x.clear();
         out.x.extend_from_slice(&self.x[k * dim..(k + 1) * dim]);
         out.xd.clear();
@@ -31,7 +50,6 @@ impl Record {
     }
 
     fn truncate(&mut self, n: usize, dim: usize) {
-        self.t.truncate(n);
         self.s.truncate(n);
         self.x.truncate(n * dim);
         self.xd.truncate(n * dim);
@@ -42,6 +60,8 @@ impl Record {
 #[derive(Debug)]
 pub(super) struct History {
     dim: usize,
+    /// The output step.
+    dt: f64,
     keep: usize,
     records: VecDeque<Record>,
     /// Points in `records`.
@@ -51,24 +71,25 @@ pub(super) struct History {
 }
 
 impl History {
-    /// An empty history of `dim`-dimensional points that keeps at least `keep` of them.
-    pub(super) fn new(dim: usize, keep: usize) -> Self {
-        Self { dim, keep, records: VecDeque::new(), points: 0, spare: Vec::new() }
+    /// An empty history of `dim`-dimensional points `dt` apart that keeps at least `keep` of them.
+    pub(super) fn new(dim: usize, dt: f64, keep: usize) -> Self {
+        Self { dim, dt, keep, records: VecDeque::new(), points: 0, spare: Vec::new() }
     }
 
-    /// Appends the points at times `t` with phases `s`, positions `x` and velocities `xd` (`dim` per point), and
-    /// forgets the oldest records that are no longer needed to hold `keep` points.
-    pub(super) fn push(&mut self, t: &[f64], s: &[f64], x: &[f64], xd: &[f64]) {
-        debug_assert!(s.len() == t.len() && x.len() == t.len() * self.dim && xd.len() == x.len());
-        if t.is_empty() {
+    /// Appends the points from time `t0` on, one output step apart, with phases `s`, positions `x` and velocities
+    /// `xd` (`dim` per point), and forgets the oldest records that are no longer needed to hold `keep` points.
+    pub(super) fn push(&mut self, t0: f64, s: &[f64], x: &[f64], xd: &[f64]) {
+        debug_assert!(x.len() == s.len() * self.dim && xd.len() == x.len());
+        if s.is_empty() {
             return;
         }
         let mut r = self.spare.pop().unwrap_or_default();
-        for (buf, from) in [(&mut r.t, t), (&mut r.s, s), (&mut r.x, x), (&mut r.xd, xd)] {
+        r.first = (t0 / self.dt).round() as i64;
+        for (buf, from) in [(&mut r.s, s), (&mut r.x, x), (&mut r.xd, xd)] {
             buf.clear();
             buf.extend_from_slice(from);
         }
-        self.points += t.len();
+        self.points += s.len();
         self.records.push_back(r);
         while let Some(front) = self.records.front()
             && self.points - front.len() >= self.keep
@@ -95,13 +116,13 @@ impl History {
         let mut dropped: Option<Record> = None;
         while let Some(r) = self.records.back_mut() {
             // The first point of this record at or after the time (the times increase).
-            let k = r.t.partition_point(|&tk| tk + tol < t);
+            let k = r.first_at_or_after(t, tol, self.dt);
             if k == r.len() {
                 break;
             }
             if k > 0 {
                 self.points -= r.len() - k;
-                r.write_point(k, self.dim, out);
+                r.write_point(k, self.dim, self.dt, out);
                 r.truncate(k, self.dim);
                 self.spare.extend(dropped);
                 return true;
@@ -112,7 +133,7 @@ impl History {
             }
         }
         let Some(r) = dropped else { return false };
-        r.write_point(0, self.dim, out);
+        r.write_point(0, self.dim, self.dt, out);
         self.spare.push(r);
         true
     }
@@ -127,11 +148,10 @@ mod tests {
     /// Pushes `n` 2-D points from index `from`: t = k dt, s = 1 - k/1000, x = (k, -k), xd = (10 k, 1).
     fn push(h: &mut History, from: usize, n: usize) {
         let ks: Vec<f64> = (from..from + n).map(|k| k as f64).collect();
-        let t: Vec<f64> = ks.iter().map(|k| k * DT).collect();
         let s: Vec<f64> = ks.iter().map(|k| 1.0 - k / 1000.0).collect();
         let x: Vec<f64> = ks.iter().flat_map(|&k| [k, -k]).collect();
         let xd: Vec<f64> = ks.iter().flat_map(|&k| [10.0 * k, 1.0]).collect();
-        h.push(&t, &s, &x, &xd);
+        h.push(from as f64 * DT, &s, &x, &xd);
     }
 
     fn rollback(h: &mut History, t: f64) -> Option<State> {
@@ -141,7 +161,7 @@ mod tests {
 
     #[test]
     fn it_keeps_at_least_the_asked_points_in_whole_records() {
-        let mut h = History::new(2, 25);
+        let mut h = History::new(2, DT, 25);
         assert_eq!(h.last(), None);
         for seg in 0..10 {
             push(&mut h, seg * 10, 10);
@@ -153,7 +173,7 @@ mod tests {
 
     #[test]
     fn a_rollback_restores_the_first_point_at_or_after_the_time_and_drops_the_rest() {
-        let mut h = History::new(2, 100);
+        let mut h = History::new(2, DT, 100);
         for seg in 0..5 {
             push(&mut h, seg * 10, 10);
         }

@@ -156,8 +156,7 @@ pub struct Runner {
     scene_version: u64,
     /// The recent output points (their states), for rollbacks.
     history: History,
-    /// The times and phases of the points of an `advance`, for the history.
-    seg_t: Vec<f64>,
+    /// The phases of the points of an `advance`, for the history.
     seg_s: Vec<f64>,
     holding: bool,
     stall: Vec<StallDetector>,
@@ -222,8 +221,7 @@ impl Runner {
             field,
             remote,
             scene_version: 0,
-            history: History::new(dim, history_len),
-            seg_t: Vec::new(),
+            history: History::new(dim, dt, history_len),
             seg_s: Vec::new(),
             holding: false,
             stall,
@@ -409,7 +407,6 @@ impl Runner {
             outcome: None,
         };
         let mut worst = Outcome::Running;
-        self.seg_t.clear();
         self.seg_s.clear();
         for k in 0..n {
             let t = self.out_t;
@@ -446,7 +443,6 @@ impl Runner {
                     "the integration diverged at t = {t:.3} s (no setpoint was sent from there)"
                 )));
             }
-            self.seg_t.push(t);
             self.seg_s.push(s);
             self.out_t = ((t + self.dt) / self.dt).round() * self.dt;
 
@@ -467,7 +463,7 @@ impl Runner {
                 }
             }
         }
-        self.history.push(&self.seg_t, &self.seg_s, &p.x, &p.xd);
+        self.history.push(p.start_time, &self.seg_s, &p.x, &p.xd);
         // Contacts at every point the robot is sent to (each checked at its time); obstacles no point can reach are
         // skipped as a whole.
         self.contacts.clear();
