@@ -28,6 +28,12 @@ pub enum DmpError {
     /// The least-squares fit of the forcing weights failed (degenerate basis).
     #[error("learning failed: {0}")]
     Learning(String),
+    /// The state of a run stopped being finite (the stability bound on the step and `tau` should prevent it).
+    #[error("the integration diverged at t = {t:.3} s (no point was handed out from there)")]
+    Diverged {
+        /// Run time of the first point that was not finite.
+        t: f64,
+    },
     /// A stored primitive was written by an unknown version of the format.
     #[error("primitive format version {found} is not supported (this build reads version {supported})")]
     UnsupportedVersion {
@@ -52,5 +58,22 @@ pub(crate) fn ensure_positive(field: impl FnOnce() -> String, value: f64) -> Res
         Ok(())
     } else {
         Err(InvalidInput::new(field(), "must be a finite number greater than zero"))
+    }
+}
+
+impl InvalidInput {
+    /// The same error with `prefix.` in front of its field.
+    pub fn within(self, prefix: &str) -> Self {
+        Self { field: format!("{prefix}.{}", self.field), rule: self.rule }
+    }
+}
+
+impl DmpError {
+    /// The same error with `prefix.` in front of its field, when it names one.
+    pub fn within(self, prefix: &str) -> Self {
+        match self {
+            DmpError::Invalid(i) => DmpError::Invalid(i.within(prefix)),
+            other => other,
+        }
     }
 }

@@ -10,6 +10,7 @@
 //! | learning from one demonstration | [`mod@learn`], [`derivatives`] |
 //! | the stored primitive | [`primitive`] |
 //! | RK4 integration, step by step | [`integrate`] |
+//! | one run of one robot or a group: stepping, changes, rollbacks, outcomes | [`execution`] |
 //! | isopotentials (superquadrics) | [`isopotential`] |
 //! | obstacles (pose, motion, boundary samples) | [`obstacle`] |
 //! | the five repulsive terms | [`avoidance`] |
@@ -24,6 +25,7 @@ pub mod derivatives;
 pub mod directions;
 pub mod distance;
 pub mod error;
+pub mod execution;
 pub mod field;
 pub mod integrate;
 pub mod isopotential;
@@ -37,6 +39,7 @@ pub mod stall;
 
 pub use avoidance::{Avoidance, Method};
 pub use error::{DmpError, InvalidInput, Result};
+pub use execution::{Execution, Outcome, Stepping};
 pub use field::{Agent, Contact, RepulsiveField, Scene};
 pub use integrate::{Integrator, Motion, NoPerturbation, Perturbation, State};
 pub use isopotential::{Isopotential, NestedSuperquadric, Shape, Superquadric};

@@ -1,10 +1,11 @@
 //! Full rollouts: fixed step, a row per step, contacts and stalls reported.
 
 use crate::error::{InvalidInput, Result};
+use crate::execution::{CellMateAvoidance, Execution, Stepping, Stretch};
 use crate::field::{Contact, RepulsiveField};
-use crate::integrate::{Integrator, Motion, State};
+use crate::integrate::Motion;
 use crate::primitive::Primitive;
-use crate::stall::{Stall, StallConfig, StallDetector};
+use crate::stall::Stall;
 
 /// The longest rollout accepted, in steps (1000 s at the reference step of 1 ms).
 pub const MAX_ROLLOUT_STEPS: usize = 1_000_000;
@@ -90,16 +91,16 @@ pub struct Rollout {
     pub stalls: Vec<(usize, Stall)>,
 }
 
-/// Rolls `primitive` out from rest at `motion.start` for `steps` steps of `dt`, under the field `field`.
+/// Rolls `primitive` out from rest at `motion.start` for `steps` steps of `dt` (RK4 at `dt`), avoiding the scene
+/// of `field`: an [`Execution`] advanced once over the whole run, so that an offline rollout and a served run step
+/// the same way.
 pub fn rollout(
     primitive: &Primitive,
     motion: &Motion,
-    field: &mut RepulsiveField,
+    field: &RepulsiveField,
     dt: f64,
     steps: usize,
 ) -> Result<Rollout> {
-    let mut integrator = Integrator::new(primitive)?;
-    motion.validate(primitive.dim)?;
     if !(dt.is_finite() && dt > 0.0) {
         return Err(InvalidInput::new("rollout.dt", "must be a finite number greater than zero").into());
     }
@@ -110,35 +111,18 @@ pub fn rollout(
         )
         .into());
     }
-    let d = primitive.dim;
-    let mut state = State::at_rest(&motion.start);
-    let mut traj = Trajectory::with_capacity(d, steps + 1);
-    let mut acc = vec![0.0; d];
-    let mut contacts = Vec::new();
-    let mut scratch = Vec::new();
-    let mut stalls = Vec::new();
-    let mut detectors: Vec<StallDetector> =
-        field.agents().iter().map(|a| StallDetector::new(StallConfig::default(), a.dims.clone())).collect();
-    for k in 0..=steps {
-        // The row of time k dt: position and velocity now, the acceleration once the step has evaluated it.
-        state.t = k as f64 * dt;
-        traj.push(state.t, &state.x, &state.xd, &acc);
-        if k < steps {
-            integrator.step(motion, field, &mut state, dt, &mut acc);
-        } else {
-            integrator.acceleration(motion, field, state.t, state.s, &state.x, &state.xd, &mut acc);
-        }
-        traj.xdd[k * d..(k + 1) * d].copy_from_slice(&acc);
-        let (t, x, xd) = (traj.t[k], traj.position(k), traj.velocity(k));
-        scratch.clear();
-        if field.contacts(t, x, &mut scratch) {
-            contacts.extend(scratch.iter().map(|c| (k, *c)));
-        }
-        for (i, det) in detectors.iter_mut().enumerate() {
-            if let Some(s) = det.update(t, x, xd, &motion.goal) {
-                stalls.push((i, s));
-            }
-        }
-    }
-    Ok(Rollout { trajectory: traj, contacts, stalls })
+    let mut run = Execution::new(
+        primitive.clone(),
+        motion.clone(),
+        field.scene().clone(),
+        CellMateAvoidance::NONE,
+        Stepping::rk4(dt),
+        0,
+    )?;
+    let Stretch { x, xd, xdd, mut contacts, stalls, .. } = run.advance(steps + 1)?;
+    // By row, and in the field's order within a row.
+    contacts.sort_by_key(|&(k, _)| k);
+    let t = (0..=steps).map(|k| k as f64 * dt).collect();
+    let trajectory = Trajectory { dim: primitive.dim, t, x, xd, xdd };
+    Ok(Rollout { trajectory, contacts, stalls })
 }

@@ -12,3 +12,4 @@ pub const FILE_DESCRIPTOR_SET: &[u8] = tonic::include_file_descriptor_set!("dmp_
 pub mod codec;
 pub mod obstacle_json;
 pub mod primitive;
+pub mod status;

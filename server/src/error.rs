@@ -55,6 +55,7 @@ impl From<dmp::DmpError> for ServerError {
     fn from(e: dmp::DmpError) -> Self {
         match e {
             dmp::DmpError::Invalid(i) => ServerError::InvalidArgument { field: i.field, reason: i.rule },
+            e @ dmp::DmpError::Diverged { .. } => ServerError::FailedPrecondition(e.to_string()),
             other => ServerError::invalid("primitive", other.to_string()),
         }
     }

@@ -4,6 +4,7 @@
 //! | concept | module |
 //! | --- | --- |
 //! | configuration (file, then flags) | [`config`], [`cli`] |
+//! | wall time and pacing, injected | [`clock`] |
 //! | wire <-> engine conversions, validation | [`convert`] |
 //! | errors and their gRPC status | [`error`] |
 //! | the cells a server serves, each with its own scene | [`cells`] |
@@ -13,10 +14,12 @@
 //! | robots' states: local scene and `dmp/<cell>/robots/<id>/state` | [`robots`] |
 //! | the Zenoh session and the subscribers that feed the scene | [`zenoh_bridge`] |
 //! | the gRPC services, one file each | [`services`] |
+//! | served runs: the engine's execution paced into gRPC streams | [`executor`] |
 //! | many streams' segments in one write on a connection | [`write_batching`] |
 
 pub mod cells;
 pub mod cli;
+pub mod clock;
 pub mod config;
 pub mod convert;
 pub mod error;

@@ -17,6 +17,7 @@ use tonic::transport::Server;
 use tracing::{info, warn};
 
 use crate::cells::Cells;
+use crate::clock::Clock;
 use crate::config::Config;
 use crate::error::ServerError;
 use crate::robots::RobotBus;
@@ -67,8 +68,13 @@ impl ServerHandle {
     }
 }
 
-/// Starts the server and returns once it serves (health SERVING).
+/// Starts the server on the system's clock and returns once it serves (health SERVING).
 pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
+    start_with_clock(config, Clock::system()).await
+}
+
+/// Starts the server on `clock` (tests run real time on tokio's paused clock) and returns once it serves.
+pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHandle, ServerError> {
     let listener = TcpListener::bind(config.grpc_addr).await.map_err(|e| {
         ServerError::FailedPrecondition(format!("cannot listen on {}: {e}", config.grpc_addr))
     })?;
@@ -101,6 +107,7 @@ pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
         robots,
         shutdown: shutdown.clone(),
         counters: Default::default(),
+        clock,
     });
     let max = state.config.limits.max_message_bytes;
 

@@ -6,6 +6,7 @@ use tokio::sync::Semaphore;
 use tokio_util::sync::CancellationToken;
 
 use crate::cells::Cells;
+use crate::clock::Clock;
 use crate::config::Config;
 use crate::error::ServerError;
 use crate::robots::RobotBus;
@@ -29,6 +30,8 @@ pub struct AppState {
     pub shutdown: CancellationToken,
     /// Traffic counters.
     pub counters: Counters,
+    /// Wall time and pacing instants.
+    pub clock: Clock,
 }
 
 /// What the server has done so far.

@@ -7,19 +7,16 @@
 //! refill (`stream::refill`, from `MIN_REFILL` with few streams to `MAX_REFILL` with many: both are checked),
 //! extrapolated with its velocity in between; and as in the server, no knot is placed past the end of a refill.
 //!
-//! Measured (three robots): the default within 1.8e-4 - 2.2e-4 with 30 ms refills and 6.1e-5 - 1.4e-4 with 60 ms,
-//! for 1,400 - 1,600 evaluations of the field over the 4 s; the fixed 5 ms step within 3.7e-4 - 5.0e-4 for about
-//! 3,300. A tolerance of 1e-5 came within 9.6e-4 of the bound (30 ms refills), and a fixed 10 ms RK4 step deviates
-//! by 3.5e-3.
+//! The deviations measured are in BENCHMARKS.md.
 
-use std::sync::Arc;
 use std::time::Duration;
 
-use dmp_proto::v1;
+use dmp::Stepping;
+use dmp::execution::{CellMate, IntegrationCost};
+use dmp::field::Agent;
 use dmp_server::config::Defaults;
-use dmp_server::executor::runner::{AvoidanceSpec, Member, Runner, Work};
-use dmp_server::executor::stream::{MAX_REFILL, MIN_REFILL};
-use dmp_server::scene::RemoteRobot;
+use dmp_server::executor::pacing::{MAX_REFILL, MIN_REFILL};
+use dmp_server::executor::served_run::{RunAvoidance, ServedRun};
 
 use super::layout::{self, FOOTPRINT_RADIUS, OBSTACLE_RADIUS};
 
@@ -61,16 +58,15 @@ impl Mate {
         Self { id: r.id.clone(), x, xd }
     }
 
-    /// Its state at output point `k` (time `t`), as a robot state stamped `t`.
-    fn seen_at(&self, k: usize, t: f64) -> Arc<RemoteRobot> {
-        let state = v1::RobotState {
-            robot_id: self.id.clone(),
-            stamp_unix_s: t,
-            position: self.x[3 * k..3 * k + 3].to_vec(),
-            velocity: self.xd[3 * k..3 * k + 3].to_vec(),
-            footprint: Some(layout::footprint(3)),
-        };
-        Arc::new(RemoteRobot { state, footprint: Some(ball(FOOTPRINT_RADIUS)) })
+    /// Its state at output point `k`, seen just now.
+    fn seen_at<'a>(&'a self, k: usize, footprint: &'a dmp::Shape) -> CellMate<'a> {
+        CellMate {
+            id: &self.id,
+            footprint,
+            position: &self.x[3 * k..3 * k + 3],
+            velocity: &self.xd[3 * k..3 * k + 3],
+            age: 0.0,
+        }
     }
 }
 
@@ -86,7 +82,7 @@ fn run(
     me: usize,
     (step_points, tolerance): (usize, Option<f64>),
     refill: Duration,
-) -> (Vec<f64>, f64, f64, Work) {
+) -> (Vec<f64>, f64, f64, IntegrationCost) {
     let robots = layout::robots(10, 10, 3, "acc");
     let robot = &robots[me];
     let primitive = layout::primitive(robot, TAU).unwrap();
@@ -97,23 +93,19 @@ fn run(
             dmp::Obstacle::new(o.id, ball(OBSTACLE_RADIUS), o.center, None, None).unwrap()
         })
         .collect();
-    let avoidance = AvoidanceSpec {
+    let avoidance = RunAvoidance {
         obstacles: (defaults.avoidance, 50),
         robots: (defaults.robot_avoidance, 50),
         extra: fixed,
         ignore_scene: true,
     };
-    let member = Member {
-        robot_id: robot.id.clone(),
-        dims: 0..3,
-        footprint: Some(ball(FOOTPRINT_RADIUS)),
-        footprint_proto: Some(layout::footprint(3)),
-    };
+    let member = Agent { id: robot.id.clone(), dims: vec![0, 1, 2], footprint: Some(ball(FOOTPRINT_RADIUS)) };
     let motion = dmp::Motion { start: robot.start.clone(), goal: robot.goals[0].clone(), tau: TAU };
-    let mut runner = Runner::new(vec![member], primitive, motion, DT, step_points, avoidance, 100).unwrap();
-    if let Some(tol) = tolerance {
-        runner = runner.with_tolerance(tol).unwrap();
-    }
+    let stepping = Stepping { dt: DT, step_points, tolerance };
+    let members = vec![(member, Some(layout::footprint(3)))];
+    let mut run = ServedRun::new(primitive, motion, members, avoidance, stepping, 100).unwrap();
+    let runner = &mut run.execution;
+    let mate_footprint = ball(FOOTPRINT_RADIUS);
     let mates: Vec<Mate> = robots.iter().filter(|r| r.id != robot.id).map(Mate::new).collect();
     let mut x = Vec::new();
     let steps = (DURATION / DT).round() as usize;
@@ -126,8 +118,7 @@ fn run(
         let refill_points = (refill.as_secs_f64() / DT).round() as usize;
         if k % refill_points == 0 {
             let t = k as f64 * DT;
-            let seen: Vec<Arc<RemoteRobot>> = mates.iter().map(|m| m.seen_at(k, t)).collect();
-            runner.set_remote(&seen, t).unwrap();
+            runner.set_cellmates(mates.iter().map(|m| m.seen_at(k, &mate_footprint))).unwrap();
             runner.limit_knots_to(t + refill_points as f64 * DT);
         }
         x.extend(runner.advance(10).unwrap().x);
@@ -145,7 +136,7 @@ fn run(
         .zip(free.chunks_exact(3))
         .map(|(a, b)| a.iter().zip(b).map(|(p, q)| (p - q).powi(2)).sum::<f64>().sqrt())
         .fold(0.0, f64::max);
-    (x, closest, detour, runner.work())
+    (x, closest, detour, runner.cost())
 }
 
 #[test]

@@ -7,12 +7,12 @@ impl RepulsiveField {
     /// Appends to `out` every contact at time `t` and state `x`: a robot inside an obstacle's true shape, or a
     /// robot's centre inside another's footprint. Returns true if there is any.
     pub fn contacts(&mut self, t: f64, x: &[f64], out: &mut Vec<Contact>) -> bool {
-        self.contacts_along(t, 0.0, x, 1, out)
+        self.each_contact_along(t, 0.0, x, 1, |_, c| out.push(c))
     }
 
     /// Appends to `out` every contact at the `n` states `xs` (row-major, one DMP state each) at times
-    /// `t0 + k dt`: exactly what [`RepulsiveField::contacts`] finds at each of them, in order. Returns true if there
-    /// is any.
+    /// `t0 + k dt`, with the index `k` of the state: exactly what [`RepulsiveField::contacts`] finds at each of
+    /// them. Returns true if there is any.
     ///
     /// # Pruning
     /// An obstacle (or another robot) is checked state by state only if some state can reach it. With `x_0` the
@@ -20,8 +20,28 @@ impl RepulsiveField {
     /// far that centre moves, and `r` the radius of a ball about the centre holding the whole shape
     /// ([`crate::Shape::bounding_radius_sq`]): if `|x_0 - c_0| > R + |w| (n - 1) dt + r`, no state is inside it.
     /// Another robot of the scene moves as its own states say, so its own `R` is added instead of `|w| (n - 1) dt`.
-    pub fn contacts_along(&mut self, t0: f64, dt: f64, xs: &[f64], n: usize, out: &mut Vec<Contact>) -> bool {
-        let before = out.len();
+    pub fn contacts_along(
+        &mut self,
+        t0: f64,
+        dt: f64,
+        xs: &[f64],
+        n: usize,
+        out: &mut Vec<(usize, Contact)>,
+    ) -> bool {
+        self.each_contact_along(t0, dt, xs, n, |k, c| out.push((k, c)))
+    }
+
+    /// Calls `found` with every contact of [`RepulsiveField::contacts_along`] and the index of its state; true if
+    /// there is any.
+    fn each_contact_along(
+        &mut self,
+        t0: f64,
+        dt: f64,
+        xs: &[f64],
+        n: usize,
+        mut found: impl FnMut(usize, Contact),
+    ) -> bool {
+        let mut any = false;
         if n == 0 {
             return false;
         }
@@ -48,7 +68,8 @@ impl RepulsiveField {
                     }
                     let c = s.eval.value(o.shape(), o.rotation(), &s.center, &s.x);
                     if c <= 0.0 {
-                        out.push(Contact::Obstacle { agent: ai, obstacle: oi, c });
+                        found(k, Contact::Obstacle { agent: ai, obstacle: oi, c });
+                        any = true;
                     }
                 }
             }
@@ -69,12 +90,13 @@ impl RepulsiveField {
                     }
                     let c = s.eval.value(f, None, &s.center, &s.x);
                     if c <= 0.0 {
-                        out.push(Contact::Robot { agent: ai, other: bi, c });
+                        found(k, Contact::Robot { agent: ai, other: bi, c });
+                        any = true;
                     }
                 }
             }
         }
-        out.len() > before
+        any
     }
 }
 
@@ -130,7 +152,7 @@ mod tests {
         let xs: Vec<f64> = (0..12).flat_map(|k| [-0.5 + 0.05 * k as f64, 0.0, 5.0, 5.0]).collect();
         let mut out = Vec::new();
         assert!(f.contacts_along(0.0, 0.01, &xs, 12, &mut out));
-        assert!(out.iter().all(|c| matches!(c, Contact::Obstacle { agent: 0, obstacle: 0, .. })));
+        assert!(out.iter().all(|(_, c)| matches!(c, Contact::Obstacle { agent: 0, obstacle: 0, .. })));
         assert!(out.len() >= 4, "{out:?}");
     }
 
@@ -152,15 +174,18 @@ mod tests {
             let xs: Vec<f64> =
                 (0..n).flat_map(|k| (0..4).map(move |i| start[i] + k as f64 * step[i])).collect();
             let mut one_by_one = Vec::new();
+            let mut at_k = Vec::new();
             for k in 0..n {
-                f.contacts(t0 + k as f64 * dt, &xs[k * 4..(k + 1) * 4], &mut one_by_one);
+                at_k.clear();
+                f.contacts(t0 + k as f64 * dt, &xs[k * 4..(k + 1) * 4], &mut at_k);
+                one_by_one.extend(at_k.iter().map(|c| (k, *c)));
             }
             let mut along = Vec::new();
             let any = f.contacts_along(t0, dt, &xs, n, &mut along);
             prop_assert_eq!(any, !one_by_one.is_empty());
-            let key = |c: &Contact| match *c {
-                Contact::Obstacle { agent, obstacle, c } => (0, agent, obstacle, c.to_bits()),
-                Contact::Robot { agent, other, c } => (1, agent, other, c.to_bits()),
+            let key = |&(k, c): &(usize, Contact)| match c {
+                Contact::Obstacle { agent, obstacle, c } => (k, 0, agent, obstacle, c.to_bits()),
+                Contact::Robot { agent, other, c } => (k, 1, agent, other, c.to_bits()),
             };
             let mut a: Vec<_> = one_by_one.iter().map(key).collect();
             let mut b: Vec<_> = along.iter().map(key).collect();

@@ -1,5 +1,11 @@
-//! Executions: the [`runner::Runner`] state machine (pure stepping, scene and command changes, rollbacks) and the
-//! [`stream`] loop that paces it and feeds a gRPC stream.
+//! Served runs: the engine's [`dmp::Execution`] with what the server adds around it ([`served_run`]), paced into a
+//! gRPC stream ([`stream`], [`pacing`]) as segments ([`segments`]). The clock, the channels, supersession and pacing
+//! live here; the stepping, the changes and the outcomes live in the engine.
 
-pub mod runner;
+pub mod pacing;
+pub mod segments;
+pub mod served_run;
 pub mod stream;
+
+#[cfg(test)]
+mod tests;

@@ -4,7 +4,10 @@ use std::pin::Pin;
 use std::sync::Arc;
 use std::time::Duration;
 
-use dmp::{Motion, Primitive};
+use dmp::execution::{GroupMember, join_group};
+use dmp::field::Agent;
+use dmp::{Motion, Primitive, Stepping};
+use dmp_proto::status::segment_status;
 use dmp_proto::v1;
 use dmp_proto::v1::motion_service_server::MotionService;
 use tokio::sync::mpsc;
@@ -18,13 +21,15 @@ use crate::convert::{
     avoidance_from_proto, check_name, obstacle_to_engine, primitive_from_proto, superquadric_to_shape, vector,
 };
 use crate::error::ServerError;
-use crate::executor::runner::{AvoidanceSpec, Member, Runner};
-use crate::executor::stream::{Batch, Control, StreamConfig, run_stream};
-use crate::scene::{SceneState, now_unix_s};
+use crate::executor::pacing::{history_len, refill_segments};
+use crate::executor::segments::Batch;
+use crate::executor::served_run::{RunAvoidance, ServedRun};
+use crate::executor::stream::{Control, StreamConfig, run_stream};
+use crate::scene::SceneState;
 use crate::state::AppState;
 use crate::write_batching::{BatchedConnectInfo, Urgency};
 
-use super::stream_request::{DEFAULT_DT, StreamRequest, history_len};
+use super::stream_request::{DEFAULT_DT, StreamRequest};
 
 /// Implements `dmp.v1.MotionService`.
 #[derive(Debug, Clone)]
@@ -43,19 +48,23 @@ type SegmentStream = Pin<Box<dyn Stream<Item = Result<v1::Segment, Status>> + Se
 type GroupStream = Pin<Box<dyn Stream<Item = Result<v1::GroupSegment, Status>> + Send + 'static>>;
 
 /// A motion request resolved against the store: the primitive, the motion, the avoidance.
-struct Resolved {
+struct ResolvedMotion {
     robot_id: String,
     /// The robot's cell.
     cell: SceneState,
     primitive: Primitive,
     motion: Motion,
-    avoidance: AvoidanceSpec,
+    avoidance: RunAvoidance,
     footprint: Option<dmp::Shape>,
     footprint_proto: Option<v1::Superquadric>,
 }
 
 impl MotionServiceImpl {
-    async fn resolve(&self, spec: Option<&v1::MotionSpec>, prefix: &str) -> Result<Resolved, ServerError> {
+    async fn resolve(
+        &self,
+        spec: Option<&v1::MotionSpec>,
+        prefix: &str,
+    ) -> Result<ResolvedMotion, ServerError> {
         let spec = spec.ok_or_else(|| ServerError::invalid(prefix, "is required"))?;
         check_name(&format!("{prefix}.robot_id"), &spec.robot_id)?;
         check_name(&format!("{prefix}.primitive"), &spec.primitive)?;
@@ -118,37 +127,34 @@ impl MotionServiceImpl {
             .map(superquadric_to_shape)
             .transpose()
             .map_err(|e| e.within(&format!("{prefix}.footprint")))?;
-        Ok(Resolved {
+        Ok(ResolvedMotion {
             robot_id: spec.robot_id.clone(),
             cell,
             primitive,
             motion: Motion { start, goal, tau },
-            avoidance: AvoidanceSpec { obstacles, robots, extra, ignore_scene: spec.ignore_scene },
+            avoidance: RunAvoidance { obstacles, robots, extra, ignore_scene: spec.ignore_scene },
             footprint,
             footprint_proto: spec.footprint.clone(),
         })
     }
 
-    fn single_runner(
+    /// The run of one robot.
+    fn single_robot_run(
         &self,
-        r: Resolved,
-        dt: f64,
-        step_points: usize,
+        r: ResolvedMotion,
+        stepping: Stepping,
         history: usize,
-    ) -> Result<Runner, ServerError> {
+    ) -> Result<ServedRun, ServerError> {
         let dim = r.primitive.dim;
-        let member = Member {
-            robot_id: r.robot_id,
-            dims: 0..dim,
-            footprint: r.footprint,
-            footprint_proto: r.footprint_proto,
-        };
-        Runner::new(vec![member], r.primitive, r.motion, dt, step_points, r.avoidance, history)
-    }
-
-    /// The runner of a stream of one robot.
-    fn stream_runner(&self, r: Resolved, cfg: &StreamConfig) -> Result<Runner, ServerError> {
-        with_tolerance(self.single_runner(r, cfg.dt, cfg.step_points, history_len(cfg))?, cfg)
+        let member = Agent { id: r.robot_id, dims: (0..dim).collect(), footprint: r.footprint };
+        ServedRun::new(
+            r.primitive,
+            r.motion,
+            vec![(member, r.footprint_proto)],
+            r.avoidance,
+            stepping,
+            history,
+        )
     }
 
     /// Refuses, before any work, an answer that would exceed the message size: `values` numbers of position,
@@ -166,7 +172,7 @@ impl MotionServiceImpl {
     /// Spawns the producer of a stream and returns the receiving end.
     fn spawn(
         &self,
-        runner: Runner,
+        run: ServedRun,
         cell: SceneState,
         cfg: StreamConfig,
         control: Option<mpsc::Receiver<Control>>,
@@ -174,18 +180,19 @@ impl MotionServiceImpl {
         let permit = self.state.stream_permit()?;
         // Real time: room for every segment computed in one wake-up (see `stream::MAX_REFILL`).
         let buffer = self.state.config.limits.stream_buffer.max(1)
-            + if cfg.realtime { crate::executor::stream::refill_segments(&cfg) } else { 0 };
+            + if cfg.realtime { refill_segments(&cfg) } else { 0 };
         let (tx, rx) = mpsc::channel(buffer);
         let app = self.state.clone();
         tokio::spawn(async move {
-            run_stream(app, runner, cell, cfg, tx, control).await;
+            run_stream(app, run, cell, cfg, tx, control).await;
             drop(permit);
         });
         Ok(rx)
     }
 }
 
-fn single(rx: mpsc::Receiver<Result<Batch, Status>>) -> SegmentStream {
+/// The stream of a one-robot run: the only segment of each batch.
+fn one_robot_stream(rx: mpsc::Receiver<Result<Batch, Status>>) -> SegmentStream {
     Box::pin(ReceiverStream::new(rx).map(|r| r.map(|mut b| b.remove(0))))
 }
 
@@ -214,22 +221,19 @@ impl MotionService for MotionServiceImpl {
         self.check_message_size("duration", (steps + 1) * r.primitive.dim)?;
         let robot_id = r.robot_id.clone();
         let cell = r.cell.clone();
-        // A plan is RK4 at the output rate: the engine's own rollout.
-        let mut runner = self.single_runner(r, dt, 1, 16)?;
-        let now = now_unix_s();
-        let snap = cell.snapshot();
-        runner.apply_scene(&snap, &cell.other_robots(&robot_id, now, 0.5), now)?;
-        let version = snap.version;
-        let out = tokio::task::spawn_blocking(move || plan_blocking(runner, steps))
-            .await
-            .map_err(|e| Status::internal(e.to_string()))??;
-        let (segment_points, collisions, stalled, goal) = out;
-        let dim = segment_points.dim;
-        let status = if collisions.is_empty() && goal {
-            v1::SegmentStatus::GoalReached
-        } else {
-            v1::SegmentStatus::Running
-        };
+        // A plan is RK4 at the output rate, as the engine's own rollout.
+        let mut run = self.single_robot_run(r, Stepping::rk4(dt), 0)?;
+        let now = self.state.clock.now_unix_s();
+        let snapshot = cell.snapshot();
+        run.apply_scene(&snapshot, &cell.other_robots(&robot_id, now, 0.5), now)?;
+        let (mut execution, scene_version) = (run.execution, run.scene_version);
+        let (stretch, execution) =
+            tokio::task::spawn_blocking(move || (execution.advance(steps + 1), execution))
+                .await
+                .map_err(|e| Status::internal(e.to_string()))?;
+        let stretch = stretch.map_err(ServerError::from)?;
+        let collisions: Vec<String> = execution.touched().iter().cloned().collect();
+        let stalled = !stretch.stalls.is_empty();
         info!(robot = %robot_id, steps, collisions = collisions.len(), stalled, "planned");
         Ok(Response::new(v1::PlanResponse {
             trajectory: Some(v1::Segment {
@@ -237,12 +241,12 @@ impl MotionService for MotionServiceImpl {
                 sequence: 0,
                 start_time: 0.0,
                 dt,
-                dim: dim as u32,
-                positions: segment_points.x,
-                velocities: segment_points.xd,
-                accelerations: segment_points.xdd,
-                status: status as i32,
-                scene_version: version,
+                dim: execution.dim() as u32,
+                status: segment_status(stretch.outcome) as i32,
+                positions: stretch.x,
+                velocities: stretch.xd,
+                accelerations: stretch.xdd,
+                scene_version,
                 start_unix_s: 0.0,
             }),
             collisions,
@@ -263,8 +267,8 @@ impl MotionService for MotionServiceImpl {
         info!(robot = %r.robot_id, cell = r.cell.cell(), realtime = cfg.realtime, "execute");
         self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
         let cell = r.cell.clone();
-        let runner = self.stream_runner(r, &cfg)?;
-        Ok(Response::new(single(self.spawn(runner, cell, cfg, None)?)))
+        let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
+        Ok(Response::new(one_robot_stream(self.spawn(run, cell, cfg, None)?)))
     }
 
     type SessionStream = SegmentStream;
@@ -292,9 +296,9 @@ impl MotionService for MotionServiceImpl {
         let dim = r.primitive.dim;
         self.check_message_size("start.segment_s", cfg.segment_points * dim)?;
         let cell = r.cell.clone();
-        let runner = self.stream_runner(r, &cfg)?;
+        let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
         let (ctl_tx, ctl_rx) = mpsc::channel(64);
-        let rx = self.spawn(runner, cell, cfg, Some(ctl_rx))?;
+        let rx = self.spawn(run, cell, cfg, Some(ctl_rx))?;
         let shutdown = self.state.shutdown.clone();
         // Reads the robot's messages; a bad one is logged and dropped (the stream goes on), the end of the inbound
         // stream stops nothing (the robot may just have nothing more to say).
@@ -331,7 +335,7 @@ impl MotionService for MotionServiceImpl {
                 }
             }
         });
-        Ok(Response::new(single(rx)))
+        Ok(Response::new(one_robot_stream(rx)))
     }
 
     type ExecuteGroupStream = GroupStream;
@@ -351,96 +355,61 @@ impl MotionService for MotionServiceImpl {
         let mut resolved = Vec::with_capacity(req.members.len());
         for (i, m) in req.members.iter().enumerate() {
             let r = self.resolve(m.motion.as_ref(), &format!("members[{i}].motion")).await?;
-            if resolved.iter().any(|p: &Resolved| p.robot_id == r.robot_id) {
-                return Err(
-                    ServerError::invalid(format!("members[{i}].motion.robot_id"), "appears twice").into()
-                );
-            }
-            resolved.push(r);
-        }
-        let first = &resolved[0];
-        for (i, r) in resolved.iter().enumerate() {
-            if r.primitive.n_basis != first.primitive.n_basis || r.primitive.alpha != first.primitive.alpha {
-                return Err(ServerError::invalid(
-                    format!("members[{i}].motion.primitive"),
-                    "every member's primitive must share N and alpha (they run on one phase)",
-                )
-                .into());
-            }
-            if r.primitive.dim != first.primitive.dim {
-                return Err(ServerError::invalid(
-                    format!("members[{i}].motion.primitive"),
-                    "every member must move in the same number of dimensions",
-                )
-                .into());
-            }
-            if r.cell.cell() != first.cell.cell() {
+            if r.cell.cell() != resolved.first().map_or(r.cell.cell(), |f: &ResolvedMotion| f.cell.cell()) {
                 return Err(ServerError::invalid(
                     format!("members[{i}].motion.cell"),
                     format!(
                         "must be the first member's cell `{}`: a group works in one cell",
-                        first.cell.cell()
+                        resolved[0].cell.cell()
                     ),
                 )
                 .into());
             }
-            if r.footprint.is_none() {
-                return Err(ServerError::invalid(
-                    format!("members[{i}].motion.footprint"),
-                    "is required: the other members avoid it",
-                )
-                .into());
-            }
+            resolved.push(r);
         }
         let tau =
             if req.tau == 0.0 { resolved.iter().map(|r| r.motion.tau).fold(0.0, f64::max) } else { req.tau };
         if !(tau.is_finite() && tau > 0.0) {
             return Err(ServerError::invalid("tau", "must be a finite number greater than zero").into());
         }
-        let cfg = StreamRequest::of_group(&req).config(tau, &self.state.config, urgency)?;
-        let cell = first.cell.clone();
         // One DMP: the members' primitives side by side (the paper's 6-D youBot DMP).
-        let mut primitive = first.primitive.clone();
-        primitive.tau = tau;
-        primitive.dim = 0;
-        for f in [&mut primitive.k, &mut primitive.d, &mut primitive.start, &mut primitive.goal] {
-            f.clear();
-        }
-        primitive.weights.clear();
-        let mut motion = Motion { start: Vec::new(), goal: Vec::new(), tau };
-        let mut members = Vec::new();
-        let mut avoidance = first.avoidance.clone();
+        let group: Vec<GroupMember<'_>> = resolved
+            .iter()
+            .map(|r| GroupMember {
+                id: &r.robot_id,
+                primitive: &r.primitive,
+                motion: &r.motion,
+                footprint: r.footprint.as_ref(),
+            })
+            .collect();
+        let (primitive, motion, agents) = join_group(&group, Some(tau)).map_err(|e| {
+            // The engine names a member's fields; the request holds them in its motion.
+            match ServerError::from(e) {
+                ServerError::InvalidArgument { field, reason } => ServerError::InvalidArgument {
+                    field: field.replacen("].", "].motion.", 1).replace(".motion.id", ".motion.robot_id"),
+                    reason,
+                },
+                other => other,
+            }
+        })?;
+        let cfg = StreamRequest::of_group(&req).config(tau, &self.state.config, urgency)?;
+        let cell = resolved[0].cell.clone();
+        // The members' extra obstacles, once each (members often repeat the same ones).
+        let mut avoidance = resolved[0].avoidance.clone();
         avoidance.extra.clear();
         for r in &resolved {
-            let p = &r.primitive;
-            let dims = primitive.dim..primitive.dim + p.dim;
-            primitive.dim += p.dim;
-            primitive.k.extend(&p.k);
-            primitive.d.extend(&p.d);
-            primitive.start.extend(&p.start);
-            primitive.goal.extend(&p.goal);
-            primitive.weights.extend(p.weights.iter().cloned());
-            motion.start.extend(&r.motion.start);
-            motion.goal.extend(&r.motion.goal);
-            // The members' extra obstacles, once each (members often repeat the same ones).
             for o in &r.avoidance.extra {
                 if !avoidance.extra.iter().any(|e| e.id() == o.id()) {
                     avoidance.extra.push(o.clone());
                 }
             }
-            members.push(Member {
-                robot_id: r.robot_id.clone(),
-                dims,
-                footprint: r.footprint.clone(),
-                footprint_proto: r.footprint_proto.clone(),
-            });
         }
+        let members =
+            agents.into_iter().zip(resolved.into_iter().map(|r| r.footprint_proto)).collect::<Vec<_>>();
         info!(robots = members.len(), realtime = cfg.realtime, "execute group");
         self.check_message_size("segment_s", cfg.segment_points * primitive.dim)?;
-        let runner =
-            Runner::new(members, primitive, motion, cfg.dt, cfg.step_points, avoidance, history_len(&cfg))?;
-        let runner = with_tolerance(runner, &cfg)?;
-        let rx = self.spawn(runner, cell, cfg, None)?;
+        let run = ServedRun::new(primitive, motion, members, avoidance, cfg.stepping, history_len(&cfg))?;
+        let rx = self.spawn(run, cell, cfg, None)?;
         let stream = ReceiverStream::new(rx).map(|r| {
             r.map(|segments| v1::GroupSegment {
                 sequence: segments.first().map(|s| s.sequence).unwrap_or(0),
@@ -451,36 +420,7 @@ impl MotionService for MotionServiceImpl {
     }
 }
 
-/// Rolls a runner out for `steps` steps: the points (steps + 1 rows), contacts, stalled, arrived.
-fn plan_blocking(
-    mut runner: Runner,
-    steps: usize,
-) -> Result<(PlanPoints, Vec<String>, bool, bool), ServerError> {
-    let pts = runner.advance(steps + 1)?;
-    let dim = runner.dim();
-    let outcome = pts.outcome;
-    let collisions = runner.touched().iter().cloned().collect();
-    let stalled = outcome == Some(crate::executor::runner::Outcome::Stalled);
-    let goal = outcome == Some(crate::executor::runner::Outcome::GoalReached);
-    Ok((PlanPoints { dim, x: pts.x, xd: pts.xd, xdd: pts.xdd }, collisions, stalled, goal))
-}
-
-struct PlanPoints {
-    dim: usize,
-    x: Vec<f64>,
-    xd: Vec<f64>,
-    xdd: Vec<f64>,
-}
-
 /// The urgency of the connection a request came on, when it batches its writes (`write_batching`).
 fn urgency_of<T>(request: &Request<T>) -> Option<Urgency> {
     request.extensions().get::<BatchedConnectInfo<TcpConnectInfo>>().map(|c| c.urgency.clone())
-}
-
-/// The runner with the adaptive step, when the stream's request set a tolerance.
-fn with_tolerance(runner: Runner, cfg: &StreamConfig) -> Result<Runner, ServerError> {
-    match cfg.tolerance {
-        Some(tol) => runner.with_tolerance(tol),
-        None => Ok(runner),
-    }
 }

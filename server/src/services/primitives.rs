@@ -226,6 +226,7 @@ mod tests {
             config,
             shutdown: CancellationToken::new(),
             counters: Default::default(),
+            clock: Default::default(),
         }))
     }
 

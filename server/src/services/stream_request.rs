@@ -1,8 +1,9 @@
-//! What a streamed execution asks for (the fields ExecuteRequest and ExecuteGroupRequest share), its defaults and
-//! its validation, and the rollback history it needs.
+//! What a streamed execution asks for (the fields ExecuteRequest and ExecuteGroupRequest share), its defaults
+//! and its validation.
 
 use std::time::Duration;
 
+use dmp::Stepping;
 use dmp_proto::v1;
 
 use crate::config::Config;
@@ -123,23 +124,12 @@ impl StreamRequest {
             Some(_) => ((step / dt).round() as usize).max(1),
         };
         Ok(StreamConfig {
-            dt,
+            stepping: Stepping { dt, step_points, tolerance },
             segment_points,
-            step_points,
-            tolerance,
             realtime,
             lookahead: Duration::from_secs_f64(lookahead_s),
             max_duration,
             urgency,
         })
     }
-}
-
-/// States kept for rollbacks: everything a stream can have sent ahead of the robot (the lookahead, one refill and
-/// one segment), plus a margin.
-pub(super) fn history_len(cfg: &StreamConfig) -> usize {
-    let dt = cfg.dt;
-    let refill = if cfg.realtime { crate::executor::stream::MAX_REFILL.as_secs_f64() } else { 0.0 };
-    let ahead = cfg.lookahead.as_secs_f64() + refill + cfg.segment_points as f64 * dt;
-    ((ahead / dt).ceil() as usize + 2).max(16)
 }

@@ -1,7 +1,8 @@
 //! Holding (pause, and the deceleration of a stop): the phase is frozen and the robot comes to rest under the DMP's
 //! damping alone, integrated exactly.
 
-use dmp::{Primitive, State};
+use crate::integrate::State;
+use crate::primitive::Primitive;
 
 /// The damping a holding robot decelerates with, per dimension: the primitive's `D / tau`, or critical damping if
 /// it has none (a robot must come to rest).

@@ -1,13 +1,13 @@
-//! The recent output points of a run, kept for rollbacks. One record per [`Runner::advance`](super::Runner::advance)
-//! (a segment): its points' phases, positions and velocities in flat arrays, copied once per array rather than
+//! The recent output points of a run, kept for rollbacks. One record per [`Execution::advance`](super::Execution::advance)
+//! (a stretch): its points' phases, positions and velocities in flat arrays, copied once per array rather than
 //! once per point, into buffers that are recycled (no allocation once the history is full). The points lie on the
-//! run's output grid, one step apart (the runner's invariant, which `contacts_along` also relies on): a record
-//! keeps the grid index of its first point, and point `k` is at `(first + k) dt`, the very value the runner
+//! run's output grid, one step apart (the execution's invariant, which `contacts_along` also relies on): a record
+//! keeps the grid index of its first point, and point `k` is at `(first + k) dt`, the very value the execution
 //! computed.
 
 use std::collections::VecDeque;
 
-use dmp::integrate::State;
+use crate::integrate::State;
 
 /// The points of one `advance`, in time order.
 #[derive(Debug, Default)]
@@ -80,7 +80,7 @@ impl History {
     /// `xd` (`dim` per point), and forgets the oldest records that are no longer needed to hold `keep` points.
     pub(super) fn push(&mut self, t0: f64, s: &[f64], x: &[f64], xd: &[f64]) {
         debug_assert!(x.len() == s.len() * self.dim && xd.len() == x.len());
-        if s.is_empty() {
+        if s.is_empty() || self.keep == 0 {
             return;
         }
         let mut r = self.spare.pop().unwrap_or_default();

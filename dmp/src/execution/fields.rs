@@ -1,0 +1,99 @@
+//! The two fields of a run: the obstacles with the run's own members, and the cell's other robots as moving
+//! obstacles (updated in place while they are the same robots). Both change from the run's next output point (a
+//! rebase), never by a jump.
+
+use super::{CellMate, Execution, cellmate_field};
+use crate::error::Result;
+use crate::field::{RepulsiveField, Scene};
+use crate::isopotential::Isopotential;
+use crate::obstacle::Obstacle;
+
+impl Execution {
+    /// Replaces the cell's obstacles by `seen`: each obstacle with its age, how long before the run's current time
+    /// its centre was where it says (it moves on along its velocity). Obstacles of another dimension than the
+    /// members' are left out; the run's own obstacles stay, after these.
+    pub fn set_obstacles<'a>(&mut self, seen: impl IntoIterator<Item = (&'a Obstacle, f64)>) -> Result<()> {
+        self.rebase();
+        let t = self.out_t;
+        let sub = self.field.agent_dim();
+        let mut obstacles = Vec::new();
+        for (o, age) in seen {
+            if o.dim() != sub {
+                continue;
+            }
+            // Centre now, moved back along its velocity to the run's time zero.
+            let mut now = vec![0.0; sub];
+            o.center_at(age, &mut now);
+            let c0: Vec<f64> = now.iter().zip(o.velocity()).map(|(c, v)| c - v * t).collect();
+            obstacles.push(o.with_center(c0));
+        }
+        obstacles.extend(self.scene.obstacles.iter().cloned());
+        let scene = Scene { obstacles, ..self.scene.clone() };
+        self.field = RepulsiveField::new(scene, self.primitive.dim)?;
+        Ok(())
+    }
+
+    /// Updates the cell's other robots (moving obstacles with their footprints). Members of the run and robots of
+    /// another dimension than the members' are left out.
+    pub fn set_cellmates<'a, I>(&mut self, mates: I) -> Result<()>
+    where
+        I: IntoIterator<Item = CellMate<'a>>,
+        I::IntoIter: Clone,
+    {
+        // Taken out for the call, so that the filter does not borrow the run.
+        let members = std::mem::take(&mut self.member_ids);
+        let result = self.set_cellmates_except(&members, mates);
+        self.member_ids = members;
+        result
+    }
+
+    fn set_cellmates_except<'a, I>(&mut self, members: &[String], mates: I) -> Result<()>
+    where
+        I: IntoIterator<Item = CellMate<'a>>,
+        I::IntoIter: Clone,
+    {
+        let t = self.out_t;
+        let sub = self.field.agent_dim();
+        let mates = mates.into_iter().filter(|m| {
+            !members.iter().any(|id| id == m.id)
+                && m.footprint.dim() == sub
+                && m.position.len() == sub
+                && m.velocity.len() == sub
+        });
+        // The centre at the run's time zero of a robot seen `age` ago moving at constant velocity.
+        let c0_into = |m: &CellMate<'_>, c0: &mut Vec<f64>| {
+            c0.clear();
+            c0.extend(m.position.iter().zip(m.velocity).map(|(p, v)| p + v * m.age - v * t));
+        };
+        // The same robots with the same footprints as the field holds (the common case, every stretch): move them
+        // in place instead of compiling a new field.
+        let current = &self.cellmates.scene().obstacles;
+        let same = mates.clone().count() == current.len()
+            && mates.clone().zip(current).all(|(m, o)| o.id() == m.id && m.footprint == o.shape());
+        if same {
+            if current.is_empty() {
+                return Ok(());
+            }
+            self.rebase();
+            let mut c0 = std::mem::take(&mut self.c0);
+            for (i, m) in mates.enumerate() {
+                c0_into(&m, &mut c0);
+                self.cellmates.set_obstacle_motion(i, &c0, m.velocity);
+            }
+            self.c0 = c0;
+            return Ok(());
+        }
+        let mut obstacles = Vec::new();
+        for m in mates {
+            let mut c0 = Vec::new();
+            c0_into(&m, &mut c0);
+            if let Ok(o) = Obstacle::new(m.id, m.footprint.clone(), c0, None, Some(m.velocity.to_vec())) {
+                obstacles.push(o);
+            }
+        }
+        self.rebase();
+        let agents = self.field.agents().to_vec();
+        self.cellmates = cellmate_field(&agents, self.cellmate_avoidance, obstacles, self.primitive.dim)?;
+        Ok(())
+    }
+}

@@ -1,0 +1,350 @@
+//! One run on one phase: a robot, or a group of robots sharing a DMP, stepped stretch by stretch to a given time.
+//! The offline rollout ([`crate::rollout`]), the scenario runs and the server's streams all step through
+//! [`Execution`], so that the offline and the served paths agree by construction.
+//!
+//! Changes (a new goal, `tau` or start, pause, resume and stop, new obstacles, the cell-mates' motion) apply from the
+//! next output point, never by a jump; the run can roll back to a recent point so that a new stretch supersedes
+//! points already handed out.
+//!
+//! Stepping ([`Stepping`]): RK4 on an internal grid of `step_points` output steps, the output points in between
+//! being the quintic Hermite interpolant of the two knots around them ([`crate::dense`]); every change restarts the
+//! grid at the next output point, so a change takes effect exactly where it would with RK4 at the output rate. With
+//! a tolerance the grid adapts instead: Dormand–Prince 5(4) steps of a whole number of output steps, at most
+//! `step_points`, each accepted when its error estimate is within the tolerance
+//! ([`crate::integrate::dormand_prince`]), and never beyond the limit the caller sets
+//! ([`Execution::limit_knots_to`]: where its next change can apply, so that no step is computed past it for
+//! nothing).
+//!
+//! Outcomes ([`Outcome`]): arrival, stall, contact, holding, stop and the end time, judged on the points handed out.
+
+mod advance;
+mod changes;
+mod fields;
+mod grid;
+mod group;
+mod history;
+mod hold;
+mod stepping;
+
+use crate::avoidance::Avoidance;
+use crate::dense::{Interpolant, Knot};
+use crate::error::Result;
+use crate::field::{Agent, Contact, RepulsiveField, Scene};
+use crate::integrate::{Integrator, Motion, State};
+use crate::primitive::Primitive;
+use crate::stall::{Stall, StallConfig, StallDetector};
+
+pub use self::group::{GroupMember, join_group};
+use self::history::History;
+pub use self::stepping::{IntegrationCost, MAX_STIFF_STEP, Stepping, check_stability};
+
+/// Distance to the goal and speed under which a robot has arrived.
+pub const ARRIVED_DISTANCE: f64 = 1e-3;
+/// See [`ARRIVED_DISTANCE`].
+pub const ARRIVED_SPEED: f64 = 1e-3;
+
+/// What a stretch of points came to. Later variants are not "worse": see [`Execution::advance`] for the order in
+/// which they are judged.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Outcome {
+    /// Moving.
+    #[default]
+    Running,
+    /// Holding (a pause, or a stop still decelerating).
+    Holding,
+    /// A robot stopped away from its goal.
+    Stalled,
+    /// A robot is inside an obstacle's true shape or another robot's footprint.
+    Collision,
+    /// Every robot at its goal and at rest: the run is complete.
+    GoalReached,
+    /// A stop came to rest: the run is complete.
+    Stopped,
+    /// The last point is at the end time ([`Execution::set_end_time`]): the run is complete.
+    EndTime,
+}
+
+impl Outcome {
+    /// True when the run is complete after this stretch.
+    pub fn is_final(self) -> bool {
+        matches!(self, Outcome::GoalReached | Outcome::Stopped | Outcome::EndTime)
+    }
+}
+
+/// How the cell's other robots are avoided: they are moving obstacles of this method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CellMateAvoidance {
+    /// The method.
+    pub method: Avoidance,
+    /// Boundary samples of a footprint for the point methods.
+    pub point_samples: usize,
+}
+
+impl CellMateAvoidance {
+    /// Cell-mates are not avoided.
+    pub const NONE: Self = Self { method: Avoidance::NONE, point_samples: 0 };
+}
+
+/// Another robot of the cell, seen `age` seconds before the run's current time at `position`, moving at
+/// `velocity`, with its footprint: a moving obstacle for every member.
+#[derive(Debug, Clone, Copy)]
+pub struct CellMate<'a> {
+    /// Its id.
+    pub id: &'a str,
+    /// What the members avoid, centred on its position.
+    pub footprint: &'a crate::Shape,
+    /// Where it was.
+    pub position: &'a [f64],
+    /// Its velocity then.
+    pub velocity: &'a [f64],
+    /// How long before the run's current time it was there.
+    pub age: f64,
+}
+
+/// The output points of one [`Execution::advance`], one output step apart.
+#[derive(Debug, Clone, Default)]
+pub struct Stretch {
+    /// Time of the first point.
+    pub start_time: f64,
+    /// Positions, row-major (the DMP's dimension per point).
+    pub x: Vec<f64>,
+    /// Velocities `dx/dt`.
+    pub xd: Vec<f64>,
+    /// Accelerations.
+    pub xdd: Vec<f64>,
+    /// What the stretch came to.
+    pub outcome: Outcome,
+    /// Contacts with the run's obstacles and between its members, with the index of the point (within the
+    /// stretch); the indices are those of [`Execution::field`].
+    pub contacts: Vec<(usize, Contact)>,
+    /// Contacts with the cell-mates, with the index of the point.
+    pub cellmate_contacts: Vec<(usize, Contact)>,
+    /// Stalls detected, with the index of the member.
+    pub stalls: Vec<(usize, Stall)>,
+}
+
+/// One run of a primitive on one phase: the state machine that the offline rollout and the server's streams step.
+#[derive(Debug)]
+pub struct Execution {
+    primitive: Primitive,
+    integrator: Integrator,
+    motion: Motion,
+    stepping: Stepping,
+    /// The fixed part of the field: the run's own obstacles, its members and their methods.
+    scene: Scene,
+    /// How the cell-mates are avoided.
+    cellmate_avoidance: CellMateAvoidance,
+    /// Obstacles of the cell (set by [`Execution::set_obstacles`]) then the run's own, and the members.
+    field: RepulsiveField,
+    /// The cell's other robots.
+    cellmates: RepulsiveField,
+    /// The grid point the output is in, and the next one (None until computed after a change).
+    knot0: Knot,
+    knot1: Option<Knot>,
+    /// Buffers of a knot dropped by a change, for the next one.
+    spare: Option<Knot>,
+    /// `knot0.xdd` is the acceleration at `knot0` under the current field and motion (it was computed as the
+    /// previous step's end knot and nothing changed since): the next step reuses it as its first stage.
+    acc0_current: bool,
+    /// The interpolant of `knot0` and `knot1`, fitted when `knot1` is computed.
+    interpolant: Interpolant,
+    /// Scratch acceleration of an interpolated point.
+    xdd: Vec<f64>,
+    /// Where a step computes the next knot.
+    scratch: State,
+    /// Time of the next output point.
+    out_t: f64,
+    /// Adaptive step: the next step to try, in output steps.
+    next_points: usize,
+    /// No knot beyond this time (adaptive step).
+    knot_limit: f64,
+    /// The run is complete at this time.
+    end_time: f64,
+    /// The recent output points (their states), for rollbacks.
+    history: History,
+    /// The phases of the points of an `advance`, for the history.
+    stretch_s: Vec<f64>,
+    holding: bool,
+    stopping: bool,
+    stall: Vec<StallDetector>,
+    /// The last output point handed out (when `has_last`): position and velocity.
+    last_x: Vec<f64>,
+    last_xd: Vec<f64>,
+    has_last: bool,
+    /// The members' ids (never a cell-mate).
+    member_ids: Vec<String>,
+    /// Scratch for a cell-mate's centre.
+    c0: Vec<f64>,
+    /// Every obstacle or robot touched so far.
+    touched: std::collections::BTreeSet<String>,
+    cost: IntegrationCost,
+}
+
+impl Execution {
+    /// A run of `primitive` with `motion`, avoiding `scene` (the run's own obstacles, centred at time zero, and its
+    /// members: a group on one phase when it names several robots, one implicit robot owning every dimension when
+    /// it names none) and the cell-mates ([`Execution::set_cellmates`]) with `cellmates`. Keeps the last
+    /// `history` output points for rollbacks.
+    pub fn new(
+        primitive: Primitive,
+        motion: Motion,
+        scene: Scene,
+        cellmates: CellMateAvoidance,
+        stepping: Stepping,
+        history: usize,
+    ) -> Result<Self> {
+        motion.validate(primitive.dim).map_err(|e| e.within("motion"))?;
+        stepping.validate()?;
+        check_stability(&primitive.k, stepping.internal_step(), motion.tau, "tau")?;
+        let integrator = Integrator::new(&primitive)?;
+        let dim = primitive.dim;
+        let field = RepulsiveField::new(scene.clone(), dim)?;
+        let cellmate_field = cellmate_field(field.agents(), cellmates, Vec::new(), dim)?;
+        let stall = field
+            .agents()
+            .iter()
+            .map(|a| StallDetector::new(StallConfig::default(), a.dims.clone()))
+            .collect();
+        let member_ids = field.agents().iter().map(|a| a.id.clone()).collect();
+        let state = State::at_rest(&motion.start);
+        let knot0 = Knot { t: 0.0, s: 1.0, x: state.x.clone(), xd: state.xd.clone(), xdd: vec![0.0; dim] };
+        Ok(Self {
+            integrator,
+            motion,
+            scene,
+            cellmate_avoidance: cellmates,
+            field,
+            cellmates: cellmate_field,
+            knot0,
+            knot1: None,
+            spare: None,
+            acc0_current: false,
+            interpolant: Interpolant::default(),
+            xdd: vec![0.0; dim],
+            scratch: state,
+            out_t: 0.0,
+            next_points: stepping.step_points,
+            knot_limit: f64::INFINITY,
+            end_time: f64::INFINITY,
+            history: History::new(dim, stepping.dt, history),
+            stretch_s: Vec::new(),
+            holding: false,
+            stopping: false,
+            stall,
+            last_x: vec![0.0; dim],
+            last_xd: vec![0.0; dim],
+            has_last: false,
+            member_ids,
+            c0: Vec::new(),
+            touched: Default::default(),
+            cost: IntegrationCost::default(),
+            primitive,
+            stepping,
+        })
+    }
+
+    /// The robots of the run (one implicit robot when the scene named none).
+    pub fn members(&self) -> &[Agent] {
+        self.field.agents()
+    }
+
+    /// The field of the run's obstacles and members (what [`Stretch::contacts`] index).
+    pub fn field(&self) -> &RepulsiveField {
+        &self.field
+    }
+
+    /// Time of the next output point.
+    pub fn time(&self) -> f64 {
+        self.out_t
+    }
+
+    /// The DMP's dimension (the members' together).
+    pub fn dim(&self) -> usize {
+        self.primitive.dim
+    }
+
+    /// How the run steps.
+    pub fn stepping(&self) -> &Stepping {
+        &self.stepping
+    }
+
+    /// Output step.
+    pub fn dt(&self) -> f64 {
+        self.stepping.dt
+    }
+
+    /// The motion (start, goal, tau).
+    pub fn motion(&self) -> &Motion {
+        &self.motion
+    }
+
+    /// What the integration cost so far.
+    pub fn cost(&self) -> IntegrationCost {
+        self.cost
+    }
+
+    /// Every obstacle or robot touched so far, by id.
+    pub fn touched(&self) -> &std::collections::BTreeSet<String> {
+        &self.touched
+    }
+
+    /// True while holding (a pause, or a stop).
+    pub fn is_holding(&self) -> bool {
+        self.holding
+    }
+
+    /// The run is complete at run time `t` (its last point is there).
+    pub fn set_end_time(&mut self, t: f64) {
+        self.end_time = t;
+    }
+
+    /// Output points from the current time to the end time, inclusive (at least one).
+    pub fn points_to_end(&self) -> usize {
+        let dt = self.stepping.dt;
+        ((self.end_time - self.out_t) / dt).round().clamp(0.0, usize::MAX as f64 / 2.0) as usize + 1
+    }
+
+    /// Adaptive step: no knot is placed after run time `t` (where the caller's next change can apply: a change
+    /// restarts the grid there, and a step past it would be computed for nothing). Ignored when `t` is less than
+    /// one output step ahead of the current knot.
+    pub fn limit_knots_to(&mut self, t: f64) {
+        self.knot_limit = t;
+    }
+
+    /// The last output point (the start, before any).
+    fn last(&self) -> (&[f64], &[f64]) {
+        if self.has_last { (&self.last_x, &self.last_xd) } else { (&self.knot0.x, &self.knot0.xd) }
+    }
+
+    /// Whether every member is at its goal and at rest (at the last output point).
+    pub fn arrived(&self) -> bool {
+        let (x, xd) = self.last();
+        self.members().iter().all(|m| {
+            let dist: f64 = m.dims.iter().map(|&i| (x[i] - self.motion.goal[i]).powi(2)).sum::<f64>().sqrt();
+            let speed: f64 = m.dims.iter().map(|&i| xd[i].powi(2)).sum::<f64>().sqrt();
+            dist <= ARRIVED_DISTANCE && speed <= ARRIVED_SPEED
+        })
+    }
+
+    /// True when every member is at rest (at the last output point).
+    pub fn at_rest(&self) -> bool {
+        self.last().1.iter().map(|v| v * v).sum::<f64>().sqrt() <= ARRIVED_SPEED
+    }
+}
+
+/// The cell's other robots, as moving obstacles of the cell-mate method.
+fn cellmate_field(
+    agents: &[Agent],
+    a: CellMateAvoidance,
+    obstacles: Vec<crate::Obstacle>,
+    dim: usize,
+) -> Result<RepulsiveField> {
+    let scene = Scene {
+        obstacles,
+        avoidance: a.method,
+        agents: agents.to_vec(),
+        robot_avoidance: Avoidance::NONE,
+        point_samples: a.point_samples,
+    };
+    RepulsiveField::new(scene, dim)
+}

@@ -1,0 +1,49 @@
+//! The one mapping of a run's outcome to the status its segments carry.
+
+use dmp::Outcome;
+
+use crate::v1::SegmentStatus;
+
+/// The status of a segment whose points came to `outcome`.
+pub fn segment_status(outcome: Outcome) -> SegmentStatus {
+    match outcome {
+        Outcome::Running => SegmentStatus::Running,
+        Outcome::Holding => SegmentStatus::Paused,
+        Outcome::Stalled => SegmentStatus::Stalled,
+        Outcome::Collision => SegmentStatus::Collision,
+        Outcome::GoalReached => SegmentStatus::GoalReached,
+        Outcome::Stopped | Outcome::EndTime => SegmentStatus::Stopped,
+    }
+}
+
+/// Why a run ended, in words (logs), when `outcome` ends it.
+pub fn end_reason(outcome: Outcome) -> Option<&'static str> {
+    match outcome {
+        Outcome::GoalReached => Some("goal reached"),
+        Outcome::Stopped => Some("stopped"),
+        Outcome::EndTime => Some("max duration"),
+        Outcome::Running | Outcome::Holding | Outcome::Stalled | Outcome::Collision => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn final_outcomes_and_only_they_end_a_run() {
+        for o in [
+            Outcome::Running,
+            Outcome::Holding,
+            Outcome::Stalled,
+            Outcome::Collision,
+            Outcome::GoalReached,
+            Outcome::Stopped,
+            Outcome::EndTime,
+        ] {
+            assert_eq!(end_reason(o).is_some(), o.is_final(), "{o:?}");
+        }
+        assert_eq!(segment_status(Outcome::EndTime), SegmentStatus::Stopped);
+        assert_eq!(segment_status(Outcome::Holding), SegmentStatus::Paused);
+    }
+}
