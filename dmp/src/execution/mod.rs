@@ -348,3 +348,6 @@ fn cellmate_field(
     };
     RepulsiveField::new(scene, dim)
 }
+
+#[cfg(test)]
+mod tests;

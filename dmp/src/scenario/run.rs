@@ -131,9 +131,8 @@ pub fn prepare(s: &Scenario) -> Result<Prepared> {
 
 /// Rolls the prepared scenario out with and without obstacles and measures it.
 pub fn run(p: &Prepared) -> Result<ScenarioOutcome> {
-    let free = rollout(&p.primitive, &p.motion, &mut p.free_field()?, p.dt, p.steps)?;
-    let mut field = p.field()?;
-    let adapted = rollout(&p.primitive, &p.motion, &mut field, p.dt, p.steps)?;
+    let free = rollout(&p.primitive, &p.motion, &p.free_field()?, p.dt, p.steps)?;
+    let adapted = rollout(&p.primitive, &p.motion, &p.field()?, p.dt, p.steps)?;
     let metrics = metrics(p, &free, &adapted)?;
     Ok(ScenarioOutcome { free, adapted, metrics })
 }

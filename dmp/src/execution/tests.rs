@@ -1,0 +1,117 @@
+//! The execution's own contract: rollbacks recompute the same points, changes keep the motion continuous, stops and
+//! end times end the run where they say.
+
+use super::*;
+
+/// A 2-D straight reach from the origin to (1, 0.5) in 1 s, alone, at `stepping`.
+fn reach(stepping: Stepping) -> Execution {
+    let p =
+        Primitive::straight_line(20, 4.0, vec![1000.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 0.5]).unwrap();
+    Execution::new(p.clone(), Motion::of(&p), Scene::empty(), CellMateAvoidance::NONE, stepping, 200).unwrap()
+}
+
+fn bits(v: &[f64]) -> Vec<u64> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+#[test]
+fn a_rollback_recomputes_the_same_points_bit_for_bit() {
+    for stepping in [
+        Stepping::rk4(1e-3),
+        Stepping { dt: 1e-3, step_points: 5, tolerance: None },
+        Stepping { dt: 1e-3, step_points: 30, tolerance: Some(3e-6) },
+    ] {
+        let mut e = reach(stepping);
+        e.advance(50).unwrap();
+        let first = e.advance(50).unwrap();
+        assert_eq!(e.rollback_to(0.050), 0.050, "{stepping:?}");
+        let again = e.advance(50).unwrap();
+        assert_eq!(again.start_time, first.start_time);
+        for (a, b, tol) in
+            [(&first.x, &again.x, 1e-6), (&first.xd, &again.xd, 1e-4), (&first.xdd, &again.xdd, 1e-2)]
+        {
+            if stepping.is_coarse() {
+                // The grid restarts at the rolled-back point: the same trajectory to the integration's accuracy.
+                let worst = a.iter().zip(b).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max);
+                assert!(worst < tol, "{stepping:?}: {worst}");
+            } else {
+                assert_eq!(bits(a), bits(b), "{stepping:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_goal_change_keeps_position_and_velocity_continuous_and_is_reached() {
+    let mut e = reach(Stepping::rk4(1e-3));
+    let before = e.advance(400).unwrap();
+    e.set_goal(vec![0.2, 0.9]).unwrap();
+    let after = e.advance(1).unwrap();
+    let (x0, v0) = (&before.x[798..], &before.xd[798..]);
+    for i in 0..2 {
+        assert!((after.x[i] - x0[i] - 1e-3 * v0[i]).abs() < 1e-5, "position jumps");
+        assert!((after.xd[i] - v0[i]).abs() < 0.05, "velocity jumps: {} -> {}", v0[i], after.xd[i]);
+    }
+    let mut outcome = Outcome::Running;
+    for _ in 0..400 {
+        outcome = e.advance(10).unwrap().outcome;
+        if outcome.is_final() {
+            break;
+        }
+    }
+    assert_eq!(outcome, Outcome::GoalReached);
+    assert!(e.set_goal(vec![1.0]).is_err() && e.set_goal(vec![f64::NAN, 0.0]).is_err());
+}
+
+#[test]
+fn a_stop_comes_to_rest_ends_the_run_and_is_not_resumed() {
+    let mut e = reach(Stepping::rk4(1e-3));
+    e.advance(300).unwrap();
+    e.stop();
+    assert_eq!(e.advance(10).unwrap().outcome, Outcome::Holding);
+    e.set_holding(false);
+    assert!(e.is_holding(), "a stop is not resumed");
+    let mut outcome = Outcome::Holding;
+    for _ in 0..200 {
+        outcome = e.advance(10).unwrap().outcome;
+        if outcome.is_final() {
+            break;
+        }
+    }
+    assert_eq!(outcome, Outcome::Stopped);
+    assert!(e.at_rest() && !e.arrived());
+}
+
+#[test]
+fn the_end_time_ends_the_run_on_its_point() {
+    let mut e = reach(Stepping::rk4(1e-3));
+    e.set_end_time(0.25);
+    let mut last = Stretch::default();
+    while !last.outcome.is_final() {
+        last = e.advance(40.min(e.points_to_end())).unwrap();
+    }
+    assert_eq!(last.outcome, Outcome::EndTime);
+    assert!((e.time() - 1e-3 - 0.25).abs() < 1e-12, "the last point is at the end time: {}", e.time());
+}
+
+#[test]
+fn a_pause_holds_without_stalling_and_a_resume_goes_on() {
+    let mut e = reach(Stepping::rk4(1e-3));
+    e.advance(200).unwrap();
+    e.set_holding(true);
+    for _ in 0..100 {
+        let s = e.advance(10).unwrap();
+        assert_eq!(s.outcome, Outcome::Holding);
+        assert!(s.stalls.is_empty());
+    }
+    assert!(e.at_rest());
+    e.set_holding(false);
+    let mut outcome = Outcome::Running;
+    for _ in 0..400 {
+        outcome = e.advance(10).unwrap().outcome;
+        if outcome.is_final() {
+            break;
+        }
+    }
+    assert_eq!(outcome, Outcome::GoalReached);
+}
