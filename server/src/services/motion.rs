@@ -84,7 +84,7 @@ impl MotionServiceImpl {
             ))
         })?;
         let d = primitive.dim;
-        let pick = |field: &str, v: &[f64], default: &[f64]| -> Result<Vec<f64>, ServerError> {
+        let given_or_default = |field: &str, v: &[f64], default: &[f64]| -> Result<Vec<f64>, ServerError> {
             if v.is_empty() {
                 Ok(default.to_vec())
             } else {
@@ -92,8 +92,8 @@ impl MotionServiceImpl {
                 Ok(v.to_vec())
             }
         };
-        let start = pick("start", &spec.start, &primitive.start)?;
-        let goal = pick("goal", &spec.goal, &primitive.goal)?;
+        let start = given_or_default("start", &spec.start, &primitive.start)?;
+        let goal = given_or_default("goal", &spec.goal, &primitive.goal)?;
         let tau = if spec.tau == 0.0 { primitive.tau } else { spec.tau };
         if !(tau.is_finite() && tau > 0.0) {
             return Err(ServerError::invalid(
