@@ -175,15 +175,20 @@ mod tests {
 
     /// A subscriber peer on loopback, without scouting, as the server would be; returns it and its locator.
     async fn subscriber_peer() -> (zenoh::Session, String) {
-        let options = SessionOptions {
-            mode: "peer".into(),
-            listen: Some(vec!["tcp/127.0.0.1:0".into()]),
-            connect: Vec::new(),
-            multicast_scouting: false,
-        };
-        let s = zenoh::open(session_config(&options).unwrap()).await.unwrap();
+        let config = session_config(&SessionOptions::loopback_peer(Vec::new())).unwrap();
+        let s = zenoh::open(config).await.unwrap();
         let locator = s.info().locators().await[0].to_string();
         (s, locator)
+    }
+
+    #[test]
+    fn a_publisher_connecting_to_the_server_scouts_nothing_and_listens_on_nothing() {
+        let direct = publisher_options(&["tcp/127.0.0.1:7447".into()], &[]);
+        assert_eq!((direct.listen, direct.multicast_scouting), (Some(vec![]), false));
+        let lan = publisher_options(&[], &[]);
+        assert_eq!((lan.listen, lan.multicast_scouting), (None, true));
+        let listening = publisher_options(&[], &["tcp/127.0.0.1:0".into()]);
+        assert_eq!(listening.listen, Some(vec!["tcp/127.0.0.1:0".to_string()]));
     }
 
     #[tokio::test(flavor = "multi_thread")]

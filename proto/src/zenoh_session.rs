@@ -28,6 +28,19 @@ pub struct SessionOptions {
     pub multicast_scouting: bool,
 }
 
+impl SessionOptions {
+    /// A peer on loopback (`tcp/127.0.0.1:0`, read the real port with [`locators`]) without scouting, connecting to
+    /// `connect`: what tests open, as Zenoh's own test harness does (multicast fails on CI machines).
+    pub fn loopback_peer(connect: Vec<String>) -> Self {
+        Self {
+            mode: "peer".into(),
+            listen: Some(vec!["tcp/127.0.0.1:0".into()]),
+            connect,
+            multicast_scouting: false,
+        }
+    }
+}
+
 /// The Zenoh configuration of `options` (see the module's rules). Errors name the setting: `zenoh.mode`,
 /// `zenoh.listen[i]`, `zenoh.connect[i]`.
 pub fn session_config(options: &SessionOptions) -> Result<zenoh::Config, WireError> {
@@ -71,34 +84,30 @@ pub async fn locators(session: &Session) -> Vec<String> {
 mod tests {
     use super::*;
 
-    fn loopback(connect: Vec<String>) -> SessionOptions {
-        SessionOptions {
-            mode: "peer".into(),
-            listen: Some(vec!["tcp/127.0.0.1:0".into()]),
-            connect,
-            multicast_scouting: false,
-        }
-    }
-
     #[test]
     fn config_is_built_and_checked() {
-        let c = session_config(&loopback(vec!["tcp/127.0.0.1:7447".into()])).unwrap();
+        let c = session_config(&SessionOptions::loopback_peer(vec!["tcp/127.0.0.1:7447".into()])).unwrap();
         let json = format!("{c}");
         assert!(json.contains("tcp/127.0.0.1:7447"), "{json}");
-        let mut bad = loopback(vec![]);
+        let mut bad = SessionOptions::loopback_peer(vec![]);
         bad.mode = "router".into();
         assert!(session_config(&bad).unwrap_err().to_string().starts_with("zenoh.mode"));
-        let bad = loopback(vec!["tcp/127.0.0.1:1".into(), "not an endpoint".into()]);
+        let bad = SessionOptions::loopback_peer(vec!["tcp/127.0.0.1:1".into(), "not an endpoint".into()]);
         assert!(session_config(&bad).unwrap_err().to_string().starts_with("zenoh.connect[1]"));
-        let bad = SessionOptions { listen: Some(vec!["nowhere".into()]), ..loopback(vec![]) };
+        let bad =
+            SessionOptions { listen: Some(vec!["nowhere".into()]), ..SessionOptions::loopback_peer(vec![]) };
         assert_eq!(session_config(&bad).unwrap_err().field, "zenoh.listen[0]");
     }
 
     #[test]
     fn listening_on_nothing_differs_from_the_default() {
-        let nothing = session_config(&SessionOptions { listen: Some(vec![]), ..loopback(vec![]) }).unwrap();
+        let nothing =
+            session_config(&SessionOptions { listen: Some(vec![]), ..SessionOptions::loopback_peer(vec![]) })
+                .unwrap();
         assert_eq!(nothing.get_json("listen/endpoints").unwrap(), "[]");
-        let default = session_config(&SessionOptions { listen: None, ..loopback(vec![]) }).unwrap();
+        let default =
+            session_config(&SessionOptions { listen: None, ..SessionOptions::loopback_peer(vec![]) })
+                .unwrap();
         assert_ne!(default.get_json("listen/endpoints").unwrap(), "[]");
     }
 }
