@@ -99,6 +99,13 @@ impl ClientError {
     }
 }
 
+/// A value that breaks a rule of the wire (a field, a name in a key, a Zenoh setting) is bad input.
+impl From<dmp_proto::WireError> for ClientError {
+    fn from(e: dmp_proto::WireError) -> Self {
+        ClientError::Argument { field: e.field, message: e.rule }
+    }
+}
+
 impl From<tonic::Status> for ClientError {
     fn from(s: tonic::Status) -> Self {
         ClientError::Status { code: s.code(), message: s.message().to_string() }

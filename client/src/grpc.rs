@@ -18,6 +18,8 @@ use std::fmt;
 use std::pin::Pin;
 use std::time::Duration;
 
+use dmp_proto::learning::demonstration_to_proto;
+use dmp_proto::primitive::{primitive_from_proto, primitive_to_proto};
 use dmp_proto::v1;
 use dmp_proto::v1::motion_service_client::MotionServiceClient;
 use dmp_proto::v1::primitive_service_client::PrimitiveServiceClient;
@@ -29,7 +31,6 @@ use tokio_stream::wrappers::ReceiverStream;
 use tokio_stream::{Stream, StreamExt};
 use tonic::transport::{Channel, Endpoint};
 
-use crate::convert::{primitive_from_proto, primitive_to_proto};
 use crate::error::ClientError;
 use crate::setpoints::Setpoints;
 
@@ -182,24 +183,7 @@ impl DmpClient {
         rows: &[Vec<f64>],
         parameters: v1::LearnParameters,
     ) -> Result<v1::PrimitiveRecord, ClientError> {
-        let dim = rows.first().map_or(0, Vec::len);
-        if t.len() != rows.len() {
-            return Err(ClientError::argument(
-                "demonstration.t",
-                format!("has {} times for {} rows of positions", t.len(), rows.len()),
-            ));
-        }
-        if let Some(i) = rows.iter().position(|r| r.len() != dim) {
-            return Err(ClientError::argument(
-                format!("demonstration.x[{i}]"),
-                format!("has {} coordinates, expected {dim} like the first row", rows[i].len()),
-            ));
-        }
-        let demonstration = v1::Demonstration {
-            t: t.to_vec(),
-            positions: rows.iter().flatten().copied().collect(),
-            dim: dim as u32,
-        };
+        let demonstration = demonstration_to_proto(t, rows)?;
         let request = v1::LearnRequest {
             robot_id: robot.into(),
             name: name.into(),

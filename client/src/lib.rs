@@ -7,7 +7,7 @@
 //! | output files | [`outputs`] |
 //! | figures | [`plot`] |
 //! | the gRPC client of the server's three services | [`grpc`] |
-//! | wire schema <-> engine and scenario format | [`convert`] |
+//! | the JSON of a stored record (the wire's conversions are `dmp_proto`'s) | [`convert`] |
 //! | the setpoints in force after a stream of segments (supersession) | [`setpoints`] |
 //! | publishing obstacles over Zenoh (perception nodes) | [`zenoh_pub`] |
 //! | demonstrations from CSV | [`demo_csv`] |

@@ -4,20 +4,22 @@
 use std::path::Path;
 use std::time::Duration;
 
+use dmp_proto::avoidance::avoidance_to_proto;
+use dmp_proto::keys::obstacle_key;
+use dmp_proto::learning::learn_parameters_to_proto;
+use dmp_proto::obstacle_json::{JsonObstacle, obstacle_to_json};
 use dmp_proto::v1;
 use serde_json::{Value, json};
 
 use crate::cli::{LearnArgs, LearnSource, MotionArgs, PlanArgs, StreamArgs, Via};
-use crate::convert::{
-    JsonObstacle, avoidance_to_proto, learn_parameters, obstacle_from_json, obstacle_json, record_json,
-};
+use crate::convert::record_json;
 use crate::demo_csv::load_demonstration_csv;
 use crate::error::ClientError;
 use crate::grpc::{DmpClient, record_primitive};
 use crate::outputs::{to_json, trajectory_csv, write_file};
 use crate::scenario_file::load_scenario;
 use crate::setpoints::Setpoints;
-use crate::zenoh_pub::{ObstaclePublisher, obstacle_key};
+use crate::zenoh_pub::ObstaclePublisher;
 
 /// How long `scene ... --via zenoh` waits for the server's subscriber.
 pub const ZENOH_SUBSCRIBER_WAIT: Duration = Duration::from_secs(5);
@@ -31,7 +33,7 @@ pub async fn learn(client: &DmpClient, a: &LearnArgs) -> Result<String, ClientEr
     let (t, x, mut params) = match &a.source {
         LearnSource { scenario: Some(path), .. } => {
             let s = load_scenario(path)?;
-            (s.demonstration.t, s.demonstration.x, learn_parameters(&s.dmp))
+            (s.demonstration.t, s.demonstration.x, learn_parameters_to_proto(&s.dmp))
         }
         LearnSource { csv: Some(path), .. } => {
             let d = load_demonstration_csv(path)?;
@@ -233,19 +235,13 @@ pub fn read_obstacles(path: &Path, ttl_s: Option<f64>) -> Result<Vec<JsonObstacl
     }
     let mut out = Vec::with_capacity(items.len());
     for (prefix, v) in items {
-        let mut o = obstacle_from_json(v, &prefix).map_err(|e| match e {
-            ClientError::Argument { field, message } => at_file(field, message),
-            other => other,
-        })?;
+        let mut o = JsonObstacle::parse(v, &prefix).map_err(|e| at_file(e.field, e.rule))?;
         if let Some(ttl) = ttl_s {
             o.ttl_s = ttl;
         }
-        o.validate().map_err(|e| match e {
-            dmp::DmpError::Invalid(i) => {
-                let field = if prefix.is_empty() { i.field } else { format!("{prefix}.{}", i.field) };
-                at_file(field, i.rule)
-            }
-            other => ClientError::Invalid { path: path.to_path_buf(), source: other },
+        o.validate().map_err(|e| {
+            let e = if prefix.is_empty() { e } else { e.within(&prefix) };
+            at_file(e.field, e.rule)
         })?;
         out.push(o);
     }
@@ -320,7 +316,7 @@ pub async fn scene_delete(server: &str, z: &ZenohArgs, id: &str, via: Via) -> Re
 /// `scene list`: the scene as JSON.
 pub async fn scene_list(client: &DmpClient) -> Result<String, ClientError> {
     let s = client.list_obstacles().await?;
-    let obstacles: Vec<Value> = s.obstacles.iter().map(obstacle_json).collect();
+    let obstacles: Vec<Value> = s.obstacles.iter().map(obstacle_to_json).collect();
     Ok(to_json(&json!({"scene_version": s.scene_version, "obstacles": obstacles})))
 }
 

@@ -28,10 +28,13 @@ use std::time::Instant;
 use dmp::scenario::{Prepared, Scenario};
 use dmp::stall::{StallConfig, StallDetector};
 use dmp::{Avoidance, Rollout, Trajectory};
+use dmp_proto::avoidance::avoidance_to_proto;
+use dmp_proto::learning::learn_parameters_to_proto;
+use dmp_proto::obstacle_json::obstacle_to_proto;
+use dmp_proto::shape::footprint_to_proto;
 use dmp_proto::v1;
 use tokio_stream::StreamExt;
 
-use crate::convert::{avoidance_to_proto, footprint_to_proto, learn_parameters, obstacle_to_proto};
 use crate::error::ClientError;
 use crate::grpc::{DmpClient, record_primitive};
 use crate::offline::{RunSummary, write_outputs};
@@ -146,7 +149,13 @@ async fn single(
 ) -> Result<(Trajectory, Trajectory), ClientError> {
     let name = sanitize(&s.name);
     let record = client
-        .learn(SCENARIO_ROBOT, &name, &s.demonstration.t, &s.demonstration.x, learn_parameters(&s.dmp))
+        .learn(
+            SCENARIO_ROBOT,
+            &name,
+            &s.demonstration.t,
+            &s.demonstration.x,
+            learn_parameters_to_proto(&s.dmp),
+        )
         .await?;
     compare_primitive(&record, &p.primitive, &format!("{SCENARIO_ROBOT}/{name}"), notes)?;
     let motion = |avoidance: &Avoidance, obstacles: Vec<v1::Obstacle>| v1::MotionSpec {
@@ -185,7 +194,7 @@ async fn group(
     notes: &mut Vec<String>,
 ) -> Result<(Trajectory, Trajectory), ClientError> {
     let name = sanitize(&s.name);
-    let whole = learn_parameters(&s.dmp);
+    let whole = learn_parameters_to_proto(&s.dmp);
     let mut members = Vec::with_capacity(s.robots.len());
     for r in &s.robots {
         let robot = sanitize(&format!("scenario-{}", r.id));

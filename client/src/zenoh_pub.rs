@@ -1,8 +1,9 @@
 //! Publishing obstacles over Zenoh, for perception nodes (and `dmpctl scene put --via zenoh`).
 //!
-//! Keys are `dmp/<cell>/obstacles/<obstacle-id>`: a put adds or replaces the obstacle, a delete removes it. The
-//! payload is either the JSON obstacle of the scenario format (plus optional `margin` and `ttl_s`), encoding
-//! `application/json`, or the protobuf `dmp.v1.Obstacle`, encoding `application/protobuf`.
+//! Keys are `dmp/<cell>/obstacles/<obstacle-id>` (`dmp_proto::keys`): a put adds or replaces the obstacle, a delete
+//! removes it. The payload is either the JSON obstacle of the scenario format (plus optional `margin` and `ttl_s`),
+//! encoding `application/json`, or the protobuf `dmp.v1.Obstacle`, encoding `application/protobuf`. The session is
+//! configured by `dmp_proto::zenoh_session`, as the server's is.
 //!
 //! Zenoh drops a put made before the subscriber is known to the publisher: call
 //! [`ObstaclePublisher::wait_for_subscriber`] once after opening, before the first put. Puts use congestion control
@@ -13,58 +14,30 @@ use std::fmt;
 use std::time::Duration;
 
 use dmp::scenario::ObstacleSpec;
+use dmp_proto::keys::{check_name, obstacle_key, obstacles_of};
+use dmp_proto::obstacle_json::JsonObstacle;
+use dmp_proto::zenoh_session::{SessionOptions, session_config};
 use dmp_proto::{codec, v1};
 use zenoh::bytes::Encoding;
 use zenoh::pubsub::Publisher;
 use zenoh::qos::CongestionControl;
 
-use crate::convert::JsonObstacle;
 use crate::error::ClientError;
-
-/// How long opening waits for the `connect` endpoints before failing.
-pub const CONNECT_TIMEOUT_MS: u64 = 5000;
 
 fn zerr(context: &str) -> impl FnOnce(zenoh::Error) -> ClientError + '_ {
     move |e| ClientError::Zenoh(format!("{context}: {e}"))
 }
 
-/// The key of an obstacle.
-pub fn obstacle_key(cell: &str, id: &str) -> String {
-    format!("dmp/{cell}/obstacles/{id}")
-}
-
-/// Checks that `s` is one chunk of a key (non-empty, none of `/ * $ ? #`).
-fn check_chunk(field: &str, s: &str) -> Result<(), ClientError> {
-    if s.is_empty() {
-        return Err(ClientError::argument(field, "must not be empty"));
+/// What a publishing peer opens with. With `connect` endpoints, scouting is off, opening fails fast if they cannot
+/// be reached, and only the `listen` endpoints are listened on (none: nothing, a publisher needs no port); without,
+/// multicast scouting finds the server on the LAN and Zenoh's default `listen` applies unless some are given.
+pub fn publisher_options(connect: &[String], listen: &[String]) -> SessionOptions {
+    SessionOptions {
+        mode: "peer".into(),
+        listen: (!connect.is_empty() || !listen.is_empty()).then(|| listen.to_vec()),
+        connect: connect.to_vec(),
+        multicast_scouting: connect.is_empty(),
     }
-    if let Some(c) = s.chars().find(|c| matches!(c, '/' | '*' | '$' | '?' | '#') || c.is_whitespace()) {
-        return Err(ClientError::argument(field, format!("has `{c}`, which a Zenoh key chunk cannot hold")));
-    }
-    Ok(())
-}
-
-/// The Zenoh configuration of a publishing peer. With `connect` endpoints, multicast scouting is off and opening
-/// fails after [`CONNECT_TIMEOUT_MS`] if they cannot be reached; without, Zenoh's defaults apply (multicast scouting
-/// finds the server on the LAN). `listen` endpoints are optional (none: with `connect`, nothing is listened on).
-pub fn peer_config(connect: &[String], listen: &[String]) -> Result<zenoh::Config, ClientError> {
-    let mut c = zenoh::Config::default();
-    let json = |v: &[String]| serde_json::to_string(v).unwrap_or_else(|_| "[]".into());
-    let mut set = |key: &str, value: String| {
-        c.insert_json5(key, &value)
-            .map_err(|e| ClientError::argument("zenoh", format!("{key} = {value}: {e}")))
-    };
-    set("mode", "\"peer\"".into())?;
-    if !connect.is_empty() {
-        set("connect/endpoints", json(connect))?;
-        set("connect/timeout_ms", CONNECT_TIMEOUT_MS.to_string())?;
-        set("connect/exit_on_failure", "true".into())?;
-        set("scouting/multicast/enabled", "false".into())?;
-        set("listen/endpoints", json(listen))?;
-    } else if !listen.is_empty() {
-        set("listen/endpoints", json(listen))?;
-    }
-    Ok(c)
 }
 
 /// A Zenoh peer that publishes the obstacles of one cell.
@@ -86,19 +59,17 @@ impl fmt::Debug for ObstaclePublisher {
 }
 
 impl ObstaclePublisher {
-    /// Opens a peer session for `cell` (see [`peer_config`]).
+    /// Opens a peer session for `cell` (see [`publisher_options`]).
     pub async fn open(cell: &str, connect: &[String], listen: &[String]) -> Result<Self, ClientError> {
-        Self::open_with(cell, peer_config(connect, listen)?).await
+        Self::open_with(cell, session_config(&publisher_options(connect, listen))?).await
     }
 
     /// Opens a session with a given configuration.
     pub async fn open_with(cell: &str, config: zenoh::Config) -> Result<Self, ClientError> {
-        check_chunk("cell", cell)?;
+        check_name("cell", cell)?;
         let session = zenoh::open(config).await.map_err(zerr("opening the session"))?;
-        let probe = session
-            .declare_publisher(format!("dmp/{cell}/obstacles/*"))
-            .await
-            .map_err(zerr("declaring the publisher"))?;
+        let probe =
+            session.declare_publisher(obstacles_of(cell)).await.map_err(zerr("declaring the publisher"))?;
         Ok(Self { cell: cell.into(), session, probe })
     }
 
@@ -129,16 +100,16 @@ impl ObstaclePublisher {
         match tokio::time::timeout(timeout, matched).await {
             Ok(true) => Ok(()),
             _ => Err(ClientError::Zenoh(format!(
-                "no subscriber of dmp/{}/obstacles/** after {timeout:?}: is the server running with Zenoh on, in this \
-                 cell, and reachable (--zenoh-connect)?",
-                self.cell
+                "no subscriber of {} after {timeout:?}: is the server running with Zenoh on, in this cell, and \
+                 reachable (--zenoh-connect)?",
+                obstacles_of(&self.cell)
             ))),
         }
     }
 
     /// Puts a JSON obstacle under `id` (its own `id`, if any, should be the same).
     pub async fn put_json(&self, id: &str, obstacle: &serde_json::Value) -> Result<(), ClientError> {
-        check_chunk("id", id)?;
+        check_name("id", id)?;
         let bytes =
             serde_json::to_vec(obstacle).map_err(|e| ClientError::argument("obstacle", e.to_string()))?;
         self.session
@@ -154,7 +125,7 @@ impl ObstaclePublisher {
         self.put_obstacle(&JsonObstacle { spec: spec.clone(), margin: 0.0, ttl_s }).await
     }
 
-    /// Puts a JSON obstacle read with [`crate::convert::obstacle_from_json`].
+    /// Puts a JSON obstacle (e.g. read with [`JsonObstacle::parse`]).
     pub async fn put_obstacle(&self, obstacle: &JsonObstacle) -> Result<(), ClientError> {
         self.put_json(&obstacle.spec.id, &obstacle.to_json()).await
     }
@@ -167,8 +138,8 @@ impl ObstaclePublisher {
     /// Puts a protobuf obstacle under its id in another cell than the publisher's (the server subscribes to every
     /// cell's obstacles, so [`ObstaclePublisher::wait_for_subscriber`] on one cell covers the others).
     pub async fn put_proto_in(&self, cell: &str, obstacle: &v1::Obstacle) -> Result<(), ClientError> {
-        check_chunk("cell", cell)?;
-        check_chunk("id", &obstacle.id)?;
+        check_name("cell", cell)?;
+        check_name("id", &obstacle.id)?;
         self.session
             .put(obstacle_key(cell, &obstacle.id), codec::encode(obstacle))
             .encoding(Encoding::from(codec::PROTOBUF_ENCODING))
@@ -179,7 +150,7 @@ impl ObstaclePublisher {
 
     /// Removes the obstacle `id`.
     pub async fn delete(&self, id: &str) -> Result<(), ClientError> {
-        check_chunk("id", id)?;
+        check_name("id", id)?;
         self.session
             .delete(obstacle_key(&self.cell, id))
             .congestion_control(CongestionControl::Block)
@@ -197,26 +168,33 @@ impl ObstaclePublisher {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use dmp_proto::zenoh_session::CONNECT_TIMEOUT_MS;
     use zenoh::sample::SampleKind;
 
     const WAIT: Duration = Duration::from_secs(10);
 
     /// A subscriber peer on loopback, without scouting, as the server would be; returns it and its locator.
     async fn subscriber_peer() -> (zenoh::Session, String) {
-        let mut c = zenoh::Config::default();
-        c.insert_json5("mode", "\"peer\"").unwrap();
-        c.insert_json5("listen/endpoints", "[\"tcp/127.0.0.1:0\"]").unwrap();
-        c.insert_json5("scouting/multicast/enabled", "false").unwrap();
-        c.insert_json5("scouting/gossip/enabled", "false").unwrap();
-        let s = zenoh::open(c).await.unwrap();
+        let config = session_config(&SessionOptions::loopback_peer(Vec::new())).unwrap();
+        let s = zenoh::open(config).await.unwrap();
         let locator = s.info().locators().await[0].to_string();
         (s, locator)
+    }
+
+    #[test]
+    fn a_publisher_connecting_to_the_server_scouts_nothing_and_listens_on_nothing() {
+        let direct = publisher_options(&["tcp/127.0.0.1:7447".into()], &[]);
+        assert_eq!((direct.listen, direct.multicast_scouting), (Some(vec![]), false));
+        let lan = publisher_options(&[], &[]);
+        assert_eq!((lan.listen, lan.multicast_scouting), (None, true));
+        let listening = publisher_options(&[], &["tcp/127.0.0.1:0".into()]);
+        assert_eq!(listening.listen, Some(vec!["tcp/127.0.0.1:0".to_string()]));
     }
 
     #[tokio::test(flavor = "multi_thread")]
     async fn puts_and_deletes_reach_a_subscriber_with_their_encodings() {
         let (server, locator) = subscriber_peer().await;
-        let sub = server.declare_subscriber("dmp/cellA/obstacles/**").await.unwrap();
+        let sub = server.declare_subscriber(obstacles_of("cellA")).await.unwrap();
         let publisher = ObstaclePublisher::open("cellA", &[locator], &[]).await.unwrap();
         publisher.wait_for_subscriber(WAIT).await.unwrap();
 
@@ -232,14 +210,14 @@ mod tests {
         publisher.close().await.unwrap();
 
         let s = tokio::time::timeout(WAIT, sub.recv_async()).await.unwrap().unwrap();
-        assert_eq!(s.key_expr().as_str(), "dmp/cellA/obstacles/box1");
+        assert_eq!(s.key_expr().as_str(), obstacle_key("cellA", "box1"));
         assert_eq!(s.encoding(), &Encoding::APPLICATION_JSON);
         let v: serde_json::Value = serde_json::from_slice(&s.payload().to_bytes()).unwrap();
         assert_eq!(v["ttl_s"], 2.5);
         assert_eq!(v["semi_axes"], serde_json::json!([0.2, 0.1]));
 
         let s = tokio::time::timeout(WAIT, sub.recv_async()).await.unwrap().unwrap();
-        assert_eq!(s.key_expr().as_str(), "dmp/cellA/obstacles/box2");
+        assert_eq!(s.key_expr().as_str(), obstacle_key("cellA", "box2"));
         assert_eq!(s.encoding().to_string(), codec::PROTOBUF_ENCODING);
         let o: v1::Obstacle = codec::decode(&s.payload().to_bytes()).unwrap();
         assert_eq!(o.id, "box2");
@@ -248,7 +226,7 @@ mod tests {
 
         let s = tokio::time::timeout(WAIT, sub.recv_async()).await.unwrap().unwrap();
         assert_eq!(s.kind(), SampleKind::Delete);
-        assert_eq!(s.key_expr().as_str(), "dmp/cellA/obstacles/box1");
+        assert_eq!(s.key_expr().as_str(), obstacle_key("cellA", "box1"));
         server.close().await.unwrap();
     }
 
@@ -256,7 +234,7 @@ mod tests {
     async fn waiting_without_a_subscriber_times_out_and_bad_ids_are_refused() {
         let (other, locator) = subscriber_peer().await;
         // A subscriber of another cell does not count.
-        let _sub = other.declare_subscriber("dmp/elsewhere/obstacles/**").await.unwrap();
+        let _sub = other.declare_subscriber(obstacles_of("elsewhere")).await.unwrap();
         let publisher = ObstaclePublisher::open("cellB", &[locator], &[]).await.unwrap();
         let e = publisher.wait_for_subscriber(Duration::from_millis(300)).await.unwrap_err();
         assert!(e.to_string().contains("dmp/cellB/obstacles"), "{e}");

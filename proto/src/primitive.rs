@@ -1,7 +1,6 @@
 //! The one mapping between the engine's primitive and its message, shared by the server and the client.
 
-use dmp::{DmpError, InvalidInput};
-
+use crate::WireError;
 use crate::v1;
 
 /// The message of a primitive: weights row-major, `dim` rows of `n_basis + 1` entries.
@@ -21,20 +20,19 @@ pub fn primitive_to_proto(p: &dmp::Primitive) -> v1::Primitive {
 }
 
 /// The engine's primitive of a message, validated (errors name the field).
-pub fn primitive_from_proto(p: &v1::Primitive) -> Result<dmp::Primitive, DmpError> {
+pub fn primitive_from_proto(p: &v1::Primitive) -> Result<dmp::Primitive, WireError> {
     let (dim, n) = (p.dim as usize, p.n_basis as usize);
     if dim == 0 {
-        return Err(InvalidInput::new("dim", "must be at least 1").into());
+        return Err(WireError::new("dim", "must be at least 1"));
     }
     if n == 0 {
-        return Err(InvalidInput::new("n_basis", "must be at least 1").into());
+        return Err(WireError::new("n_basis", "must be at least 1"));
     }
     if p.weights.len() != dim * (n + 1) {
-        return Err(InvalidInput::new(
+        return Err(WireError::new(
             "weights",
             format!("must have dim x (n_basis + 1) = {} entries, found {}", dim * (n + 1), p.weights.len()),
-        )
-        .into());
+        ));
     }
     let prim = dmp::Primitive {
         format_version: p.format_version,
@@ -50,4 +48,43 @@ pub fn primitive_from_proto(p: &v1::Primitive) -> Result<dmp::Primitive, DmpErro
     };
     prim.validate()?;
     Ok(prim)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn learned() -> dmp::Primitive {
+        let t: Vec<f64> = (0..=100).map(|k| k as f64 / 100.0).collect();
+        let x: Vec<Vec<f64>> = t.iter().map(|t| vec![t.sin(), t * t, 1.0 - t]).collect();
+        let demo = dmp::Demonstration::new(t, x).unwrap();
+        dmp::learn(&demo, &dmp::LearnConfig { n_basis: 7, ..dmp::LearnConfig::paper() }).unwrap()
+    }
+
+    #[test]
+    fn primitives_round_trip_through_the_message() {
+        let p = learned();
+        let m = primitive_to_proto(&p);
+        assert_eq!(m.weights.len(), 3 * 8);
+        // Row-major: row p holds the N + 1 weights of dimension p.
+        assert_eq!(m.weights[8..16], p.weights[1][..]);
+        assert_eq!(primitive_from_proto(&m).unwrap(), p);
+        // And through the bytes.
+        let bytes = crate::codec::encode(&m);
+        let back: v1::Primitive = crate::codec::decode(&bytes).unwrap();
+        assert_eq!(primitive_from_proto(&back).unwrap(), p);
+    }
+
+    #[test]
+    fn bad_primitive_messages_name_the_field() {
+        let mut m = primitive_to_proto(&learned());
+        m.weights.pop();
+        assert!(primitive_from_proto(&m).unwrap_err().to_string().contains("weights"));
+        let mut m = primitive_to_proto(&learned());
+        m.k[2] = -1.0;
+        assert!(primitive_from_proto(&m).unwrap_err().to_string().contains("k[2]"));
+        let mut m = primitive_to_proto(&learned());
+        m.dim = 0;
+        assert!(primitive_from_proto(&m).unwrap_err().to_string().contains("dim"));
+    }
 }

@@ -6,7 +6,8 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use crate::convert::check_name;
+use dmp_proto::keys::check_name;
+
 use crate::error::ServerError;
 use crate::scene::SceneState;
 

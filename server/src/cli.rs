@@ -66,7 +66,7 @@ pub fn load_config(args: &Args) -> anyhow::Result<Config> {
     if let Some(cell) = &args.cell {
         config.cell = cell.clone();
     }
-    crate::convert::check_name("cell", &config.cell).map_err(|e| anyhow::anyhow!("{e}"))?;
+    dmp_proto::keys::check_name("cell", &config.cell).map_err(|e| anyhow::anyhow!("{e}"))?;
     if let Some(mode) = &args.zenoh_mode {
         config.zenoh.mode = mode.clone();
     }

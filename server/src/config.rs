@@ -56,6 +56,19 @@ pub struct ZenohConfig {
     pub multicast_scouting: bool,
 }
 
+impl ZenohConfig {
+    /// What `dmp_proto::zenoh_session::session_config` builds the session from: an empty `listen` is Zenoh's
+    /// default for the mode.
+    pub fn session_options(&self) -> dmp_proto::zenoh_session::SessionOptions {
+        dmp_proto::zenoh_session::SessionOptions {
+            mode: self.mode.clone(),
+            listen: (!self.listen.is_empty()).then(|| self.listen.clone()),
+            connect: self.connect.clone(),
+            multicast_scouting: self.multicast_scouting,
+        }
+    }
+}
+
 impl Default for ZenohConfig {
     fn default() -> Self {
         Self {

@@ -61,6 +61,13 @@ impl From<dmp::DmpError> for ServerError {
     }
 }
 
+/// The one conversion of the wire's error: a field of a message, a payload or a key that breaks a rule.
+impl From<dmp_proto::WireError> for ServerError {
+    fn from(e: dmp_proto::WireError) -> Self {
+        ServerError::InvalidArgument { field: e.field, reason: e.rule }
+    }
+}
+
 impl From<dmp::InvalidInput> for ServerError {
     fn from(i: dmp::InvalidInput) -> Self {
         ServerError::InvalidArgument { field: i.field, reason: i.rule }

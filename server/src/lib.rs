@@ -5,7 +5,7 @@
 //! | --- | --- |
 //! | configuration (file, then flags) | [`config`], [`cli`] |
 //! | wall time and pacing, injected | [`clock`] |
-//! | wire <-> engine conversions, validation | [`convert`] |
+//! | the limits of the configuration on the wire's conversions (which are `dmp_proto`'s) | [`convert`] |
 //! | errors and their gRPC status | [`error`] |
 //! | the cells a server serves, each with its own scene | [`cells`] |
 //! | one cell's scene (obstacles, robot states) | [`scene`] |

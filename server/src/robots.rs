@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
-use dmp::Isopotential;
+use dmp_proto::keys::{check_name, robot_state_key};
 use dmp_proto::{codec, v1};
 use tracing::{debug, warn};
 use zenoh::Session;
@@ -14,48 +14,22 @@ use zenoh::bytes::Encoding;
 use zenoh::pubsub::Publisher;
 use zenoh::sample::Locality;
 
-use crate::convert::{check_name, superquadric_to_shape, vector};
-use crate::error::ServerError;
 use crate::scene::SceneState;
-use crate::zenoh_bridge::robot_state_key;
 
-/// Checks a robot state (a named robot, finite stamp, position and velocity of one dimension, a footprint of that
-/// dimension) and returns its footprint in the engine's form.
-pub fn check_robot_state(s: &v1::RobotState) -> Result<Option<dmp::Shape>, ServerError> {
-    check_name("robot_id", &s.robot_id)?;
-    if !s.stamp_unix_s.is_finite() {
-        return Err(ServerError::invalid("stamp_unix_s", "must be a finite number"));
-    }
-    let dim = s.position.len();
-    if dim == 0 {
-        return Err(ServerError::invalid("position", "must not be empty"));
-    }
-    vector("position", &s.position, dim)?;
-    if !s.velocity.is_empty() {
-        vector("velocity", &s.velocity, dim)?;
-    }
-    let Some(f) = &s.footprint else { return Ok(None) };
-    let shape = superquadric_to_shape(f).map_err(|e| e.within("footprint"))?;
-    if shape.dim() != dim {
-        return Err(ServerError::invalid(
-            "footprint.semi_axes",
-            format!("must have {dim} entries (the position's dimension), found {}", shape.dim()),
-        ));
-    }
-    Ok(Some(shape))
-}
+/// Checks a robot state; imported from here by `services/motion.rs`.
+pub use dmp_proto::robot_state::check_robot_state;
 
 /// Publishes executing robots' states: into their cell's scene always (every segment), and on Zenoh when the
 /// server has a session (at most once per `period` per robot: other servers extrapolate with the velocity). Cheap to
 /// clone; a Zenoh error is logged, never returned (a robot's motion never waits on the network).
 #[derive(Debug, Clone)]
 pub struct RobotBus {
-    zenoh: Option<Arc<ZenohOut>>,
+    zenoh: Option<Arc<ZenohRobotBus>>,
 }
 
 /// A robot's Zenoh publisher, whether any remote subscriber matches it, and the stamp of its last state sent.
 #[derive(Debug)]
-struct Out {
+struct RobotPublisher {
     publisher: Publisher<'static>,
     /// Kept up to date by a matching listener: with nobody listening (a lone server), states are neither encoded
     /// nor put.
@@ -66,11 +40,11 @@ struct Out {
 /// The Zenoh side: one publisher per robot, declared at its first state (a declared publisher keeps its routes,
 /// unlike a `session.put` per state) and undeclared when it retires.
 #[derive(Debug)]
-struct ZenohOut {
+struct ZenohRobotBus {
     session: Session,
     period_s: f64,
     /// By cell, then robot id. The lock is held only to look up or insert, never across an await.
-    publishers: Mutex<HashMap<String, HashMap<String, Arc<Out>>>>,
+    publishers: Mutex<HashMap<String, HashMap<String, Arc<RobotPublisher>>>>,
 }
 
 impl RobotBus {
@@ -78,7 +52,7 @@ impl RobotBus {
     /// seconds) when one is given.
     pub fn new(zenoh: Option<(Session, f64)>) -> Self {
         let zenoh = zenoh.map(|(session, period_s)| {
-            Arc::new(ZenohOut { session, period_s, publishers: Mutex::new(HashMap::new()) })
+            Arc::new(ZenohRobotBus { session, period_s, publishers: Mutex::new(HashMap::new()) })
         });
         Self { zenoh }
     }
@@ -145,9 +119,9 @@ impl RobotBus {
     }
 }
 
-impl ZenohOut {
+impl ZenohRobotBus {
     /// The robot's publisher, declared at first use; None (logged) for an id that cannot be a key chunk.
-    async fn publisher(&self, cell: &str, robot_id: &str) -> Option<Arc<Out>> {
+    async fn publisher(&self, cell: &str, robot_id: &str) -> Option<Arc<RobotPublisher>> {
         let found = {
             let map = self.publishers.lock().unwrap_or_else(|p| p.into_inner());
             map.get(cell).and_then(|m| m.get(robot_id)).cloned()
@@ -180,7 +154,11 @@ impl ZenohOut {
                     warn!(robot = %robot_id, error = %e, "zenoh: no matching listener, every state is published");
                     matching.store(true, Ordering::Relaxed);
                 }
-                let out = Arc::new(Out { publisher, matching, last_stamp: Mutex::new(f64::NEG_INFINITY) });
+                let out = Arc::new(RobotPublisher {
+                    publisher,
+                    matching,
+                    last_stamp: Mutex::new(f64::NEG_INFINITY),
+                });
                 let mut map = self.publishers.lock().unwrap_or_else(|p| p.into_inner());
                 // A concurrent first publish may have won: keep its publisher, drop (undeclare) this one.
                 let cell_map = map.entry(cell.to_owned()).or_default();
@@ -200,7 +178,9 @@ mod tests {
     use crate::cells::Cells;
     use crate::config::ZenohConfig;
     use crate::scene::now_unix_s;
-    use crate::zenoh_bridge::{ZenohBridge, locators, obstacle_key, open_session};
+    use crate::zenoh_bridge::{ZenohBridge, open_session};
+    use dmp_proto::keys::obstacle_key;
+    use dmp_proto::zenoh_session::locators;
     use std::future::IntoFuture;
     use std::time::Duration;
     use tokio_util::sync::CancellationToken;
@@ -217,22 +197,6 @@ mod tests {
             velocity: vec![0.0; 3],
             footprint: Some(v1::Superquadric { semi_axes: vec![0.2; 3], exponents: vec![] }),
         }
-    }
-
-    #[test]
-    fn robot_states_are_checked() {
-        assert!(check_robot_state(&state("r1", 0.0)).unwrap().is_some());
-        let mut s = state("r1", f64::NAN);
-        assert!(check_robot_state(&s).unwrap_err().to_string().starts_with("position[0]"));
-        s = state("r1", 0.0);
-        s.velocity = vec![0.0; 2];
-        assert!(check_robot_state(&s).unwrap_err().to_string().starts_with("velocity"));
-        s = state("r1", 0.0);
-        s.footprint = Some(v1::Superquadric { semi_axes: vec![0.2; 2], exponents: vec![] });
-        assert!(check_robot_state(&s).unwrap_err().to_string().starts_with("footprint.semi_axes"));
-        s.footprint = Some(v1::Superquadric { semi_axes: vec![0.2, 0.0, 0.2], exponents: vec![] });
-        assert!(check_robot_state(&s).unwrap_err().to_string().starts_with("footprint."));
-        assert!(check_robot_state(&state("a/b", 0.0)).is_err());
     }
 
     #[tokio::test(flavor = "multi_thread")]

@@ -9,6 +9,7 @@ use dmp_proto::v1::motion_service_server::MotionServiceServer;
 use dmp_proto::v1::primitive_service_server::PrimitiveServiceServer;
 use dmp_proto::v1::scene_service_server::SceneServiceServer;
 use dmp_proto::v1::server_service_server::ServerServiceServer;
+use dmp_proto::zenoh_session::locators;
 use tokio::net::TcpListener;
 use tokio::sync::Semaphore;
 use tokio::task::JoinHandle;
@@ -28,7 +29,7 @@ use crate::services::server::ServerServiceImpl;
 use crate::state::AppState;
 use crate::store::Store;
 use crate::write_batching::BatchedWrites;
-use crate::zenoh_bridge::{ZenohBridge, locators, open_session};
+use crate::zenoh_bridge::{ZenohBridge, open_session};
 
 /// How long a shutdown waits for connections to drain before closing them.
 const DRAIN_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(5);

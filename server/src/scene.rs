@@ -4,10 +4,10 @@
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 
+use dmp_proto::obstacle::obstacle_to_engine;
 use dmp_proto::v1;
 use tokio::sync::watch;
 
-use crate::convert::obstacle_to_engine;
 use crate::error::ServerError;
 
 /// An obstacle as the scene holds it.

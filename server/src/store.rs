@@ -22,11 +22,11 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use dmp_proto::primitive::primitive_to_proto;
 use dmp_proto::v1;
 use prost::Message;
 use redb::{Database, Durability, ReadableDatabase, ReadableTable, TableDefinition, TableHandle};
 
-use crate::convert::primitive_to_proto;
 use crate::error::ServerError;
 
 /// Version of the store's layout. A file of another version is refused on open (never silently reset).

@@ -9,7 +9,8 @@
 //! | `dmp/<cell>/robots/<robot-id>/state` put | `dmp.v1.RobotState` (protobuf) | records the robot, a moving obstacle for the others |
 //! | `dmp/<cell>/robots/<robot-id>/state` delete | | forgets the robot |
 //!
-//! A payload that cannot be decoded or validated is logged at warn with its key and the reason, counted
+//! The keys are `dmp_proto::keys`'s and the payloads are decoded by `dmp_proto::payload`. A payload that cannot
+//! be decoded or validated is logged at warn with its key and the reason, counted
 //! ([`ZenohBridge::malformed_payloads`]) and changes nothing else. Samples are handled in Zenoh's callbacks: decoding
 //! and validating one obstacle or robot state takes microseconds and never awaits.
 
@@ -17,90 +18,28 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
-use dmp_proto::{codec, v1};
+use dmp_proto::keys::{self, EVERY_CELL};
+use dmp_proto::payload::{decode_obstacle, decode_robot_state};
+use dmp_proto::zenoh_session::{locators, session_config};
 use tokio::task::JoinHandle;
 use tokio_util::sync::{CancellationToken, DropGuard};
 use tracing::{debug, info, warn};
-use zenoh::bytes::Encoding;
-use zenoh::config::EndPoint;
 use zenoh::pubsub::Subscriber;
 use zenoh::sample::{Locality, Sample, SampleKind};
 use zenoh::{Session, Wait};
 
 use crate::cells::Cells;
 use crate::config::ZenohConfig;
-use crate::convert::obstacle_from_json;
 use crate::error::ServerError;
-use crate::robots::check_robot_state;
 use crate::scene::now_unix_s;
-
-/// How long opening a session waits for the `connect` endpoints before it fails (only when some are given).
-pub const CONNECT_TIMEOUT_MS: u64 = 2000;
 
 /// Period of the reaper that removes obstacles whose time to live has passed.
 pub const REAP_PERIOD: Duration = Duration::from_millis(100);
 
-/// Largest obstacle or robot-state payload accepted (larger ones are refused as malformed).
-pub const MAX_PAYLOAD_BYTES: usize = 1 << 20;
-
-/// The key of one obstacle: `dmp/<cell>/obstacles/<obstacle-id>`.
-pub fn obstacle_key(cell: &str, obstacle_id: &str) -> String {
-    format!("dmp/{cell}/obstacles/{obstacle_id}")
-}
-
-/// The key of one robot's state: `dmp/<cell>/robots/<robot-id>/state`.
-pub fn robot_state_key(cell: &str, robot_id: &str) -> String {
-    format!("dmp/{cell}/robots/{robot_id}/state")
-}
-
-/// The cell of a key `dmp/<cell>/...` (empty if the key has no such chunk; the subscriptions guarantee one).
-fn cell_of(key: &str) -> &str {
-    key.split('/').nth(1).unwrap_or_default()
-}
-
-/// The Zenoh configuration of [`ZenohConfig`]: mode, listen and connect endpoints, scouting.
-///
-/// Gossip scouting follows the multicast switch: with it off the session talks only to the endpoints it is given
-/// (and to those that connect to it). With `connect` endpoints, opening waits at most [`CONNECT_TIMEOUT_MS`] for
-/// them and fails if they cannot be reached, instead of retrying forever in the background; without, Zenoh's
-/// defaults apply.
-pub fn session_config(cfg: &ZenohConfig) -> Result<zenoh::Config, ServerError> {
-    if !matches!(cfg.mode.as_str(), "peer" | "client") {
-        return Err(ServerError::invalid(
-            "zenoh.mode",
-            format!("must be `peer` or `client`, found `{}`", cfg.mode),
-        ));
-    }
-    let endpoints = |field: &str, list: &[String]| -> Result<String, ServerError> {
-        for (i, e) in list.iter().enumerate() {
-            e.parse::<EndPoint>()
-                .map_err(|err| ServerError::invalid(format!("zenoh.{field}[{i}]"), err.to_string()))?;
-        }
-        Ok(serde_json::to_string(list).expect("a list of strings is JSON"))
-    };
-    let mut c = zenoh::Config::default();
-    let mut set = |key: &str, value: String| -> Result<(), ServerError> {
-        c.insert_json5(key, &value)
-            .map_err(|e| ServerError::invalid(format!("zenoh config {key}"), e.to_string()))
-    };
-    set("mode", serde_json::to_string(&cfg.mode).expect("a string is JSON"))?;
-    if !cfg.listen.is_empty() {
-        set("listen/endpoints", endpoints("listen", &cfg.listen)?)?;
-    }
-    if !cfg.connect.is_empty() {
-        set("connect/endpoints", endpoints("connect", &cfg.connect)?)?;
-        set("connect/timeout_ms", CONNECT_TIMEOUT_MS.to_string())?;
-        set("connect/exit_on_failure", "true".into())?;
-    }
-    set("scouting/multicast/enabled", cfg.multicast_scouting.to_string())?;
-    set("scouting/gossip/enabled", cfg.multicast_scouting.to_string())?;
-    Ok(c)
-}
-
-/// Opens the Zenoh session of [`ZenohConfig`] (see [`session_config`]). Fails fast when a `connect` endpoint
-/// cannot be reached.
+/// Opens the Zenoh session of [`ZenohConfig`] (built by `dmp_proto::zenoh_session::session_config`). Fails fast
+/// when a `connect` endpoint cannot be reached.
 pub async fn open_session(cfg: &ZenohConfig) -> Result<Session, ServerError> {
-    let config = session_config(cfg)?;
+    let config = session_config(&cfg.session_options())?;
     let session = zenoh::open(config)
         .await
         .map_err(|e| ServerError::FailedPrecondition(format!("zenoh: cannot open the session: {e}")))?;
@@ -113,81 +52,6 @@ pub async fn open_session(cfg: &ZenohConfig) -> Result<Session, ServerError> {
         "zenoh session open"
     );
     Ok(session)
-}
-
-/// The endpoints the session really listens on (`tcp/127.0.0.1:0` resolved to its port), for peers to connect to.
-pub async fn locators(session: &Session) -> Vec<String> {
-    session.info().locators().await.into_iter().map(|l| l.to_string()).collect()
-}
-
-/// Decodes an obstacle payload whose key names `id_from_key`.
-///
-/// Encoding `application/protobuf`: a `dmp.v1.Obstacle`; a JSON encoding: the JSON obstacle
-/// ([`obstacle_from_json`]); any other (or none): JSON, then protobuf, except that a payload starting with `{` is
-/// only JSON (so that bad JSON is reported as such). An id in the payload must equal the key's.
-pub fn decode_obstacle(
-    encoding: &Encoding,
-    bytes: &[u8],
-    id_from_key: &str,
-) -> Result<v1::Obstacle, ServerError> {
-    check_size(bytes)?;
-    let protobuf = |bytes: &[u8]| {
-        codec::decode::<v1::Obstacle>(bytes)
-            .map_err(|e| ServerError::invalid("payload", format!("not a protobuf dmp.v1.Obstacle: {e}")))
-    };
-    // The encoding's name without its schema (`application/protobuf;dmp.v1.Obstacle`).
-    let name = std::borrow::Cow::<'static, str>::from(encoding);
-    let mut o = match name.split(';').next().unwrap_or_default() {
-        codec::PROTOBUF_ENCODING => protobuf(bytes)?,
-        "application/json" | "text/json" => obstacle_from_json(bytes, id_from_key)?,
-        _ => match obstacle_from_json(bytes, id_from_key) {
-            Ok(o) => o,
-            Err(e) if bytes.trim_ascii_start().starts_with(b"{") => return Err(e),
-            Err(json) => codec::decode::<v1::Obstacle>(bytes).map_err(|pb| {
-                ServerError::invalid(
-                    "payload",
-                    format!("neither a JSON obstacle ({json}) nor a protobuf dmp.v1.Obstacle ({pb})"),
-                )
-            })?,
-        },
-    };
-    if o.id.is_empty() {
-        o.id = id_from_key.to_owned();
-    } else if o.id != id_from_key {
-        return Err(ServerError::invalid("id", format!("`{}` differs from the key's `{id_from_key}`", o.id)));
-    }
-    Ok(o)
-}
-
-/// Decodes a robot-state payload (protobuf `dmp.v1.RobotState`) whose key names `id_from_key`, and validates it
-/// ([`check_robot_state`]); returns it with its footprint. An empty `robot_id` takes the key's.
-pub fn decode_robot_state(
-    bytes: &[u8],
-    id_from_key: &str,
-) -> Result<(v1::RobotState, Option<dmp::Shape>), ServerError> {
-    check_size(bytes)?;
-    let mut state = codec::decode::<v1::RobotState>(bytes)
-        .map_err(|e| ServerError::invalid("payload", format!("not a protobuf dmp.v1.RobotState: {e}")))?;
-    if state.robot_id.is_empty() {
-        state.robot_id = id_from_key.to_owned();
-    } else if state.robot_id != id_from_key {
-        return Err(ServerError::invalid(
-            "robot_id",
-            format!("`{}` differs from the key's `{id_from_key}`", state.robot_id),
-        ));
-    }
-    let footprint = check_robot_state(&state)?;
-    Ok((state, footprint))
-}
-
-fn check_size(bytes: &[u8]) -> Result<(), ServerError> {
-    if bytes.len() > MAX_PAYLOAD_BYTES {
-        return Err(ServerError::invalid(
-            "payload",
-            format!("{} bytes, more than the limit of {MAX_PAYLOAD_BYTES}", bytes.len()),
-        ));
-    }
-    Ok(())
 }
 
 /// Spawns the task that removes expired obstacles of every cell every [`REAP_PERIOD`] until `stop` is cancelled.
@@ -213,14 +77,14 @@ pub fn spawn_reaper(cells: Cells, stop: CancellationToken) -> JoinHandle<()> {
     })
 }
 
-/// What the callbacks share: the scene and the counter of refused payloads.
+/// Applies the samples of the subscribers' callbacks to the cells' scenes, and counts those it refuses.
 #[derive(Debug, Clone)]
-struct Ingest {
+struct SceneUpdater {
     cells: Cells,
     malformed: Arc<AtomicU64>,
 }
 
-impl Ingest {
+impl SceneUpdater {
     fn obstacle(&self, sample: &Sample) {
         if let Err(e) = self.try_obstacle(sample) {
             self.refuse(sample, e);
@@ -229,8 +93,9 @@ impl Ingest {
 
     fn try_obstacle(&self, sample: &Sample) -> Result<(), ServerError> {
         let key = sample.key_expr().as_str();
-        let id = key.rsplit('/').next().unwrap_or_default();
-        let scene = self.cells.scene(cell_of(key))?;
+        let names = keys::parse_obstacle_key(key)
+            .ok_or_else(|| ServerError::invalid("key", "is not dmp/<cell>/obstacles/<obstacle-id>"))?;
+        let (scene, id) = (self.cells.scene(names.cell)?, names.id);
         match sample.kind() {
             SampleKind::Delete => {
                 let (version, existed) = scene.delete(id);
@@ -238,7 +103,9 @@ impl Ingest {
             }
             SampleKind::Put => {
                 let bytes = sample.payload().to_bytes();
-                let o = decode_obstacle(sample.encoding(), &bytes, id)?;
+                // The encoding's name, with its schema if any (`application/protobuf;dmp.v1.Obstacle`).
+                let encoding = std::borrow::Cow::<'static, str>::from(sample.encoding());
+                let o = decode_obstacle(&encoding, &bytes, id)?;
                 let version = scene.put(o, now_unix_s())?;
                 debug!(key, version, "obstacle put over zenoh");
             }
@@ -254,8 +121,9 @@ impl Ingest {
 
     fn try_robot(&self, sample: &Sample) -> Result<(), ServerError> {
         let key = sample.key_expr().as_str();
-        let id = key.strip_suffix("/state").and_then(|k| k.rsplit('/').next()).unwrap_or_default();
-        let scene = self.cells.scene(cell_of(key))?;
+        let names = keys::parse_robot_state_key(key)
+            .ok_or_else(|| ServerError::invalid("key", "is not dmp/<cell>/robots/<robot-id>/state"))?;
+        let (scene, id) = (self.cells.scene(names.cell)?, names.id);
         match sample.kind() {
             SampleKind::Delete => {
                 scene.remove_robot(id);
@@ -295,22 +163,21 @@ impl ZenohBridge {
         cells: Cells,
         shutdown: CancellationToken,
     ) -> Result<Self, ServerError> {
-        let cell = "*";
         let malformed = Arc::new(AtomicU64::new(0));
-        let ingest = Ingest { cells: cells.clone(), malformed: malformed.clone() };
+        let updater = SceneUpdater { cells: cells.clone(), malformed: malformed.clone() };
         let zenoh_err = |e: zenoh::Error| ServerError::Internal(format!("zenoh: cannot subscribe: {e}"));
 
-        let obstacles_key = obstacle_key(cell, "*");
-        let i = ingest.clone();
+        let obstacles_key = keys::obstacles_of(EVERY_CELL);
+        let on_obstacle = updater.clone();
         let obstacles = session
             .declare_subscriber(&obstacles_key)
-            .callback(move |sample| i.obstacle(&sample))
+            .callback(move |sample| on_obstacle.obstacle(&sample))
             .await
             .map_err(zenoh_err)?;
-        let robots_key = robot_state_key(cell, "*");
+        let robots_key = keys::robot_states_of(EVERY_CELL);
         let robots = session
             .declare_subscriber(&robots_key)
-            .callback(move |sample| ingest.robot(&sample))
+            .callback(move |sample| updater.robot(&sample))
             .allowed_origin(Locality::Remote)
             .await
             .map_err(zenoh_err)?;

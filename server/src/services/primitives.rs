@@ -11,7 +11,9 @@ use dmp_proto::v1::primitive_service_server::PrimitiveService;
 use tonic::{Request, Response, Status};
 use tracing::{debug, error, info};
 
-use crate::convert::{check_name, demonstration_from_proto, learn_config_from_proto, primitive_from_proto};
+use dmp_proto::keys::check_name;
+
+use crate::convert::{demonstration_from_proto, learn_config_from_proto, primitive_from_proto};
 use crate::error::ServerError;
 use crate::state::AppState;
 
@@ -80,7 +82,7 @@ fn learn_field(e: ServerError) -> ServerError {
 }
 
 /// The error with `prefix.` in front of its field, unless the field already starts with `prefix`.
-fn under(prefix: &str, e: ServerError) -> ServerError {
+fn prefix_field_once(prefix: &str, e: ServerError) -> ServerError {
     match &e {
         ServerError::InvalidArgument { field, .. } if field.starts_with(prefix) => e,
         _ => e.within(prefix),
@@ -124,8 +126,8 @@ impl PrimitiveServiceImpl {
         check_name("robot_id", &req.robot_id)?;
         check_name("name", &req.name)?;
         let proto = req.primitive.as_ref().ok_or_else(|| ServerError::invalid("primitive", "is required"))?;
-        let primitive =
-            primitive_from_proto(proto, &self.state.config.limits).map_err(|e| under("primitive", e))?;
+        let primitive = primitive_from_proto(proto, &self.state.config.limits)
+            .map_err(|e| prefix_field_once("primitive", e))?;
         let store = self.state.store.clone();
         let (robot_id, name) = (req.robot_id, req.name);
         let record = blocking(move || store.put(&robot_id, &name, &primitive, now_unix_ms())).await?;
@@ -212,9 +214,9 @@ mod tests {
     use super::*;
     use crate::cells::Cells;
     use crate::config::Config;
-    use crate::convert::primitive_to_proto;
     use crate::robots::RobotBus;
     use crate::store::Store;
+    use dmp_proto::primitive::primitive_to_proto;
 
     fn service(dir: &std::path::Path) -> PrimitiveServiceImpl {
         let config = Config::default();

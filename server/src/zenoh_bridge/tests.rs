@@ -1,8 +1,13 @@
-//! Tests of the Zenoh bridge: keys, payload decoding, and the bridge on loopback.
+//! Tests of the Zenoh bridge on loopback (the keys, the session's configuration and the payloads' decoding are
+//! tested in `dmp_proto`).
 
 use super::*;
+use dmp_proto::keys::{obstacle_key, robot_state_key};
+use dmp_proto::zenoh_session::CONNECT_TIMEOUT_MS;
+use dmp_proto::{codec, v1};
 use std::future::IntoFuture;
 use tokio::sync::watch;
+use zenoh::bytes::Encoding;
 use zenoh::pubsub::Publisher;
 
 const T: Duration = Duration::from_secs(10);
@@ -74,36 +79,6 @@ fn ball(id: &str, center: [f64; 3]) -> v1::Obstacle {
         center: center.to_vec(),
         ..Default::default()
     }
-}
-
-#[test]
-fn config_is_built_and_checked() {
-    let c = session_config(&loopback(vec!["tcp/127.0.0.1:7447".into()])).unwrap();
-    let json = format!("{c}");
-    assert!(json.contains("tcp/127.0.0.1:7447"), "{json}");
-    let mut bad = loopback(vec![]);
-    bad.mode = "router".into();
-    assert!(session_config(&bad).unwrap_err().to_string().starts_with("zenoh.mode"));
-    let bad = loopback(vec!["tcp/127.0.0.1:1".into(), "not an endpoint".into()]);
-    assert!(session_config(&bad).unwrap_err().to_string().starts_with("zenoh.connect[1]"));
-}
-
-#[test]
-fn payloads_are_decoded_by_encoding() {
-    let json = br#"{"center": [0, 0], "semi_axes": [0.2, 0.1], "ttl_s": 1}"#;
-    let o = decode_obstacle(&Encoding::APPLICATION_JSON, json, "a").unwrap();
-    assert_eq!((o.id.as_str(), o.ttl_s), ("a", 1.0));
-    let o = decode_obstacle(&Encoding::default(), json, "a").unwrap();
-    assert_eq!(o.id, "a");
-    let pb = codec::encode(&ball("b", [0.0; 3]));
-    assert_eq!(decode_obstacle(&Encoding::APPLICATION_PROTOBUF, &pb, "b").unwrap().id, "b");
-    assert_eq!(decode_obstacle(&Encoding::default(), &pb, "b").unwrap().id, "b");
-    let e = decode_obstacle(&Encoding::APPLICATION_PROTOBUF, &pb, "c").unwrap_err();
-    assert!(e.to_string().starts_with("id:"), "{e}");
-    let e = decode_obstacle(&Encoding::default(), b"{\"center\": [0,", "a").unwrap_err();
-    assert!(e.to_string().contains("EOF"), "bad JSON is reported as JSON: {e}");
-    assert!(decode_obstacle(&Encoding::APPLICATION_PROTOBUF, json, "a").is_err());
-    assert!(decode_obstacle(&Encoding::default(), &vec![b' '; MAX_PAYLOAD_BYTES + 1], "a").is_err());
 }
 
 #[tokio::test(flavor = "multi_thread")]
