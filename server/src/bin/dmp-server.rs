@@ -13,22 +13,12 @@ use tracing_subscriber::EnvFilter;
 
 /// Thousands of streams allocate and free small buffers (segments, robot states) at a high rate: mimalloc keeps
 /// that cheaper than the system allocator. Built without transparent huge pages (`no_thp`): with them its resident
-/// memory rose in steps of about 12 MiB over a run (130 to 190 MiB with 1,000 streams) instead of staying flat.
+/// memory rose in steps over a run instead of staying flat (BENCHMARKS.md).
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    // Without a layout of the operator's, the server re-executes itself with its own, first thing: before any
-    // thread starts, and before anything is read (a configuration file given as a pipe can be read only once).
-    if !args.no_zenoh
-        && !args.print_config
-        && let Some(e) = zenoh_threads::reexec_with_layout()
-    {
-        eprintln!(
-            "dmp-server: cannot re-execute with {ZENOH_RUNTIME} set ({e}): Zenoh keeps its default threads"
-        );
-    }
     let config = match load_config(&args) {
         Ok(c) => c,
         Err(e) => {
@@ -48,15 +38,18 @@ fn main() -> ExitCode {
             }
         }
     }
-    // Zenoh's threads (`dmp_server::zenoh_threads`): an operator's layout is checked (Zenoh would panic on a bad
-    // one).
-    if !config.zenoh.disabled
-        && let Some(value) = std::env::var_os(ZENOH_RUNTIME)
+    // Zenoh's threads (`dmp_server::zenoh_threads`): the server's layout unless the operator chose one. Zenoh reads
+    // the variable at its first use, later.
+    if let Some(layout) =
+        zenoh_threads::layout_to_set(std::env::var_os(ZENOH_RUNTIME).as_deref(), !config.zenoh.disabled)
     {
-        let checked = value.to_str().ok_or_else(|| "not UTF-8".to_string()).and_then(zenoh_threads::check);
-        if let Err(e) = checked {
-            eprintln!("dmp-server: {ZENOH_RUNTIME}: {e}");
-            return ExitCode::from(2);
+        // SAFETY: `set_var` is unsound only while another thread may read or write the environment. This process
+        // has one thread here: Rust starts none before `main`, and everything above (clap's parsing, reading and
+        // parsing the configuration file, printing) runs on this one; logging, the tokio runtime and Zenoh, which
+        // start threads, are all set up below.
+        #[allow(unsafe_code)]
+        unsafe {
+            std::env::set_var(ZENOH_RUNTIME, layout);
         }
     }
 

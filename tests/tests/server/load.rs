@@ -1,0 +1,123 @@
+//! Many streams at once: a hundred concurrent ones, a leaving client, and a small `dmpctl load`.
+
+use dmp_proto::v1;
+use tokio_stream::StreamExt;
+
+use crate::common::within;
+use crate::{line, serve, spec, until};
+
+#[tokio::test(flavor = "multi_thread")]
+async fn a_hundred_concurrent_streams_complete_and_a_leaving_client_frees_its_stream() {
+    let dir = tempfile::tempdir().unwrap();
+    let (handle, client) = serve(dir.path()).await;
+    within("put", client.put_primitive("fleet", "hop", &line(vec![0.0, 0.0], vec![0.5, 0.0], 0.5)))
+        .await
+        .unwrap();
+    let mut tasks = Vec::new();
+    for _ in 0..100 {
+        let client = client.clone();
+        tasks.push(tokio::spawn(async move {
+            let mut motion = spec("fleet", "hop");
+            motion.ignore_scene = true;
+            let request =
+                v1::ExecuteRequest { motion: Some(motion), max_duration_s: 2.0, ..Default::default() };
+            let mut stream = client.execute(request).await.unwrap();
+            let mut last = None;
+            while let Some(s) = stream.next().await {
+                last = Some(s.unwrap());
+            }
+            last.unwrap().status
+        }));
+    }
+    for t in tasks {
+        let status = within("stream", t).await.unwrap();
+        assert_eq!(status, v1::SegmentStatus::GoalReached as i32);
+    }
+    until("streams released", || handle.open_streams() == 0).await;
+
+    // A real-time stream whose client leaves after one segment is freed.
+    let mut motion = spec("fleet", "hop");
+    motion.tau = 100.0;
+    let request = v1::ExecuteRequest {
+        motion: Some(motion),
+        pacing: v1::Pacing::Realtime as i32,
+        max_duration_s: 300.0,
+        ..Default::default()
+    };
+    let mut stream = within("execute", client.execute(request)).await.unwrap();
+    within("segment", stream.next()).await.unwrap().unwrap();
+    assert_eq!(handle.open_streams(), 1);
+    drop(stream);
+    until("stream freed after the client left", || handle.open_streams() == 0).await;
+    within("shutdown", handle.shutdown()).await.unwrap();
+}
+
+/// A small `dmpctl load` (what CI may run; never the full one): 20 robots in 2 cells at 1 kHz in 10 ms segments
+/// for 2 s, with obstacle updates over Zenoh at 5 Hz. Structure and sanity only: no timing target (CI machines
+/// are noisy).
+#[tokio::test(flavor = "multi_thread")]
+async fn a_smoke_load_streams_twenty_robots_in_two_cells() {
+    let dir = tempfile::tempdir().unwrap();
+    let (handle, _client) = serve(dir.path()).await;
+    let out = dir.path().join("load.json");
+    let args = dmp_client::load::LoadArgs {
+        robots: 20,
+        rate: 1000.0,
+        segment_ms: 10.0,
+        duration: 2.0,
+        scene_updates: 5.0,
+        out: Some(out.clone()),
+        ..Default::default()
+    };
+    let url = format!("http://{}", handle.grpc_addr);
+    let report = within("the load", dmp_client::load::run(&args, &url, &handle.zenoh_locators))
+        .await
+        .expect("the load runs");
+    let json = serde_json::to_value(&report).unwrap();
+    println!("{}", serde_json::to_string_pretty(&json).unwrap());
+    assert_eq!(
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(&out).unwrap()).unwrap(),
+        json
+    );
+    for key in [
+        "setpoints_expected",
+        "setpoints_on_time",
+        "late_segments",
+        "server_cpu_percent",
+        "server_rss_mib",
+        "server_rss_mib_max",
+    ] {
+        assert!(json[key].is_number(), "{key}: {}", json[key]);
+    }
+    for key in ["p50", "p99", "max"] {
+        assert!(json["lateness_ms"][key].is_number(), "lateness_ms.{key}");
+    }
+    for key in ["p50", "p99"] {
+        assert!(json["scene_update_latency_ms"][key].is_number(), "scene_update_latency_ms.{key}");
+    }
+
+    assert!(report.errors.is_empty(), "{:#?}", report.errors);
+    assert_eq!((report.cells, report.streams_started, report.streams_failed), (2, 20, 0));
+    // Each robot streams from its start (spread over the first stagger_s seconds) to the end.
+    let ideal = 20.0 * 1000.0 * (args.duration - report.stagger_s * 19.0 / 20.0 / 2.0);
+    let expected = report.setpoints_expected as f64;
+    assert!((expected - ideal).abs() < 0.05 * ideal, "{expected} setpoints expected, about {ideal} ideal");
+    assert!(report.setpoints_on_time > 0 && report.setpoints_on_time <= report.setpoints_expected);
+    // Ten setpoints a segment, and more segments where a scene update superseded what was sent.
+    assert!(report.segments as f64 > 0.8 * expected / 10.0, "{} segments", report.segments);
+    assert!(report.late_segments <= report.segments);
+    assert_eq!(report.lateness_ms.count, report.segments);
+    // Every late segment is in the series, by the second it arrived in (the stagger, the run and its end).
+    assert_eq!(report.late_segments_per_second.iter().sum::<u64>(), report.late_segments);
+    assert_eq!(report.late_segments_per_second.len(), (report.stagger_s + args.duration).ceil() as usize + 1);
+    assert!(report.scene_updates_sent > 0);
+    assert!(report.scene_update_latency_ms.count > 0, "no scene update reached a robot");
+    assert!(
+        report.scene_update_latency_ms.count + report.scene_updates_unanswered <= report.scene_updates_sent
+    );
+    assert!(report.server_cpu_percent.unwrap() > 0.0);
+    assert!(report.server_rss_mib.unwrap() > 0.0);
+    assert!(!report.server_rss_mib_series.is_empty());
+    assert_eq!(report.server_open_streams_max, Some(20));
+    within("shutdown", handle.shutdown()).await.unwrap();
+}

@@ -1,0 +1,84 @@
+//! The real server, in-process on 127.0.0.1:0 with Zenoh on loopback (multicast off), driven through the client
+//! library exactly as robots and perception nodes drive it. Every await is under a timeout.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod bad_input;
+mod load;
+mod matches_the_engine;
+mod primitives;
+mod scene_over_zenoh;
+mod sessions_and_groups;
+
+use std::path::Path;
+use std::time::Duration;
+
+use common::{config, within};
+use dmp::Primitive;
+use dmp_client::grpc::DmpClient;
+use dmp_proto::v1;
+use dmp_server::run::{ServerHandle, start};
+
+async fn serve(dir: &Path) -> (ServerHandle, DmpClient) {
+    let handle = within("server start", start(config(dir))).await.expect("server starts");
+    let client = within("connect", DmpClient::connect(format!("http://{}", handle.grpc_addr)))
+        .await
+        .expect("connects");
+    (handle, client)
+}
+
+/// Waits (polling a condition, not a fixed sleep) until `cond` holds.
+async fn until(what: &str, mut cond: impl FnMut() -> bool) {
+    within(what, async {
+        while !cond() {
+            tokio::time::sleep(Duration::from_millis(5)).await;
+        }
+    })
+    .await
+}
+
+fn paper_curve() -> (Vec<f64>, Vec<Vec<f64>>) {
+    let t: Vec<f64> = (0..=1000).map(|i| i as f64 * 1e-3).collect();
+    let x = t
+        .iter()
+        .map(|t| vec![t * (std::f64::consts::PI * t).cos(), t * (std::f64::consts::PI * t).sin()])
+        .collect();
+    (t, x)
+}
+
+fn line(start: Vec<f64>, goal: Vec<f64>, tau: f64) -> Primitive {
+    let d = start.len();
+    Primitive::straight_line(50, 4.0, vec![3050.0; d], None, tau, start, goal).unwrap()
+}
+
+fn spec(robot: &str, name: &str) -> v1::MotionSpec {
+    v1::MotionSpec { robot_id: robot.into(), primitive: name.into(), ..Default::default() }
+}
+
+fn ellipse(id: &str, center: Vec<f64>, axes: Vec<f64>) -> v1::Obstacle {
+    v1::Obstacle {
+        id: id.into(),
+        shape: Some(v1::obstacle::Shape::Superquadric(v1::Superquadric {
+            semi_axes: axes,
+            exponents: vec![],
+        })),
+        center,
+        ..Default::default()
+    }
+}
+
+fn dynamic_volumetric(lambda: f64, beta: f64, eta: f64) -> v1::Avoidance {
+    v1::Avoidance {
+        method: Some(v1::avoidance::Method::DynamicVolumetric(v1::avoidance::DynamicVolumetric {
+            lambda,
+            beta,
+            eta,
+        })),
+        ..Default::default()
+    }
+}
+
+fn rows(seg: &v1::Segment, v: &[f64]) -> Vec<Vec<f64>> {
+    v.chunks(seg.dim as usize).map(<[f64]>::to_vec).collect()
+}
