@@ -91,9 +91,9 @@ pub fn bench_scenario(path: &Path, repeats: usize) -> Result<BenchReport, Client
     let repeats = repeats.max(1);
     let mut seconds = Vec::with_capacity(repeats);
     for i in 0..=repeats {
-        let mut field = p.field().map_err(invalid(path))?;
+        let field = p.field().map_err(invalid(path))?;
         let started = Instant::now();
-        let r = dmp::rollout(&p.primitive, &p.motion, &mut field, p.dt, p.steps).map_err(invalid(path))?;
+        let r = dmp::rollout(&p.primitive, &p.motion, &field, p.dt, p.steps).map_err(invalid(path))?;
         let elapsed = started.elapsed().as_secs_f64();
         std::hint::black_box(&r);
         if i > 0 {

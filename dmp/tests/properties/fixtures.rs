@@ -121,13 +121,7 @@ pub(crate) fn integrate_to(
     state
 }
 
-pub(crate) fn run(
-    p: &Primitive,
-    motion: &Motion,
-    field: &mut RepulsiveField,
-    dt: f64,
-    duration: f64,
-) -> Rollout {
+pub(crate) fn run(p: &Primitive, motion: &Motion, field: &RepulsiveField, dt: f64, duration: f64) -> Rollout {
     rollout(p, motion, field, dt, (duration / dt).round() as usize).unwrap()
 }
 

@@ -32,8 +32,8 @@ fn a_start_inside_an_obstacle_gives_a_finite_trajectory_and_a_contact() {
     ];
     for method in all_methods() {
         for o in &obstacles {
-            let mut f = field(vec![o.clone()], method, 2);
-            let r = run(p, &Motion::of(p), &mut f, 1e-3, 1.0);
+            let f = field(vec![o.clone()], method, 2);
+            let r = run(p, &Motion::of(p), &f, 1e-3, 1.0);
             let label = format!("{} in {}", method.name(), o.id());
             assert!(r.trajectory.is_finite(), "{label}: not finite");
             let (row, contact) = r.contacts.first().copied().unwrap_or_else(|| panic!("{label}: no contact"));
@@ -59,13 +59,12 @@ fn a_robot_at_rest_feels_no_dynamic_term_and_stays_finite() {
         paper_methods()[2],
         dynamic_volumetric(10.0, 2.0, 0.5),
     ] {
-        let r = run(&p, &Motion::of(&p), &mut field(vec![near.clone()], method, 2), 1e-3, 0.5);
+        let r = run(&p, &Motion::of(&p), &field(vec![near.clone()], method, 2), 1e-3, 0.5);
         assert!(r.trajectory.is_finite(), "{}", method.name());
         assert!(r.trajectory.x.iter().all(|&x| x == 0.0), "{}: a robot at rest moved", method.name());
     }
     // The static terms do push it, so the test above could see a motion.
-    let r =
-        run(&p, &Motion::of(&p), &mut field(vec![near.clone()], static_volumetric(10.0, 1.0), 2), 1e-3, 0.5);
+    let r = run(&p, &Motion::of(&p), &field(vec![near.clone()], static_volumetric(10.0, 1.0), 2), 1e-3, 0.5);
     assert!(last_position(&r)[0] < -1e-3);
     // An obstacle coming at a robot at rest: the relative velocity is not zero, the dynamic terms push it
     // away.
@@ -80,14 +79,14 @@ fn a_robot_at_rest_feels_no_dynamic_term_and_stays_finite() {
     for method in
         [dynamic_point(0.2, 2.0), dynamic_volumetric(10.0, 2.0, 0.5), dynamic_volumetric(10.0, 1.0, 0.5)]
     {
-        let r = run(&p, &Motion::of(&p), &mut field(vec![coming.clone()], method, 2), 1e-3, 1.0);
+        let r = run(&p, &Motion::of(&p), &field(vec![coming.clone()], method, 2), 1e-3, 1.0);
         assert!(r.trajectory.is_finite(), "{}", method.name());
         let pushed = (0..r.trajectory.len()).map(|k| r.trajectory.position(k)[0]).fold(0.0, f64::min);
         assert!(pushed < -1e-2, "{}: pushed only to {pushed}", method.name());
     }
     // The steering angle rotates the robot's own velocity: at rest it does nothing, and the obstacle runs it
     // over.
-    let r = run(&p, &Motion::of(&p), &mut field(vec![coming], paper_methods()[2], 2), 1e-3, 1.0);
+    let r = run(&p, &Motion::of(&p), &field(vec![coming], paper_methods()[2], 2), 1e-3, 1.0);
     assert!(r.trajectory.is_finite());
     assert!(obstacle_contacts(&r) > 0);
 }
@@ -99,7 +98,7 @@ fn a_robot_stuck_in_front_of_a_large_disc_is_reported_as_stalled() {
     let p = Primitive::straight_line(50, 4.0, vec![1050.0; 2], None, 1.0, vec![0.0, 0.0], vec![2.0, 0.0])
         .unwrap();
     let disc = ellipsoid("disc", &[1.0, 0.0], &[0.5, 0.5]);
-    let r = run(&p, &Motion::of(&p), &mut field(vec![disc], static_volumetric(10.0, 1.0), 2), 1e-3, 3.0);
+    let r = run(&p, &Motion::of(&p), &field(vec![disc], static_volumetric(10.0, 1.0), 2), 1e-3, 3.0);
     assert!(r.trajectory.is_finite());
     assert!(r.contacts.is_empty(), "{:?}", r.contacts.first());
     let end = last_position(&r);
@@ -112,7 +111,7 @@ fn a_robot_stuck_in_front_of_a_large_disc_is_reported_as_stalled() {
     assert_eq!(robot, 0);
     assert!(stall.distance > 1.0 && stall.since < stall.detected_at && stall.detected_at < 3.0);
     // Without the disc it arrives and nothing is reported.
-    let free = run(&p, &Motion::of(&p), &mut empty_field(2), 1e-3, 3.0);
+    let free = run(&p, &Motion::of(&p), &empty_field(2), 1e-3, 3.0);
     assert!(free.stalls.is_empty());
     assert!(dist(last_position(&free), &p.goal) < 1e-3);
 }
@@ -154,7 +153,7 @@ fn the_dynamic_terms_are_finite_exactly_at_their_switch_and_jump_there_only_for_
     // Rollouts through the paper's scene cross the switch: finite, and with beta = 1 still no collision.
     let p = &*PAPER;
     for method in [dynamic_point(0.2, 1.0), dynamic_volumetric(10.0, 1.0, 0.5)] {
-        let r = run(p, &Motion::of(p), &mut field(vec![paper_ellipse()], method, 2), 1e-3, 1.0);
+        let r = run(p, &Motion::of(p), &field(vec![paper_ellipse()], method, 2), 1e-3, 1.0);
         assert!(r.trajectory.is_finite(), "{}", method.name());
         assert!(r.contacts.is_empty(), "{}: {:?}", method.name(), r.contacts.first());
     }

@@ -19,7 +19,7 @@ fn assert_replays(label: &str, t0: f64, duration: f64, curve: impl Fn(f64) -> Ve
     let p = learn(&demo, &LearnConfig::paper()).unwrap();
     assert!((p.tau - duration).abs() < 1e-9);
     let dim = demo.dim();
-    let r = rollout(&p, &Motion::of(&p), &mut empty_field(dim), 1e-3, n).unwrap();
+    let r = rollout(&p, &Motion::of(&p), &empty_field(dim), 1e-3, n).unwrap();
     assert!(r.trajectory.is_finite());
     let span = span(demo.positions());
     let dev = (0..=n)
@@ -62,7 +62,7 @@ fn a_learned_primitive_replays_a_1d_demonstration_that_does_not_start_at_zero() 
 
 /// Positions of a no-obstacle rollout, row-major.
 fn free_rollout(p: &Primitive, dt: f64, steps: usize) -> Vec<f64> {
-    rollout(p, &Motion::of(p), &mut empty_field(p.dim), dt, steps).unwrap().trajectory.x
+    rollout(p, &Motion::of(p), &empty_field(p.dim), dt, steps).unwrap().trajectory.x
 }
 
 proptest! {

@@ -65,8 +65,8 @@ fn activity(make_field: impl Fn() -> RepulsiveField) -> Vec<bool> {
 /// The obstacle must really change the motion, or a convergence test with it would only repeat the free one.
 fn assert_acts(make_field: impl Fn() -> RepulsiveField) {
     let p = &*PAPER;
-    let free = run(p, &Motion::of(p), &mut empty_field(2), 1e-3, 1.0).trajectory;
-    let pushed = run(p, &Motion::of(p), &mut make_field(), 1e-3, 1.0).trajectory;
+    let free = run(p, &Motion::of(p), &empty_field(2), 1e-3, 1.0).trajectory;
+    let pushed = run(p, &Motion::of(p), &make_field(), 1e-3, 1.0).trajectory;
     let moved = (0..free.len()).map(|k| dist(free.position(k), pushed.position(k))).fold(0.0, f64::max);
     assert!(moved > 1e-2, "the obstacle moves the path by only {moved}");
 }

@@ -29,8 +29,8 @@ fn a_saved_and_loaded_primitive_replays_bit_for_bit() {
     }
     let m = Motion::of(&p);
     let make = || field(vec![paper_ellipse()], dynamic_volumetric(10.0, 2.0, 0.5), 2);
-    let a = run(&p, &m, &mut make(), 1e-3, 1.0);
-    let b = run(&q, &Motion::of(&q), &mut make(), 1e-3, 1.0);
+    let a = run(&p, &m, &make(), 1e-3, 1.0);
+    let b = run(&q, &Motion::of(&q), &make(), 1e-3, 1.0);
     assert_same_bits(&a.trajectory.x, &b.trajectory.x);
     assert_same_bits(&a.trajectory.xd, &b.trajectory.xd);
     assert_same_bits(&a.trajectory.xdd, &b.trajectory.xdd);

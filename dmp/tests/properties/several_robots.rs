@@ -70,11 +70,11 @@ fn three_crossing_robots_avoid_each_other_and_arrive_case(
     skew_deg: f64,
 ) -> Result<(), TestCaseError> {
     let skew = skew_deg.to_radians();
-    let (p, mut blind) = three_robots(turn, skew, Method::None);
-    let collide = run(&p, &Motion::of(&p), &mut blind, 1e-3, 3.0);
+    let (p, blind) = three_robots(turn, skew, Method::None);
+    let collide = run(&p, &Motion::of(&p), &blind, 1e-3, 3.0);
     prop_assert!(robot_contacts(&collide) > 0, "the paths do not cross: nothing to avoid");
-    let (p, mut careful) = three_robots(turn, skew, dynamic_volumetric(60.0, 2.0, 0.2));
-    let r = run(&p, &Motion::of(&p), &mut careful, 1e-3, 3.0);
+    let (p, careful) = three_robots(turn, skew, dynamic_volumetric(60.0, 2.0, 0.2));
+    let r = run(&p, &Motion::of(&p), &careful, 1e-3, 3.0);
     let (closest_blind, closest) = (min_pair_distance(&collide), min_pair_distance(&r));
     eprintln!(
         "three robots, skew {skew_deg:.1} deg: closest centres {closest_blind:.3} without avoidance, \

@@ -30,9 +30,9 @@ fn doubling_tau_plays_the_same_path_twice_as_slowly_case(
     let slow_motion = motion(start, p.goal.clone(), 2.0 * tau);
     let dt = 5e-4;
     let n = (1.5 * tau / dt).round() as usize;
-    let fast = rollout(p, &fast_motion, &mut empty_field(2), dt, n).unwrap().trajectory;
-    let slow = rollout(p, &slow_motion, &mut empty_field(2), dt, 2 * n).unwrap().trajectory;
-    let slow_2dt = rollout(p, &slow_motion, &mut empty_field(2), 2.0 * dt, n).unwrap().trajectory;
+    let fast = rollout(p, &fast_motion, &empty_field(2), dt, n).unwrap().trajectory;
+    let slow = rollout(p, &slow_motion, &empty_field(2), dt, 2 * n).unwrap().trajectory;
+    let slow_2dt = rollout(p, &slow_motion, &empty_field(2), 2.0 * dt, n).unwrap().trajectory;
     let span = (0..=n).map(|k| dist(fast.position(k), fast.position(0))).fold(0.0, f64::max);
     let (mut same_dt, mut double_dt, mut velocity) = (0.0f64, 0.0f64, 0.0f64);
     for k in 0..=n {
@@ -75,7 +75,7 @@ fn new_start_and_goal_are_reached_case(
 ) -> Result<(), TestCaseError> {
     let p = &*PAPER;
     let m = motion(start.to_vec(), goal.to_vec(), tau);
-    let r = run(p, &m, &mut empty_field(2), 1e-3, (3.0 * tau * 1e3).round() * 1e-3);
+    let r = run(p, &m, &empty_field(2), 1e-3, (3.0 * tau * 1e3).round() * 1e-3);
     let t = &r.trajectory;
     prop_assert!(t.is_finite());
     prop_assert_eq!(t.position(0), &start[..]);

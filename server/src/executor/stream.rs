@@ -159,10 +159,10 @@ impl<'a> Producer<'a> {
         let mut wake = Wake::default();
         loop {
             let changes_plan = self.apply(run, std::mem::take(&mut wake)).await?;
-            if changes_plan || self.finished.is_none() {
-                if let Some(reason) = self.send_due(run, changes_plan).await? {
-                    return Ok(reason);
-                }
+            if (changes_plan || self.finished.is_none())
+                && let Some(reason) = self.send_due(run, changes_plan).await?
+            {
+                return Ok(reason);
             }
             match self.wait(run).await? {
                 Ok(w) => wake = w,

@@ -87,10 +87,9 @@ async fn a_coarse_internal_step_stays_within_1e3_of_the_engines_1ms_rollout() {
             dmp::Avoidance::new(method),
             50,
         );
-        let mut field = dmp::RepulsiveField::new(scene, 2).unwrap();
-        let reference = dmp::rollout(&primitive, &dmp::Motion::of(&primitive), &mut field, 1e-3, 1500)
-            .unwrap()
-            .trajectory;
+        let field = dmp::RepulsiveField::new(scene, 2).unwrap();
+        let reference =
+            dmp::rollout(&primitive, &dmp::Motion::of(&primitive), &field, 1e-3, 1500).unwrap().trajectory;
         // Fixed RK4 steps, and the adaptive step (Dormand-Prince 5(4), at most 30 ms).
         for (step, tolerance) in [(0.005, 0.0), (0.01, 0.0), (0.03, 3e-6)] {
             let mut motion = spec("arm", "curve");

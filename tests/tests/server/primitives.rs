@@ -49,10 +49,10 @@ async fn primitives_survive_a_restart_and_a_plan_equals_the_engine() {
         beta: 2.0,
         eta: 0.5,
     }));
-    let mut field =
+    let field =
         dmp::RepulsiveField::new(dmp::Scene::with_obstacles(vec![obstacle], avoidance, 50), 2).unwrap();
     let reference =
-        dmp::rollout(&offline, &dmp::Motion::of(&offline), &mut field, 1e-3, 1000).unwrap().trajectory;
+        dmp::rollout(&offline, &dmp::Motion::of(&offline), &field, 1e-3, 1000).unwrap().trajectory;
     assert_eq!(seg.positions.len(), reference.x.len());
     let worst = seg.positions.iter().zip(&reference.x).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     assert!(worst <= 1e-9, "plan differs from the engine by {worst}");
