@@ -8,8 +8,8 @@ use std::sync::{Arc, Mutex};
 
 use dmp_proto::keys::check_name;
 
+use crate::cell::Cell;
 use crate::error::ServerError;
-use crate::scene::SceneState;
 
 /// Every cell's scene, by name. Cheap to clone.
 #[derive(Debug, Clone)]
@@ -18,7 +18,7 @@ pub struct Cells {
     max_cells: usize,
     max_obstacles: usize,
     /// The lock is held only to look up or insert, never across an await.
-    map: Arc<Mutex<HashMap<Arc<str>, SceneState>>>,
+    map: Arc<Mutex<HashMap<Arc<str>, Cell>>>,
 }
 
 impl Cells {
@@ -28,7 +28,7 @@ impl Cells {
         check_name("cell", default)?;
         let cells =
             Self { default: default.into(), max_cells: max_cells.max(1), max_obstacles, map: Arc::default() };
-        cells.scene("")?;
+        cells.get("")?;
         Ok(cells)
     }
 
@@ -39,7 +39,7 @@ impl Cells {
 
     /// The scene of `cell` (empty: the default cell), created if it is new. Fails on a name that cannot be a
     /// Zenoh key chunk, or when `max_cells` cells exist already.
-    pub fn scene(&self, cell: &str) -> Result<SceneState, ServerError> {
+    pub fn get(&self, cell: &str) -> Result<Cell, ServerError> {
         let name = if cell.is_empty() { &*self.default } else { cell };
         let mut map = self.map.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(s) = map.get(name) {
@@ -53,13 +53,13 @@ impl Cells {
             )));
         }
         let name: Arc<str> = name.into();
-        let scene = SceneState::new(name.clone(), self.max_obstacles);
+        let scene = Cell::new(name.clone(), self.max_obstacles);
         map.insert(name, scene.clone());
         Ok(scene)
     }
 
     /// Every cell's scene, in no particular order.
-    pub fn all(&self) -> Vec<SceneState> {
+    pub fn all(&self) -> Vec<Cell> {
         self.map.lock().unwrap_or_else(|p| p.into_inner()).values().cloned().collect()
     }
 
@@ -82,9 +82,9 @@ mod tests {
     fn cells_are_created_once_named_and_bounded() {
         let cells = Cells::new("home", 2, 10).unwrap();
         assert_eq!(cells.len(), 1);
-        assert_eq!(cells.scene("").unwrap().cell(), "home");
-        assert_eq!(cells.scene("home").unwrap().cell(), "home");
-        let a = cells.scene("a").unwrap();
+        assert_eq!(cells.get("").unwrap().name(), "home");
+        assert_eq!(cells.get("home").unwrap().name(), "home");
+        let a = cells.get("a").unwrap();
         a.put(
             dmp_proto::v1::Obstacle {
                 id: "o".into(),
@@ -99,10 +99,10 @@ mod tests {
         )
         .unwrap();
         // The same scene again, and the default cell does not see it.
-        assert_eq!(cells.scene("a").unwrap().snapshot().obstacles.len(), 1);
-        assert!(cells.scene("").unwrap().snapshot().obstacles.is_empty());
-        assert!(matches!(cells.scene("b"), Err(ServerError::ResourceExhausted(_))));
-        assert!(matches!(cells.scene("x/y"), Err(ServerError::InvalidArgument { .. })));
+        assert_eq!(cells.get("a").unwrap().snapshot().obstacles.len(), 1);
+        assert!(cells.get("").unwrap().snapshot().obstacles.is_empty());
+        assert!(matches!(cells.get("b"), Err(ServerError::ResourceExhausted(_))));
+        assert!(matches!(cells.get("x/y"), Err(ServerError::InvalidArgument { .. })));
         assert_eq!(cells.all().len(), 2);
     }
 }

@@ -8,7 +8,7 @@
 //! | the limits of the configuration on the wire's conversions (which are `dmp_proto`'s) | [`convert`] |
 //! | errors and their gRPC status | [`error`] |
 //! | the cells a server serves, each with its own scene | [`cells`] |
-//! | one cell's scene (obstacles, robot states) | [`scene`] |
+//! | one cell: its obstacles (versioned) and its robots' states | [`cell`] |
 //! | shared state of the services | [`state`] |
 //! | the embedded store of primitives (redb) | [`store`] |
 //! | robots' states: local scene and `dmp/<cell>/robots/<id>/state` | [`robots`] |
@@ -17,6 +17,7 @@
 //! | served runs: the engine's execution paced into gRPC streams | [`executor`] |
 //! | many streams' segments in one write on a connection | [`write_batching`] |
 
+pub mod cell;
 pub mod cells;
 pub mod cli;
 pub mod clock;
@@ -26,7 +27,6 @@ pub mod error;
 pub mod executor;
 pub mod robots;
 pub mod run;
-pub mod scene;
 pub mod services;
 pub mod state;
 pub mod store;

@@ -14,7 +14,7 @@ use zenoh::bytes::Encoding;
 use zenoh::pubsub::Publisher;
 use zenoh::sample::Locality;
 
-use crate::scene::SceneState;
+use crate::cell::Cell;
 
 /// Checks a robot state; imported from here by `services/motion.rs`.
 pub use dmp_proto::robot_state::check_robot_state;
@@ -59,12 +59,12 @@ impl RobotBus {
 
     /// Records a robot's state in its cell's scene and publishes it on Zenoh (encoding `application/protobuf`)
     /// unless the robot's last state went out less than the period ago.
-    pub async fn publish(&self, scene: &SceneState, state: v1::RobotState, footprint: Option<dmp::Shape>) {
+    pub async fn publish(&self, scene: &Cell, state: v1::RobotState, footprint: Option<dmp::Shape>) {
         let Some(z) = &self.zenoh else {
             scene.update_robot(state, footprint);
             return;
         };
-        let out = z.publisher(scene.cell(), &state.robot_id).await;
+        let out = z.publisher(scene.name(), &state.robot_id).await;
         let due = out.as_ref().is_some_and(|o| {
             if !o.matching.load(Ordering::Relaxed) {
                 return false;
@@ -87,21 +87,21 @@ impl RobotBus {
     }
 
     /// Forgets a robot whose run ended, locally and on Zenoh (a delete on its key).
-    pub async fn retire(&self, scene: &SceneState, robot_id: &str) {
+    pub async fn retire(&self, scene: &Cell, robot_id: &str) {
         scene.remove_robot(robot_id);
         let Some(z) = &self.zenoh else { return };
         let out = {
             let mut map = z.publishers.lock().unwrap_or_else(|p| p.into_inner());
-            let out = map.get_mut(scene.cell()).and_then(|m| m.remove(robot_id));
-            if map.get(scene.cell()).is_some_and(|m| m.is_empty()) {
-                map.remove(scene.cell());
+            let out = map.get_mut(scene.name()).and_then(|m| m.remove(robot_id));
+            if map.get(scene.name()).is_some_and(|m| m.is_empty()) {
+                map.remove(scene.name());
             }
             out
         };
         let result = match out {
             Some(o) => o.publisher.delete().await,
             None if check_name("robot_id", robot_id).is_ok() => {
-                z.session.delete(robot_state_key(scene.cell(), robot_id)).await
+                z.session.delete(robot_state_key(scene.name(), robot_id)).await
             }
             None => return,
         };
@@ -177,7 +177,6 @@ mod tests {
     use super::*;
     use crate::cells::Cells;
     use crate::config::ZenohConfig;
-    use crate::scene::now_unix_s;
     use crate::zenoh_bridge::{ZenohBridge, open_session};
     use dmp_proto::keys::obstacle_key;
     use dmp_proto::zenoh_session::locators;
@@ -192,7 +191,7 @@ mod tests {
     fn state(id: &str, x: f64) -> v1::RobotState {
         v1::RobotState {
             robot_id: id.into(),
-            stamp_unix_s: now_unix_s(),
+            stamp_unix_s: crate::clock::system_unix_s(),
             position: vec![x, 0.0, 0.0],
             velocity: vec![0.0; 3],
             footprint: Some(v1::Superquadric { semi_axes: vec![0.2; 3], exponents: vec![] }),
@@ -201,12 +200,12 @@ mod tests {
 
     #[tokio::test(flavor = "multi_thread")]
     async fn without_zenoh_states_stay_local() {
-        let scene = SceneState::new("c", 10);
+        let scene = Cell::new("c", 10);
         let bus = RobotBus::new(None);
         bus.publish(&scene, state("r1", 1.0), None).await;
-        assert_eq!(scene.other_robots("r2", now_unix_s(), 60.0).len(), 1);
+        assert_eq!(scene.other_robots("r2", crate::clock::system_unix_s(), 60.0).len(), 1);
         bus.retire(&scene, "r1").await;
-        assert!(scene.other_robots("r2", now_unix_s(), 60.0).is_empty());
+        assert!(scene.other_robots("r2", crate::clock::system_unix_s(), 60.0).is_empty());
     }
 
     /// Two servers of one cell: the robots of one are seen by the other through Zenoh.
@@ -222,12 +221,16 @@ mod tests {
         // b (with the bridge) listens; a (with the bus) connects to it and so knows b's subscribers on opening.
         let b = within("open b", open_session(&cfg(vec![]))).await.unwrap();
         let cells_b = Cells::new("c", 10, 10).unwrap();
-        let scene_b = cells_b.scene("c").unwrap();
+        let scene_b = cells_b.get("c").unwrap();
         let shutdown = CancellationToken::new();
-        let bridge =
-            within("bridge b", ZenohBridge::start(b.clone(), cells_b, shutdown.clone())).await.unwrap();
+        let bridge = within(
+            "bridge b",
+            ZenohBridge::start(b.clone(), cells_b, crate::clock::Clock::system(), shutdown.clone()),
+        )
+        .await
+        .unwrap();
         let a = within("open a", open_session(&cfg(locators(&b).await))).await.unwrap();
-        let scene_a = SceneState::new("c", 10);
+        let scene_a = Cell::new("c", 10);
         let bus = RobotBus::new(Some((a.clone(), 0.0)));
 
         // Belt and braces: a knows b's robot subscriber (declared after the obstacle one) before publishing.
@@ -246,18 +249,22 @@ mod tests {
         let sentinel = obstacle_key("c", "sentinel");
         within("sentinel", a.put(&sentinel, r#"{"center": [0], "semi_axes": [1]}"#)).await.unwrap();
         within("scene b", rx.changed()).await.unwrap();
-        let seen = scene_b.other_robots("r2", now_unix_s(), 60.0);
+        let seen = scene_b.other_robots("r2", crate::clock::system_unix_s(), 60.0);
         assert_eq!(seen.len(), 1);
         assert_eq!(seen[0].state.position, vec![2.0, 0.0, 0.0]);
         assert!(seen[0].footprint.is_some());
-        assert_eq!(scene_a.other_robots("r2", now_unix_s(), 60.0).len(), 1, "recorded locally");
+        assert_eq!(
+            scene_a.other_robots("r2", crate::clock::system_unix_s(), 60.0).len(),
+            1,
+            "recorded locally"
+        );
 
         bus.retire(&scene_a, "r1").await;
         assert_eq!(bus.publishers(), 0);
-        assert!(scene_a.other_robots("r2", now_unix_s(), 60.0).is_empty());
+        assert!(scene_a.other_robots("r2", crate::clock::system_unix_s(), 60.0).is_empty());
         within("sentinel delete", a.delete(&sentinel)).await.unwrap();
         within("scene b", rx.changed()).await.unwrap();
-        assert!(scene_b.other_robots("r2", now_unix_s(), 60.0).is_empty());
+        assert!(scene_b.other_robots("r2", crate::clock::system_unix_s(), 60.0).is_empty());
         assert_eq!(bridge.malformed_payloads(), 0);
 
         shutdown.cancel();

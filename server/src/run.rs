@@ -89,11 +89,11 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
 
     let (session, bridge, robots, zenoh_locators) = if config.zenoh.disabled {
         // Without Zenoh the bridge's reaper is not there: obstacles put over gRPC with a ttl still expire.
-        crate::zenoh_bridge::spawn_reaper(cells.clone(), shutdown.clone());
+        crate::zenoh_bridge::spawn_reaper(cells.clone(), clock, shutdown.clone());
         (None, None, RobotBus::new(None), Vec::new())
     } else {
         let session = open_session(&config.zenoh).await?;
-        let bridge = ZenohBridge::start(session.clone(), cells.clone(), shutdown.clone()).await?;
+        let bridge = ZenohBridge::start(session.clone(), cells.clone(), clock, shutdown.clone()).await?;
         let locs = locators(&session).await;
         let robots = RobotBus::new(Some((session.clone(), config.defaults.robot_state_period_s)));
         (Some(session), Some(bridge), robots, locs)

@@ -29,9 +29,9 @@ use zenoh::sample::{Locality, Sample, SampleKind};
 use zenoh::{Session, Wait};
 
 use crate::cells::Cells;
+use crate::clock::Clock;
 use crate::config::ZenohConfig;
 use crate::error::ServerError;
-use crate::scene::now_unix_s;
 
 /// Period of the reaper that removes obstacles whose time to live has passed.
 pub const REAP_PERIOD: Duration = Duration::from_millis(100);
@@ -56,7 +56,7 @@ pub async fn open_session(cfg: &ZenohConfig) -> Result<Session, ServerError> {
 
 /// Spawns the task that removes expired obstacles of every cell every [`REAP_PERIOD`] until `stop` is cancelled.
 /// The bridge starts one; without Zenoh, start one for the time to live of gRPC puts.
-pub fn spawn_reaper(cells: Cells, stop: CancellationToken) -> JoinHandle<()> {
+pub fn spawn_reaper(cells: Cells, clock: Clock, stop: CancellationToken) -> JoinHandle<()> {
     tokio::spawn(async move {
         let mut tick = tokio::time::interval(REAP_PERIOD);
         tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
@@ -64,11 +64,11 @@ pub fn spawn_reaper(cells: Cells, stop: CancellationToken) -> JoinHandle<()> {
             tokio::select! {
                 _ = stop.cancelled() => break,
                 _ = tick.tick() => {
-                    let now = now_unix_s();
+                    let now = clock.now_unix_s();
                     for scene in cells.all() {
                         let n = scene.expire(now);
                         if n > 0 {
-                            debug!(cell = scene.cell(), expired = n, version = scene.snapshot().version, "obstacles expired");
+                            debug!(cell = scene.name(), expired = n, version = scene.snapshot().version, "obstacles expired");
                         }
                     }
                 }
@@ -82,6 +82,7 @@ pub fn spawn_reaper(cells: Cells, stop: CancellationToken) -> JoinHandle<()> {
 struct SceneUpdater {
     cells: Cells,
     malformed: Arc<AtomicU64>,
+    clock: Clock,
 }
 
 impl SceneUpdater {
@@ -95,7 +96,7 @@ impl SceneUpdater {
         let key = sample.key_expr().as_str();
         let names = keys::parse_obstacle_key(key)
             .ok_or_else(|| ServerError::invalid("key", "is not dmp/<cell>/obstacles/<obstacle-id>"))?;
-        let (scene, id) = (self.cells.scene(names.cell)?, names.id);
+        let (scene, id) = (self.cells.get(names.cell)?, names.id);
         match sample.kind() {
             SampleKind::Delete => {
                 let (version, existed) = scene.delete(id);
@@ -106,7 +107,7 @@ impl SceneUpdater {
                 // The encoding's name, with its schema if any (`application/protobuf;dmp.v1.Obstacle`).
                 let encoding = std::borrow::Cow::<'static, str>::from(sample.encoding());
                 let o = decode_obstacle(&encoding, &bytes, id)?;
-                let version = scene.put(o, now_unix_s())?;
+                let version = scene.put(o, self.clock.now_unix_s())?;
                 debug!(key, version, "obstacle put over zenoh");
             }
         }
@@ -123,7 +124,7 @@ impl SceneUpdater {
         let key = sample.key_expr().as_str();
         let names = keys::parse_robot_state_key(key)
             .ok_or_else(|| ServerError::invalid("key", "is not dmp/<cell>/robots/<robot-id>/state"))?;
-        let (scene, id) = (self.cells.scene(names.cell)?, names.id);
+        let (scene, id) = (self.cells.get(names.cell)?, names.id);
         match sample.kind() {
             SampleKind::Delete => {
                 scene.remove_robot(id);
@@ -161,10 +162,11 @@ impl ZenohBridge {
     pub async fn start(
         session: Session,
         cells: Cells,
+        clock: Clock,
         shutdown: CancellationToken,
     ) -> Result<Self, ServerError> {
         let malformed = Arc::new(AtomicU64::new(0));
-        let updater = SceneUpdater { cells: cells.clone(), malformed: malformed.clone() };
+        let updater = SceneUpdater { cells: cells.clone(), malformed: malformed.clone(), clock };
         let zenoh_err = |e: zenoh::Error| ServerError::Internal(format!("zenoh: cannot subscribe: {e}"));
 
         let obstacles_key = keys::obstacles_of(EVERY_CELL);
@@ -183,7 +185,7 @@ impl ZenohBridge {
             .map_err(zenoh_err)?;
 
         let stop = shutdown.child_token();
-        let reaper = spawn_reaper(cells, stop.clone());
+        let reaper = spawn_reaper(cells, clock, stop.clone());
         info!(obstacles = %obstacles_key, robots = %robots_key, "zenoh bridge subscribed");
         Ok(Self { obstacles, robots, reaper, stop: stop.drop_guard(), malformed })
     }

@@ -5,7 +5,7 @@ use dmp::execution::Stretch;
 use dmp_proto::v1;
 
 use super::served_run::ServedRun;
-use crate::scene::SceneState;
+use crate::cell::Cell;
 use crate::state::AppState;
 
 /// What the loop sends: one segment per member, all covering the same times.
@@ -78,7 +78,7 @@ impl FirstPoint {
 /// time zero in real time; as fast as read, now).
 pub async fn publish_states(
     app: &AppState,
-    cell: &SceneState,
+    cell: &Cell,
     run: &ServedRun,
     p: FirstPoint,
     start_unix: Option<f64>,

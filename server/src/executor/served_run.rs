@@ -9,8 +9,8 @@ use dmp::field::{Agent, Scene};
 use dmp::{Avoidance, Execution, Motion, Obstacle, Primitive, Stepping};
 use dmp_proto::v1;
 
+use crate::cell::{ObstacleSet, SeenRobot};
 use crate::error::ServerError;
-use crate::scene::{RemoteRobot, SceneSnapshot};
 
 /// How a request asked its run to avoid things.
 #[derive(Debug, Clone)]
@@ -67,8 +67,8 @@ impl ServedRun {
     /// other robots.
     pub fn apply_scene(
         &mut self,
-        snapshot: &SceneSnapshot,
-        others: &[Arc<RemoteRobot>],
+        snapshot: &ObstacleSet,
+        others: &[Arc<SeenRobot>],
         now_unix_s: f64,
     ) -> Result<(), ServerError> {
         let seen = snapshot.obstacles.values().map(|o| (&o.engine, now_unix_s - o.received_unix_s));
@@ -82,7 +82,7 @@ impl ServedRun {
     }
 
     /// Updates the cell's other robots from their last states (robots without a footprint are invisible).
-    pub fn set_cellmates(&mut self, others: &[Arc<RemoteRobot>], now_unix_s: f64) -> Result<(), ServerError> {
+    pub fn set_cellmates(&mut self, others: &[Arc<SeenRobot>], now_unix_s: f64) -> Result<(), ServerError> {
         let mates = others.iter().filter_map(|r| {
             Some(CellMate {
                 id: &r.state.robot_id,

@@ -17,8 +17,8 @@ use tracing::{debug, info, warn};
 use super::pacing::{FIRST_POINT_DELAY, ROLLBACK_MARGIN, refill};
 use super::segments::{Batch, FirstPoint, member_segments, publish_states};
 use super::served_run::ServedRun;
+use crate::cell::{Cell, ObstacleSet, SeenRobot};
 use crate::error::ServerError;
-use crate::scene::{RemoteRobot, SceneSnapshot, SceneState};
 use crate::state::AppState;
 use crate::write_batching::Urgency;
 
@@ -64,7 +64,7 @@ pub enum Control {
 pub async fn run_stream(
     app: Arc<AppState>,
     mut run: ServedRun,
-    cell: SceneState,
+    cell: Cell,
     cfg: StreamConfig,
     tx: mpsc::Sender<Result<Batch, tonic::Status>>,
     control: Option<mpsc::Receiver<Control>>,
@@ -104,12 +104,12 @@ struct Wake {
 /// The producer's state between wake-ups.
 struct Producer<'a> {
     app: &'a AppState,
-    cell: &'a SceneState,
+    cell: &'a Cell,
     cfg: &'a StreamConfig,
     tx: &'a mpsc::Sender<Result<Batch, tonic::Status>>,
     control: Option<mpsc::Receiver<Control>>,
-    scene_rx: watch::Receiver<Arc<SceneSnapshot>>,
-    others: Vec<Arc<RemoteRobot>>,
+    scene_rx: watch::Receiver<Arc<ObstacleSet>>,
+    others: Vec<Arc<SeenRobot>>,
     /// Real time: the instant and the wall time (Unix seconds) of run time zero.
     start: Instant,
     start_unix: f64,
@@ -122,7 +122,7 @@ struct Producer<'a> {
 impl<'a> Producer<'a> {
     fn new(
         app: &'a AppState,
-        cell: &'a SceneState,
+        cell: &'a Cell,
         cfg: &'a StreamConfig,
         tx: &'a mpsc::Sender<Result<Batch, tonic::Status>>,
         control: Option<mpsc::Receiver<Control>>,

@@ -54,7 +54,7 @@ async fn real_time_segments_arrive_before_they_are_due_and_a_goal_change_superse
     let dir = tempfile::tempdir().unwrap();
     let clock = Clock::following_tokio();
     let app = app(dir.path(), clock);
-    let cell = app.cells.scene("c").unwrap();
+    let cell = app.cells.get("c").unwrap();
     let cfg = StreamConfig {
         stepping: Stepping::rk4(1e-3),
         segment_points: 10,

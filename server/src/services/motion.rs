@@ -17,6 +17,7 @@ use tonic::transport::server::TcpConnectInfo;
 use tonic::{Request, Response, Status, Streaming};
 use tracing::info;
 
+use crate::cell::Cell;
 use crate::convert::{
     avoidance_from_proto, check_name, obstacle_to_engine, primitive_from_proto, superquadric_to_shape, vector,
 };
@@ -25,7 +26,6 @@ use crate::executor::pacing::{history_len, refill_segments};
 use crate::executor::segments::Batch;
 use crate::executor::served_run::{RunAvoidance, ServedRun};
 use crate::executor::stream::{Control, StreamConfig, run_stream};
-use crate::scene::SceneState;
 use crate::state::AppState;
 use crate::write_batching::{BatchedConnectInfo, Urgency};
 
@@ -51,7 +51,7 @@ type GroupStream = Pin<Box<dyn Stream<Item = Result<v1::GroupSegment, Status>> +
 struct ResolvedMotion {
     robot_id: String,
     /// The robot's cell.
-    cell: SceneState,
+    cell: Cell,
     primitive: Primitive,
     motion: Motion,
     avoidance: RunAvoidance,
@@ -68,7 +68,7 @@ impl MotionServiceImpl {
         let spec = spec.ok_or_else(|| ServerError::invalid(prefix, "is required"))?;
         check_name(&format!("{prefix}.robot_id"), &spec.robot_id)?;
         check_name(&format!("{prefix}.primitive"), &spec.primitive)?;
-        let cell = self.state.cells.scene(&spec.cell).map_err(|e| e.within(prefix))?;
+        let cell = self.state.cells.get(&spec.cell).map_err(|e| e.within(prefix))?;
         let store = self.state.store.clone();
         let (robot, name, version) = (spec.robot_id.clone(), spec.primitive.clone(), spec.version);
         let record = tokio::task::spawn_blocking(move || store.get(&robot, &name, version))
@@ -173,7 +173,7 @@ impl MotionServiceImpl {
     fn spawn(
         &self,
         run: ServedRun,
-        cell: SceneState,
+        cell: Cell,
         cfg: StreamConfig,
         control: Option<mpsc::Receiver<Control>>,
     ) -> Result<mpsc::Receiver<Result<Batch, Status>>, ServerError> {
@@ -264,7 +264,7 @@ impl MotionService for MotionServiceImpl {
         let req = request.into_inner();
         let r = self.resolve(req.motion.as_ref(), "motion").await?;
         let cfg = StreamRequest::of(&req).config(r.motion.tau, &self.state.config, urgency)?;
-        info!(robot = %r.robot_id, cell = r.cell.cell(), realtime = cfg.realtime, "execute");
+        info!(robot = %r.robot_id, cell = r.cell.name(), realtime = cfg.realtime, "execute");
         self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
         let cell = r.cell.clone();
         let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
@@ -355,12 +355,12 @@ impl MotionService for MotionServiceImpl {
         let mut resolved = Vec::with_capacity(req.members.len());
         for (i, m) in req.members.iter().enumerate() {
             let r = self.resolve(m.motion.as_ref(), &format!("members[{i}].motion")).await?;
-            if r.cell.cell() != resolved.first().map_or(r.cell.cell(), |f: &ResolvedMotion| f.cell.cell()) {
+            if r.cell.name() != resolved.first().map_or(r.cell.name(), |f: &ResolvedMotion| f.cell.name()) {
                 return Err(ServerError::invalid(
                     format!("members[{i}].motion.cell"),
                     format!(
                         "must be the first member's cell `{}`: a group works in one cell",
-                        resolved[0].cell.cell()
+                        resolved[0].cell.name()
                     ),
                 )
                 .into());

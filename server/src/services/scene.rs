@@ -11,8 +11,9 @@ use tokio_util::sync::CancellationToken;
 use tonic::{Request, Response, Status};
 use tracing::debug;
 
+use crate::cell::{Cell, ObstacleSet};
+use crate::clock::Clock;
 use crate::error::ServerError;
-use crate::scene::{SceneSnapshot, SceneState, now_unix_s};
 use crate::state::AppState;
 
 /// The scene service.
@@ -30,7 +31,7 @@ impl SceneServiceImpl {
 }
 
 /// The message of a snapshot: obstacles sorted by id, centres moved to `now_unix_s`.
-pub fn snapshot_to_proto(snapshot: &SceneSnapshot, now_unix_s: f64) -> v1::SceneSnapshot {
+pub fn snapshot_to_proto(snapshot: &ObstacleSet, now_unix_s: f64) -> v1::SceneSnapshot {
     v1::SceneSnapshot {
         scene_version: snapshot.version,
         obstacles: snapshot.obstacles.values().map(|o| o.proto_at(now_unix_s)).collect(),
@@ -44,7 +45,8 @@ pub fn snapshot_to_proto(snapshot: &SceneSnapshot, now_unix_s: f64) -> v1::Scene
 /// backpressure: a slow reader is sent the latest snapshot when it catches up (versions in between are skipped; each
 /// event is a whole snapshot, so nothing is lost), never a growing queue.
 pub fn watch_stream(
-    scene: &SceneState,
+    scene: &Cell,
+    clock: Clock,
     buffer: usize,
     shutdown: CancellationToken,
     permit: OwnedSemaphorePermit,
@@ -55,7 +57,7 @@ pub fn watch_stream(
         let _permit = permit;
         loop {
             let snapshot = changes.borrow_and_update().clone();
-            let event = v1::SceneEvent { snapshot: Some(snapshot_to_proto(&snapshot, now_unix_s())) };
+            let event = v1::SceneEvent { snapshot: Some(snapshot_to_proto(&snapshot, clock.now_unix_s())) };
             tokio::select! {
                 biased;
                 _ = shutdown.cancelled() => break,
@@ -81,10 +83,10 @@ impl SceneService for SceneServiceImpl {
         request: Request<v1::PutObstacleRequest>,
     ) -> Result<Response<v1::SceneChange>, Status> {
         let request = request.into_inner();
-        let scene = self.state.cells.scene(&request.cell)?;
+        let scene = self.state.cells.get(&request.cell)?;
         let obstacle = request.obstacle.ok_or_else(|| ServerError::invalid("obstacle", "is required"))?;
         let id = obstacle.id.clone();
-        let version = scene.put(obstacle, now_unix_s())?;
+        let version = scene.put(obstacle, self.state.clock.now_unix_s())?;
         debug!(obstacle = %id, version, "obstacle put over gRPC");
         Ok(Response::new(v1::SceneChange { scene_version: version, changed: true }))
     }
@@ -97,7 +99,7 @@ impl SceneService for SceneServiceImpl {
         if id.is_empty() {
             return Err(ServerError::invalid("id", "must not be empty").into());
         }
-        let (version, changed) = self.state.cells.scene(&cell)?.delete(&id);
+        let (version, changed) = self.state.cells.get(&cell)?.delete(&id);
         debug!(obstacle = %id, version, changed, "obstacle deleted over gRPC");
         Ok(Response::new(v1::SceneChange { scene_version: version, changed }))
     }
@@ -106,8 +108,8 @@ impl SceneService for SceneServiceImpl {
         &self,
         request: Request<v1::ListObstaclesRequest>,
     ) -> Result<Response<v1::SceneSnapshot>, Status> {
-        let scene = self.state.cells.scene(&request.into_inner().cell)?;
-        Ok(Response::new(snapshot_to_proto(&scene.snapshot(), now_unix_s())))
+        let scene = self.state.cells.get(&request.into_inner().cell)?;
+        Ok(Response::new(snapshot_to_proto(&scene.snapshot(), self.state.clock.now_unix_s())))
     }
 
     type WatchSceneStream = ReceiverStream<Result<v1::SceneEvent, Status>>;
@@ -117,15 +119,22 @@ impl SceneService for SceneServiceImpl {
         request: Request<v1::WatchSceneRequest>,
     ) -> Result<Response<Self::WatchSceneStream>, Status> {
         let s = &self.state;
-        let scene = s.cells.scene(&request.into_inner().cell)?;
+        let scene = s.cells.get(&request.into_inner().cell)?;
         let permit = s.stream_permit()?;
-        Ok(Response::new(watch_stream(&scene, s.config.limits.stream_buffer, s.shutdown.clone(), permit)))
+        Ok(Response::new(watch_stream(
+            &scene,
+            s.clock,
+            s.config.limits.stream_buffer,
+            s.shutdown.clone(),
+            permit,
+        )))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::clock::system_unix_s;
     use std::future::IntoFuture;
     use std::time::Duration;
     use tokio::sync::Semaphore;
@@ -154,7 +163,7 @@ mod tests {
 
     #[test]
     fn snapshots_move_centres_to_now() {
-        let scene = SceneState::new("c", 10);
+        let scene = Cell::new("c", 10);
         scene.put(moving("b"), 100.0).unwrap();
         scene.put(moving("a"), 100.0).unwrap();
         let p = snapshot_to_proto(&scene.snapshot(), 102.5);
@@ -165,15 +174,15 @@ mod tests {
 
     #[tokio::test(flavor = "multi_thread")]
     async fn a_watch_sends_the_snapshot_then_changes_and_frees_its_permit() {
-        let scene = SceneState::new("c", 10);
-        scene.put(moving("a"), now_unix_s()).unwrap();
+        let scene = Cell::new("c", 10);
+        scene.put(moving("a"), system_unix_s()).unwrap();
         let permits = Arc::new(Semaphore::new(1));
         let shutdown = CancellationToken::new();
         let permit = permits.clone().try_acquire_owned().unwrap();
-        let mut stream = watch_stream(&scene, 2, shutdown.clone(), permit);
+        let mut stream = watch_stream(&scene, Clock::system(), 2, shutdown.clone(), permit);
         let first = within("first", stream.next()).await.unwrap().unwrap();
         assert_eq!(ids(&first), ["a"]);
-        scene.put(moving("b"), now_unix_s()).unwrap();
+        scene.put(moving("b"), system_unix_s()).unwrap();
         let second = within("second", stream.next()).await.unwrap().unwrap();
         assert_eq!(ids(&second), ["a", "b"]);
         assert_eq!(second.snapshot.unwrap().scene_version, 2);
@@ -188,11 +197,16 @@ mod tests {
 
     #[tokio::test(flavor = "multi_thread")]
     async fn a_watch_ends_on_shutdown() {
-        let scene = SceneState::new("c", 10);
+        let scene = Cell::new("c", 10);
         let permits = Arc::new(Semaphore::new(1));
         let shutdown = CancellationToken::new();
-        let mut stream =
-            watch_stream(&scene, 1, shutdown.clone(), permits.clone().try_acquire_owned().unwrap());
+        let mut stream = watch_stream(
+            &scene,
+            Clock::system(),
+            1,
+            shutdown.clone(),
+            permits.clone().try_acquire_owned().unwrap(),
+        );
         assert!(ids(&within("first", stream.next()).await.unwrap().unwrap()).is_empty());
         shutdown.cancel();
         let last = within("last", stream.next()).await.unwrap().unwrap_err();
@@ -203,12 +217,17 @@ mod tests {
 
     #[tokio::test(flavor = "multi_thread")]
     async fn a_slow_reader_gets_the_latest_snapshot() {
-        let scene = SceneState::new("c", 100);
+        let scene = Cell::new("c", 100);
         let permits = Arc::new(Semaphore::new(1));
-        let mut stream =
-            watch_stream(&scene, 1, CancellationToken::new(), permits.clone().try_acquire_owned().unwrap());
+        let mut stream = watch_stream(
+            &scene,
+            Clock::system(),
+            1,
+            CancellationToken::new(),
+            permits.clone().try_acquire_owned().unwrap(),
+        );
         for i in 0..50 {
-            scene.put(moving(&format!("o{i:02}")), now_unix_s()).unwrap();
+            scene.put(moving(&format!("o{i:02}")), system_unix_s()).unwrap();
         }
         // Whatever was buffered, the events only grow and the last one holds all 50 obstacles.
         let mut last = 0;

@@ -30,7 +30,7 @@ fn loopback(connect: Vec<String>) -> ZenohConfig {
 struct Pair {
     server: Session,
     client: Session,
-    scene: crate::scene::SceneState,
+    scene: crate::cell::Cell,
     bridge: ZenohBridge,
     shutdown: CancellationToken,
 }
@@ -38,9 +38,14 @@ struct Pair {
 async fn pair(cell: &str) -> Pair {
     let server = within("open server", open_session(&loopback(vec![]))).await.unwrap();
     let cells = Cells::new(cell, 10, 100).unwrap();
-    let scene = cells.scene(cell).unwrap();
+    let scene = cells.get(cell).unwrap();
     let shutdown = CancellationToken::new();
-    let bridge = within("bridge", ZenohBridge::start(server.clone(), cells, shutdown.clone())).await.unwrap();
+    let bridge = within(
+        "bridge",
+        ZenohBridge::start(server.clone(), cells, crate::clock::Clock::system(), shutdown.clone()),
+    )
+    .await
+    .unwrap();
     let client = within("open client", open_session(&loopback(locators(&server).await))).await.unwrap();
     Pair { server, client, scene, bridge, shutdown }
 }
@@ -65,9 +70,7 @@ async fn matched_publisher(session: &Session, key: String) -> Publisher<'static>
 }
 
 /// Waits for the next scene version.
-async fn next(
-    rx: &mut watch::Receiver<Arc<crate::scene::SceneSnapshot>>,
-) -> Arc<crate::scene::SceneSnapshot> {
+async fn next(rx: &mut watch::Receiver<Arc<crate::cell::ObstacleSet>>) -> Arc<crate::cell::ObstacleSet> {
     within("scene change", rx.changed()).await.unwrap();
     rx.borrow_and_update().clone()
 }
@@ -172,7 +175,7 @@ async fn malformed_payloads_are_counted_and_change_nothing() {
     assert_eq!(after.version, before.version + 1, "only the sentinel changed the scene");
     assert_eq!(after.obstacles.keys().collect::<Vec<_>>(), ["sentinel", "x"]);
     assert_eq!(after.obstacles["x"].proto, before.obstacles["x"].proto);
-    assert!(p.scene.other_robots("", now_unix_s(), 1e9).is_empty());
+    assert!(p.scene.other_robots("", crate::clock::system_unix_s(), 1e9).is_empty());
     p.close().await;
 }
 
@@ -183,7 +186,7 @@ async fn robot_states_arrive_and_leave() {
     let publisher = matched_publisher(&p.client, robot_state_key("cell3", "r1")).await;
     let state = v1::RobotState {
         robot_id: "r1".into(),
-        stamp_unix_s: now_unix_s(),
+        stamp_unix_s: crate::clock::system_unix_s(),
         position: vec![0.1, 0.2, 0.3],
         velocity: vec![1.0, 0.0, 0.0],
         footprint: Some(v1::Superquadric { semi_axes: vec![0.1; 3], exponents: vec![] }),
@@ -198,16 +201,16 @@ async fn robot_states_arrive_and_leave() {
     let sentinel = r#"{"center": [0, 0], "semi_axes": [0.1, 0.1]}"#;
     within("put", p.client.put(obstacle_key("cell3", "s"), sentinel)).await.unwrap();
     next(&mut rx).await;
-    let others = p.scene.other_robots("r2", now_unix_s(), 60.0);
+    let others = p.scene.other_robots("r2", crate::clock::system_unix_s(), 60.0);
     assert_eq!(others.len(), 1);
     assert_eq!(others[0].state, state);
     assert!(others[0].footprint.is_some());
-    assert_eq!(p.scene.other_robots("r1", now_unix_s(), 60.0)[0].state.robot_id, "r2");
+    assert_eq!(p.scene.other_robots("r1", crate::clock::system_unix_s(), 60.0)[0].state.robot_id, "r2");
 
     within("delete", publisher.delete()).await.unwrap();
     within("delete", p.client.delete(obstacle_key("cell3", "s"))).await.unwrap();
     next(&mut rx).await;
-    let others = p.scene.other_robots("", now_unix_s(), 60.0);
+    let others = p.scene.other_robots("", crate::clock::system_unix_s(), 60.0);
     assert_eq!(others.iter().map(|r| r.state.robot_id.as_str()).collect::<Vec<_>>(), ["r2"]);
     assert_eq!(p.bridge.malformed_payloads(), 0);
     p.close().await;

@@ -1,4 +1,4 @@
-//! One cell's scene: obstacles (versioned, read by every stream through a `watch` channel, so readers never block
+//! One cell: its obstacles (versioned, read by every stream through a `watch` channel, so readers never block
 //! the writer) and the latest state of every robot working in the cell (moving obstacles for the others).
 
 use std::collections::BTreeMap;
@@ -10,9 +10,9 @@ use tokio::sync::watch;
 
 use crate::error::ServerError;
 
-/// An obstacle as the scene holds it.
+/// An obstacle as the cell holds it.
 #[derive(Debug, Clone)]
-pub struct SceneObstacle {
+pub struct ReceivedObstacle {
     /// As received (normalised: the id set, the centre as of `received_unix_s`).
     pub proto: v1::Obstacle,
     /// The engine's obstacle: centre at `received_unix_s`, moving with its velocity.
@@ -23,7 +23,7 @@ pub struct SceneObstacle {
     pub expires_unix_s: Option<f64>,
 }
 
-impl SceneObstacle {
+impl ReceivedObstacle {
     /// The proto with its centre moved to `now_unix_s`.
     pub fn proto_at(&self, now_unix_s: f64) -> v1::Obstacle {
         let mut p = self.proto.clone();
@@ -37,42 +37,42 @@ impl SceneObstacle {
 
 /// The obstacles at one version.
 #[derive(Debug, Clone, Default)]
-pub struct SceneSnapshot {
+pub struct ObstacleSet {
     /// Grows by one with every change.
     pub version: u64,
     /// By id.
-    pub obstacles: BTreeMap<String, SceneObstacle>,
+    pub obstacles: BTreeMap<String, ReceivedObstacle>,
 }
 
 /// A robot seen by the cell (its last published state).
 #[derive(Debug, Clone)]
-pub struct RemoteRobot {
+pub struct SeenRobot {
     /// The state.
     pub state: v1::RobotState,
     /// Its footprint in the engine's form.
     pub footprint: Option<dmp::Shape>,
 }
 
-/// The shared scene. Cheap to clone.
+/// A cell: its obstacles and its robots. Cheap to clone.
 #[derive(Debug, Clone)]
-pub struct SceneState {
+pub struct Cell {
     cell: Arc<str>,
-    tx: Arc<watch::Sender<Arc<SceneSnapshot>>>,
+    tx: Arc<watch::Sender<Arc<ObstacleSet>>>,
     /// Robot states change at the control rate: kept apart from the versioned obstacles so that they do not wake
     /// every stream. The lock is never held across an await.
-    robots: Arc<Mutex<BTreeMap<String, Arc<RemoteRobot>>>>,
+    robots: Arc<Mutex<BTreeMap<String, Arc<SeenRobot>>>>,
     max_obstacles: usize,
 }
 
-impl SceneState {
+impl Cell {
     /// The empty scene of `cell`, holding at most `max_obstacles`.
     pub fn new(cell: impl Into<Arc<str>>, max_obstacles: usize) -> Self {
-        let (tx, _) = watch::channel(Arc::new(SceneSnapshot::default()));
+        let (tx, _) = watch::channel(Arc::new(ObstacleSet::default()));
         Self { cell: cell.into(), tx: Arc::new(tx), robots: Arc::default(), max_obstacles }
     }
 
     /// The cell's name.
-    pub fn cell(&self) -> &str {
+    pub fn name(&self) -> &str {
         &self.cell
     }
 
@@ -82,12 +82,12 @@ impl SceneState {
     }
 
     /// The current snapshot.
-    pub fn snapshot(&self) -> Arc<SceneSnapshot> {
+    pub fn snapshot(&self) -> Arc<ObstacleSet> {
         self.tx.borrow().clone()
     }
 
     /// A receiver that sees every new snapshot.
-    pub fn subscribe(&self) -> watch::Receiver<Arc<SceneSnapshot>> {
+    pub fn subscribe(&self) -> watch::Receiver<Arc<ObstacleSet>> {
         self.tx.subscribe()
     }
 
@@ -98,7 +98,7 @@ impl SceneState {
         }
         let engine = obstacle_to_engine(&obstacle).map_err(|e| e.within("obstacle"))?;
         let expires_unix_s = (obstacle.ttl_s > 0.0).then_some(now_unix_s + obstacle.ttl_s);
-        let entry = SceneObstacle { proto: obstacle, engine, received_unix_s: now_unix_s, expires_unix_s };
+        let entry = ReceivedObstacle { proto: obstacle, engine, received_unix_s: now_unix_s, expires_unix_s };
         let mut result = Ok(0);
         self.tx.send_modify(|snap| {
             if !snap.obstacles.contains_key(&entry.proto.id) && snap.obstacles.len() >= self.max_obstacles {
@@ -162,9 +162,9 @@ impl SceneState {
     pub fn update_robot(&self, state: v1::RobotState, footprint: Option<dmp::Shape>) {
         let mut robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());
         match robots.get_mut(&state.robot_id) {
-            Some(r) => *r = Arc::new(RemoteRobot { state, footprint }),
+            Some(r) => *r = Arc::new(SeenRobot { state, footprint }),
             None => {
-                robots.insert(state.robot_id.clone(), Arc::new(RemoteRobot { state, footprint }));
+                robots.insert(state.robot_id.clone(), Arc::new(SeenRobot { state, footprint }));
             }
         }
     }
@@ -176,19 +176,19 @@ impl SceneState {
     }
 
     /// The other robots of the cell, except `robot_id`, whose state is not older than `max_age_s`.
-    pub fn other_robots(&self, robot_id: &str, now_unix_s: f64, max_age_s: f64) -> Vec<Arc<RemoteRobot>> {
+    pub fn other_robots(&self, robot_id: &str, now_unix_s: f64, max_age_s: f64) -> Vec<Arc<SeenRobot>> {
         let mut out = Vec::new();
         self.other_robots_into(robot_id, now_unix_s, max_age_s, &mut out);
         out
     }
 
-    /// [`SceneState::other_robots`] into `out` (cleared first), reusing its allocations.
+    /// [`Cell::other_robots`] into `out` (cleared first), reusing its allocations.
     pub fn other_robots_into(
         &self,
         robot_id: &str,
         now_unix_s: f64,
         max_age_s: f64,
-        out: &mut Vec<Arc<RemoteRobot>>,
+        out: &mut Vec<Arc<SeenRobot>>,
     ) {
         out.clear();
         let robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());
@@ -199,9 +199,4 @@ impl SceneState {
                 .cloned(),
         );
     }
-}
-
-/// Wall clock, Unix seconds.
-pub fn now_unix_s() -> f64 {
-    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs_f64()).unwrap_or(0.0)
 }
