@@ -476,4 +476,4 @@ impl Stream for Session {
 }
 
 #[cfg(test)]
-pub(crate) mod tests;
+mod tests;

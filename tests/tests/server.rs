@@ -1,17 +1,15 @@
 //! The real server, in-process on 127.0.0.1:0 with Zenoh on loopback (multicast off), driven through the client
 //! library exactly as robots and perception nodes drive it. Every await is under a timeout.
 
-mod common;
-
 use std::path::Path;
 use std::time::Duration;
 
-use common::{T, config, within};
 use dmp::{Isopotential, Primitive};
 use dmp_client::grpc::DmpClient;
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
 use dmp_server::run::{ServerHandle, start};
+use dmp_tests::{T, config, within};
 use tokio_stream::StreamExt;
 
 async fn serve(dir: &Path) -> (ServerHandle, DmpClient) {
@@ -478,12 +476,14 @@ async fn scenario_run_through_the_server_gives_the_offline_metrics() {
     ] {
         let path = scenarios.join(file);
         let (off, on) = (dir.path().join("off"), dir.path().join("on"));
-        let offline = dmp_client::offline::run_scenario(&path, &off).unwrap().metrics;
-        let remote =
-            within("remote scenario", dmp_client::remote_scenario::run_scenario_remote(&client, &path, &on))
-                .await
-                .unwrap()
-                .metrics;
+        let offline = dmpctl::offline::run_scenario(&path, &off).unwrap().metrics;
+        let remote = within(
+            "remote scenario",
+            dmpctl::scenario_through_server::run_scenario_through_server(&client, &path, &on),
+        )
+        .await
+        .unwrap()
+        .metrics;
         let strip = |m: &dmp::metrics::Metrics| {
             let mut v = serde_json::to_value(m).unwrap();
             v.as_object_mut().unwrap().remove("compute_seconds");
@@ -507,7 +507,7 @@ async fn a_smoke_load_streams_twenty_robots_in_two_cells() {
     let dir = tempfile::tempdir().unwrap();
     let (handle, _client) = serve(dir.path()).await;
     let out = dir.path().join("load.json");
-    let args = dmp_client::load::LoadArgs {
+    let args = dmp_sim::load::LoadArgs {
         robots: 20,
         rate: 1000.0,
         segment_ms: 10.0,
@@ -517,7 +517,7 @@ async fn a_smoke_load_streams_twenty_robots_in_two_cells() {
         ..Default::default()
     };
     let url = format!("http://{}", handle.grpc_addr);
-    let report = within("the load", dmp_client::load::run(&args, &url, &handle.zenoh_locators))
+    let report = within("the load", dmp_sim::load::run(&args, &url, &handle.zenoh_locators))
         .await
         .expect("the load runs");
     let json = serde_json::to_value(&report).unwrap();

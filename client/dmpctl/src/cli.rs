@@ -7,13 +7,13 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use dmp_client::grpc::{DEFAULT_SERVER, DmpClient};
 
-use crate::error::ClientError;
-use crate::grpc::{DEFAULT_SERVER, DmpClient};
+use crate::error::DmpctlError;
 use crate::offline::{RunSummary, bench_scenario, run_scenario};
 use crate::outputs::to_json;
-use crate::remote::{self, ZenohArgs};
-use crate::remote_scenario::run_scenario_remote;
+use crate::scenario_through_server::run_scenario_through_server;
+use crate::server_commands::{self, ZenohArgs};
 
 /// Command line of the DMP cell.
 #[derive(Debug, Parser)]
@@ -47,7 +47,7 @@ pub enum Command {
     /// Learn a primitive from one demonstration and store it as the next version of (robot, name).
     Learn(LearnArgs),
     /// A simulated robot against the server: writes report.json and figures into --out.
-    Sim(crate::sim::SimArgs),
+    Sim(dmp_sim::robots::SimArgs),
     /// The primitives of a robot (latest version of each).
     List {
         /// The robot.
@@ -87,7 +87,7 @@ pub enum Command {
     /// updates over Zenoh); prints one JSON object: setpoints on time, lateness, scene update latency, server CPU
     /// and memory. `--zenoh-connect` defaults to tcp/127.0.0.1:7447; `--cell` is not used (cells are
     /// `<prefix>-<c>`).
-    Load(crate::load::LoadArgs),
+    Load(dmp_sim::load::LoadArgs),
 }
 
 /// `dmpctl scenario ...`
@@ -305,7 +305,7 @@ fn parse_avoidance(s: &str) -> Result<dmp::Avoidance, String> {
 
 /// Runs a parsed command line; returns what to print on standard output. Offline commands run on this thread;
 /// the others on a multi-threaded tokio runtime (Zenoh needs one).
-pub fn run(cli: Cli) -> Result<String, ClientError> {
+pub fn run(cli: Cli) -> Result<String, DmpctlError> {
     match (&cli.command, &cli.server) {
         (Command::Scenario(ScenarioCommand::Run { file, out }), None) => offline_run(file, out),
         (Command::Scenario(ScenarioCommand::Bench { file, repeat }), _) => bench(file, *repeat),
@@ -318,14 +318,14 @@ pub fn run(cli: Cli) -> Result<String, ClientError> {
             builder
                 .enable_all()
                 .build()
-                .map_err(|source| ClientError::Io { path: PathBuf::from("(tokio runtime)"), source })?
+                .map_err(|source| DmpctlError::Io { path: PathBuf::from("(tokio runtime)"), source })?
                 .block_on(run_async(cli))
         }
     }
 }
 
 /// Runs a parsed command line inside a multi-threaded tokio runtime.
-pub async fn run_async(cli: Cli) -> Result<String, ClientError> {
+pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
     let server = cli.server.clone().unwrap_or_else(|| DEFAULT_SERVER.to_string());
     let zenoh = ZenohArgs { cell: cli.cell.clone(), connect: cli.zenoh_connect.clone() };
     let connect = || DmpClient::connect(server.as_str());
@@ -333,7 +333,7 @@ pub async fn run_async(cli: Cli) -> Result<String, ClientError> {
         Command::Scenario(ScenarioCommand::Run { file, out }) => match &cli.server {
             None => offline_run(file, out),
             Some(url) => {
-                let summary = run_scenario_remote(&connect().await?, file, out).await?;
+                let summary = run_scenario_through_server(&connect().await?, file, out).await?;
                 for n in &summary.notes {
                     eprintln!("dmpctl: note: {n}");
                 }
@@ -341,27 +341,27 @@ pub async fn run_async(cli: Cli) -> Result<String, ClientError> {
             }
         },
         Command::Scenario(ScenarioCommand::Bench { file, repeat }) => bench(file, *repeat),
-        Command::Learn(a) => remote::learn(&connect().await?, a).await,
-        Command::List { robot } => remote::list(&connect().await?, robot).await,
+        Command::Learn(a) => server_commands::learn(&connect().await?, a).await,
+        Command::List { robot } => server_commands::list(&connect().await?, robot).await,
         Command::Show { robot, name, version } => {
-            remote::show(&connect().await?, robot, name, *version).await
+            server_commands::show(&connect().await?, robot, name, *version).await
         }
-        Command::Delete { robot, name } => remote::delete(&connect().await?, robot, name).await,
-        Command::Plan(a) => remote::plan(&connect().await?, a).await,
-        Command::Stream(a) => remote::stream(&connect().await?, a).await,
+        Command::Delete { robot, name } => server_commands::delete(&connect().await?, robot, name).await,
+        Command::Plan(a) => server_commands::plan(&connect().await?, a).await,
+        Command::Stream(a) => server_commands::stream(&connect().await?, a).await,
         Command::Scene(SceneCommand::Put { file, via, ttl }) => {
-            remote::scene_put(&server, &zenoh, file, *via, *ttl).await
+            server_commands::scene_put(&server, &zenoh, file, *via, *ttl).await
         }
         Command::Scene(SceneCommand::Delete { id, via }) => {
-            remote::scene_delete(&server, &zenoh, id, *via).await
+            server_commands::scene_delete(&server, &zenoh, id, *via).await
         }
-        Command::Scene(SceneCommand::List) => remote::scene_list(&connect().await?).await,
+        Command::Scene(SceneCommand::List) => server_commands::scene_list(&connect().await?).await,
         Command::Load(a) => {
-            let report = crate::load::run(a, &server, &cli.zenoh_connect).await?;
+            let report = dmp_sim::load::run(a, &server, &cli.zenoh_connect).await?;
             Ok(to_json(&report))
         }
         Command::Sim(a) => {
-            let report = crate::sim::run_sim(a, &server, &cli.cell, &cli.zenoh_connect).await?;
+            let report = dmp_sim::robots::run_sim(a, &server, &cli.cell, &cli.zenoh_connect).await?;
             let problems = report.problems();
             Ok(format!(
                 "{}: {} robots, collision: {}, {}; wrote {}",
@@ -389,11 +389,11 @@ fn summary_line(file: &Path, summary: &RunSummary, out: &Path) -> String {
     )
 }
 
-fn offline_run(file: &Path, out: &Path) -> Result<String, ClientError> {
+fn offline_run(file: &Path, out: &Path) -> Result<String, DmpctlError> {
     Ok(summary_line(file, &run_scenario(file, out)?, out))
 }
 
-fn bench(file: &Path, repeat: usize) -> Result<String, ClientError> {
+fn bench(file: &Path, repeat: usize) -> Result<String, DmpctlError> {
     let report = bench_scenario(file, repeat)?;
     Ok(serde_json::to_string(&report).unwrap_or_else(|_| to_json(&report)))
 }

@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use crate::error::ClientError;
+use crate::error::DmpctlError;
 
 /// Sample times and one row of positions per sample.
 #[derive(Debug, Clone, PartialEq)]
@@ -19,9 +19,9 @@ pub struct CsvDemonstration {
 }
 
 /// Parses CSV text; `path` only names the source in errors, which give the line and column (from 1).
-pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstration, ClientError> {
+pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstration, DmpctlError> {
     let err =
-        |field: String, message: String| ClientError::Parse { path: path.to_path_buf(), field, message };
+        |field: String, message: String| DmpctlError::Parse { path: path.to_path_buf(), field, message };
     let mut lines = text
         .lines()
         .enumerate()
@@ -80,9 +80,9 @@ pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstrati
 }
 
 /// Reads and parses a CSV demonstration.
-pub fn load_demonstration_csv(path: &Path) -> Result<CsvDemonstration, ClientError> {
+pub fn load_demonstration_csv(path: &Path) -> Result<CsvDemonstration, DmpctlError> {
     let text = std::fs::read_to_string(path)
-        .map_err(|source| ClientError::Io { path: path.to_path_buf(), source })?;
+        .map_err(|source| DmpctlError::Io { path: path.to_path_buf(), source })?;
     parse_demonstration_csv(&text, path)
 }
 
@@ -90,7 +90,7 @@ pub fn load_demonstration_csv(path: &Path) -> Result<CsvDemonstration, ClientErr
 mod tests {
     use super::*;
 
-    fn parse(text: &str) -> Result<CsvDemonstration, ClientError> {
+    fn parse(text: &str) -> Result<CsvDemonstration, DmpctlError> {
         parse_demonstration_csv(text, Path::new("demo.csv"))
     }
 

@@ -4,7 +4,7 @@
 use std::process::ExitCode;
 
 use clap::Parser;
-use dmp_client::cli::{Cli, run};
+use dmpctl::cli::{Cli, run};
 
 /// The load generator decodes a hundred thousand segments a second (a few vectors each): mimalloc makes that
 /// allocation cheaper than the system allocator, and leaves more of a shared machine to the server under test.

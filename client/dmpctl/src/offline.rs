@@ -5,11 +5,11 @@ use std::time::Instant;
 
 use dmp::metrics::Metrics;
 use dmp::scenario::{Prepared, ScenarioOutcome};
+use dmp_plot::{PlotInput, render_svg};
 use serde::Serialize;
 
-use crate::error::ClientError;
+use crate::error::DmpctlError;
 use crate::outputs::{to_json, trajectory_csv, write_file};
-use crate::plot::{PlotInput, render_svg};
 use crate::scenario_file::prepare_scenario;
 
 /// What `scenario run` produced.
@@ -21,12 +21,12 @@ pub struct RunSummary {
     pub notes: Vec<String>,
 }
 
-fn invalid(path: &Path) -> impl FnOnce(dmp::DmpError) -> ClientError + '_ {
-    move |source| ClientError::Invalid { path: path.to_path_buf(), source }
+fn invalid(path: &Path) -> impl FnOnce(dmp::DmpError) -> DmpctlError + '_ {
+    move |source| DmpctlError::Invalid { path: path.to_path_buf(), source }
 }
 
 /// Runs the scenario at `path` and writes `trajectory.csv`, `metrics.json` and `plot.svg` into `out`.
-pub fn run_scenario(path: &Path, out: &Path) -> Result<RunSummary, ClientError> {
+pub fn run_scenario(path: &Path, out: &Path) -> Result<RunSummary, DmpctlError> {
     let started = Instant::now();
     let prepared = prepare_scenario(path)?;
     let ScenarioOutcome { free, adapted, mut metrics } =
@@ -43,7 +43,7 @@ pub fn write_outputs(
     adapted: &dmp::Trajectory,
     metrics: &Metrics,
     out: &Path,
-) -> Result<(), ClientError> {
+) -> Result<(), DmpctlError> {
     write_file(out, "trajectory.csv", trajectory_csv(adapted).as_bytes())?;
     write_file(out, "metrics.json", to_json(metrics).as_bytes())?;
     let svg = render_svg(&PlotInput {
@@ -57,8 +57,7 @@ pub fn write_outputs(
         obstacles: &p.scene.obstacles,
         robots: &p.scene.agents,
         obstacle_time: 0.0,
-    })
-    .map_err(|e| ClientError::Plot(e.to_string()))?;
+    })?;
     write_file(out, "plot.svg", svg.as_bytes())
 }
 
@@ -86,7 +85,7 @@ pub struct BenchReport {
 }
 
 /// Times the scenario's avoidance rollout `repeats` times (after one untimed warm-up run).
-pub fn bench_scenario(path: &Path, repeats: usize) -> Result<BenchReport, ClientError> {
+pub fn bench_scenario(path: &Path, repeats: usize) -> Result<BenchReport, DmpctlError> {
     let p = prepare_scenario(path)?;
     let repeats = repeats.max(1);
     let mut seconds = Vec::with_capacity(repeats);

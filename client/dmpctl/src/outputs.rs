@@ -6,7 +6,7 @@ use std::path::Path;
 use dmp::Trajectory;
 use serde::Serialize;
 
-use crate::error::ClientError;
+use crate::error::DmpctlError;
 
 /// The CSV of SPEC.md: header `t,x1..xd,xd1..xdd,a1..ad`, one row per step from `t = 0`. Numbers are written in
 /// their shortest exact form, so the file round-trips bit for bit.
@@ -31,10 +31,10 @@ pub fn trajectory_csv(traj: &Trajectory) -> String {
 }
 
 /// Writes `contents` to `dir/name`, creating `dir`.
-pub fn write_file(dir: &Path, name: &str, contents: &[u8]) -> Result<(), ClientError> {
-    std::fs::create_dir_all(dir).map_err(|source| ClientError::Io { path: dir.to_path_buf(), source })?;
+pub fn write_file(dir: &Path, name: &str, contents: &[u8]) -> Result<(), DmpctlError> {
+    std::fs::create_dir_all(dir).map_err(|source| DmpctlError::Io { path: dir.to_path_buf(), source })?;
     let path = dir.join(name);
-    std::fs::write(&path, contents).map_err(|source| ClientError::Io { path, source })
+    std::fs::write(&path, contents).map_err(|source| DmpctlError::Io { path, source })
 }
 
 /// Pretty JSON of any serializable value.

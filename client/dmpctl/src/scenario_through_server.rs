@@ -28,15 +28,16 @@ use std::time::Instant;
 use dmp::scenario::{Prepared, Scenario};
 use dmp::stall::{StallConfig, StallDetector};
 use dmp::{Avoidance, Rollout, Trajectory};
+use dmp_client::ClientError;
+use dmp_client::convert::{avoidance_to_proto, footprint_to_proto, learn_parameters, obstacle_to_proto};
+use dmp_client::grpc::{DmpClient, record_primitive};
+use dmp_client::setpoints::Setpoints;
 use dmp_proto::v1;
 use tokio_stream::StreamExt;
 
-use crate::convert::{avoidance_to_proto, footprint_to_proto, learn_parameters, obstacle_to_proto};
-use crate::error::ClientError;
-use crate::grpc::{DmpClient, record_primitive};
+use crate::error::DmpctlError;
 use crate::offline::{RunSummary, write_outputs};
 use crate::scenario_file::load_scenario;
-use crate::setpoints::Setpoints;
 
 /// The robot a single-robot scenario's primitive is stored under.
 pub const SCENARIO_ROBOT: &str = "scenario";
@@ -53,26 +54,26 @@ pub fn sanitize(name: &str) -> String {
 }
 
 /// Runs the scenario at `path` through the server and writes the three files of the offline run into `out`.
-pub async fn run_scenario_remote(
+pub async fn run_scenario_through_server(
     client: &DmpClient,
     path: &Path,
     out: &Path,
-) -> Result<RunSummary, ClientError> {
+) -> Result<RunSummary, DmpctlError> {
     let started = Instant::now();
     let scenario = load_scenario(path)?;
     let p = dmp::scenario::prepare(&scenario)
-        .map_err(|source| ClientError::Invalid { path: path.to_path_buf(), source })?;
+        .map_err(|source| DmpctlError::Invalid { path: path.to_path_buf(), source })?;
     let mut notes = Vec::new();
     let (free, adapted) = if scenario.robots.is_empty() {
-        single(client, &scenario, &p, &mut notes).await?
+        plan_one_robot(client, &scenario, &p, &mut notes).await?
     } else {
-        group(client, &scenario, &p, &mut notes).await?
+        run_robot_group(client, &scenario, &p, &mut notes).await?
     };
     let stalls = detect_stalls(&p, &adapted)?;
     let free = Rollout { trajectory: free, contacts: vec![], stalls: vec![] };
     let adapted = Rollout { trajectory: adapted, contacts: vec![], stalls };
     let mut metrics = dmp::metrics::metrics(&p, &free, &adapted)
-        .map_err(|source| ClientError::Invalid { path: path.to_path_buf(), source })?;
+        .map_err(|source| DmpctlError::Invalid { path: path.to_path_buf(), source })?;
     metrics.compute_seconds = started.elapsed().as_secs_f64();
     write_outputs(&p, &free.trajectory, &adapted.trajectory, &metrics, out)?;
     Ok(RunSummary { metrics, notes })
@@ -138,7 +139,8 @@ fn plan_trajectory(r: v1::PlanResponse) -> Result<Trajectory, ClientError> {
     Ok(s.into_trajectory())
 }
 
-async fn single(
+/// One robot: learns its primitive, then plans the adapted and the obstacle-free run.
+async fn plan_one_robot(
     client: &DmpClient,
     s: &Scenario,
     p: &Prepared,
@@ -174,11 +176,12 @@ async fn single(
 }
 
 /// The entries of a per-dimension parameter (one value, or one per dimension) for the dimensions `dims`.
-fn pick(v: Vec<f64>, dims: &[usize]) -> Vec<f64> {
+fn entries_for_dims(v: Vec<f64>, dims: &[usize]) -> Vec<f64> {
     if v.len() <= 1 { v } else { dims.iter().map(|&i| v[i]).collect() }
 }
 
-async fn group(
+/// Several robots: learns each robot's primitive, then streams the adapted and the obstacle-free group runs.
+async fn run_robot_group(
     client: &DmpClient,
     s: &Scenario,
     p: &Prepared,
@@ -192,8 +195,8 @@ async fn group(
         let x: Vec<Vec<f64>> =
             s.demonstration.x.iter().map(|row| r.dims.iter().map(|&i| row[i]).collect()).collect();
         let params = v1::LearnParameters {
-            k: pick(whole.k.clone(), &r.dims),
-            d: pick(whole.d.clone(), &r.dims),
+            k: entries_for_dims(whole.k.clone(), &r.dims),
+            d: entries_for_dims(whole.d.clone(), &r.dims),
             ..whole.clone()
         };
         let record = client.learn(&robot, &name, &s.demonstration.t, &x, params).await?;
@@ -246,8 +249,10 @@ async fn group(
         integration_tolerance: 0.0,
     };
     let dims: Vec<&[usize]> = s.robots.iter().map(|r| r.dims.as_slice()).collect();
-    let (adapted, free) =
-        tokio::join!(run_group(client, request(false), &dims, p), run_group(client, request(true), &dims, p));
+    let (adapted, free) = tokio::join!(
+        execute_group_joined(client, request(false), &dims, p),
+        execute_group_joined(client, request(true), &dims, p)
+    );
     let (mut adapted, mut free) = (adapted?, free?);
     // Streams stop on segment boundaries: rows past the scenario's duration are cut, so that the metrics are over
     // the same span as offline (`final_goal_distance` at T). A shorter stream is noted.
@@ -278,7 +283,7 @@ fn truncate(t: &mut Trajectory, rows: usize) {
 }
 
 /// Reads a group stream to its end and puts the members' setpoints back into the scenario's dimensions.
-async fn run_group(
+async fn execute_group_joined(
     client: &DmpClient,
     request: v1::ExecuteGroupRequest,
     dims: &[&[usize]],
@@ -343,7 +348,7 @@ mod tests {
     #[test]
     fn stalls_are_found_again_on_a_trajectory() {
         let file = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../scenarios/paper-one-obstacle/dynamic_volumetric.json");
+            .join("../../scenarios/paper-one-obstacle/dynamic_volumetric.json");
         let p = dmp::scenario::prepare(&load_scenario(&file).unwrap()).unwrap();
         let out = dmp::scenario::run(&p).unwrap();
         let stalls = detect_stalls(&p, &out.adapted.trajectory).unwrap();
@@ -356,109 +361,5 @@ mod tests {
         )
         .unwrap();
         assert_eq!(again, out.metrics);
-    }
-}
-
-#[cfg(test)]
-mod through_the_server {
-    use super::*;
-    use crate::grpc::tests::{TestServer, within};
-
-    /// Runs `file` offline and through the server (whose plans and group runs are the engine's rollouts); the
-    /// metrics must be the same, `compute_seconds` aside.
-    async fn same_metrics(client: &DmpClient, file: &str) -> Vec<String> {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios").join(file);
-        same_metrics_at(client, &path).await.1
-    }
-
-    /// Returns the offline metrics and the notes of the run through the server.
-    async fn same_metrics_at(client: &DmpClient, path: &Path) -> (dmp::metrics::Metrics, Vec<String>) {
-        let file = path.display();
-        let dir = tempfile::tempdir().unwrap();
-        let offline = crate::offline::run_scenario(path, &dir.path().join("offline")).unwrap();
-        let remote = within(
-            &format!("scenario run {file}"),
-            run_scenario_remote(client, path, &dir.path().join("remote")),
-        )
-        .await
-        .unwrap();
-        let (mut a, mut b) = (offline.metrics, remote.metrics);
-        a.compute_seconds = 0.0;
-        b.compute_seconds = 0.0;
-        assert_eq!(a, b, "{file}");
-        for f in ["trajectory.csv", "metrics.json", "plot.svg"] {
-            assert!(dir.path().join("remote").join(f).exists(), "{f}");
-        }
-        let csv = |d: &str| std::fs::read_to_string(dir.path().join(d).join("trajectory.csv")).unwrap();
-        assert_eq!(csv("offline"), csv("remote"), "{file}");
-        (a, remote.notes)
-    }
-
-    #[tokio::test(flavor = "multi_thread")]
-    async fn stalls_are_reported_as_offline() {
-        // 1-D: a wall on the only way to the goal, a local minimum.
-        let t: Vec<f64> = (0..=100).map(|k| k as f64 / 100.0).collect();
-        let x: Vec<Vec<f64>> = t.iter().map(|t| vec![*t]).collect();
-        let s = serde_json::json!({
-            "name": "stall 1d", "demonstration": {"t": t, "x": x}, "dmp": {"N": 10, "K": 1050, "alpha": 4},
-            "rollout": {"dt": 0.001, "duration": 2.0},
-            "obstacles": [{"id": "wall", "center": [0.5], "semi_axes": [0.1]}],
-            "avoidance": {"method": "static_volumetric", "A": 10, "eta": 1}
-        });
-        let dir = tempfile::tempdir().unwrap();
-        let file = dir.path().join("stall.json");
-        std::fs::write(&file, s.to_string()).unwrap();
-        let server = TestServer::start().await;
-        let (metrics, _) = same_metrics_at(&server.client().await, &file).await;
-        assert_eq!(metrics.stalls.len(), 1);
-        server.stop().await;
-    }
-
-    #[tokio::test(flavor = "multi_thread")]
-    async fn single_robot_scenarios_give_the_offline_metrics() {
-        let server = TestServer::start().await;
-        let client = server.client().await;
-        for m in [
-            "none",
-            "static_point",
-            "dynamic_point",
-            "steering_angle",
-            "static_volumetric",
-            "dynamic_volumetric",
-        ] {
-            let notes = same_metrics(&client, &format!("paper-one-obstacle/{m}.json")).await;
-            assert!(notes.is_empty(), "{notes:?}");
-        }
-        same_metrics(&client, "moving-obstacle-dynamic-volumetric.json").await;
-        same_metrics(&client, "paper-two-obstacles-steering-angle.json").await;
-        server.stop().await;
-    }
-
-    #[tokio::test(flavor = "multi_thread")]
-    async fn group_scenarios_give_the_offline_metrics() {
-        let server = TestServer::start().await;
-        let notes = same_metrics(&server.client().await, "youbots-three-dynamic.json").await;
-        assert!(notes.is_empty(), "{notes:?}");
-        server.stop().await;
-    }
-
-    #[tokio::test(flavor = "multi_thread")]
-    async fn a_bad_scenario_is_refused_before_the_server_is_asked() {
-        let dir = tempfile::tempdir().unwrap();
-        let file = dir.path().join("bad.json");
-        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/none.json");
-        let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(src).unwrap()).unwrap();
-        v["rollout"]["dt"] = 0.0.into();
-        std::fs::write(&file, v.to_string()).unwrap();
-        let server = TestServer::start().await;
-        let client = server.client().await;
-        let e = within("scenario run", run_scenario_remote(&client, &file, &dir.path().join("out")))
-            .await
-            .unwrap_err();
-        assert!(e.is_bad_input() && e.to_string().contains("rollout.dt"), "{e}");
-        // Nothing reached the server: no primitive was learned.
-        assert!(within("list", client.list(SCENARIO_ROBOT)).await.unwrap().is_empty());
-        assert!(!dir.path().join("out").exists());
-        server.stop().await;
     }
 }

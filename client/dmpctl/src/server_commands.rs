@@ -1,33 +1,34 @@
-//! The server half of `dmpctl`: each command talks to the server (gRPC, or Zenoh for `scene --via zenoh`) and
-//! returns what to print on standard output. Argument types are in [`crate::cli`].
+//! The commands of `dmpctl` that talk to the server (gRPC, or Zenoh for `scene --via zenoh`); each returns what to
+//! print on standard output. Argument types are in [`crate::cli`].
 
 use std::path::Path;
 use std::time::Duration;
 
+use dmp_client::ClientError;
+use dmp_client::convert::{
+    JsonObstacle, avoidance_to_proto, learn_parameters, obstacle_from_json, obstacle_json, record_json,
+};
+use dmp_client::grpc::{DmpClient, record_primitive};
+use dmp_client::setpoints::Setpoints;
+use dmp_client::zenoh_pub::{ObstaclePublisher, obstacle_key};
 use dmp_proto::v1;
 use serde_json::{Value, json};
 
 use crate::cli::{LearnArgs, LearnSource, MotionArgs, PlanArgs, StreamArgs, Via};
-use crate::convert::{
-    JsonObstacle, avoidance_to_proto, learn_parameters, obstacle_from_json, obstacle_json, record_json,
-};
 use crate::demo_csv::load_demonstration_csv;
-use crate::error::ClientError;
-use crate::grpc::{DmpClient, record_primitive};
+use crate::error::DmpctlError;
 use crate::outputs::{to_json, trajectory_csv, write_file};
 use crate::scenario_file::load_scenario;
-use crate::setpoints::Setpoints;
-use crate::zenoh_pub::{ObstaclePublisher, obstacle_key};
 
 /// How long `scene ... --via zenoh` waits for the server's subscriber.
 pub const ZENOH_SUBSCRIBER_WAIT: Duration = Duration::from_secs(5);
 
-fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ClientError + '_ {
-    move |source| ClientError::Io { path: path.to_path_buf(), source }
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> DmpctlError + '_ {
+    move |source| DmpctlError::Io { path: path.to_path_buf(), source }
 }
 
 /// `learn`: one demonstration (a scenario's, or a CSV file's) to the next version of `(robot, name)`.
-pub async fn learn(client: &DmpClient, a: &LearnArgs) -> Result<String, ClientError> {
+pub async fn learn(client: &DmpClient, a: &LearnArgs) -> Result<String, DmpctlError> {
     let (t, x, mut params) = match &a.source {
         LearnSource { scenario: Some(path), .. } => {
             let s = load_scenario(path)?;
@@ -37,7 +38,7 @@ pub async fn learn(client: &DmpClient, a: &LearnArgs) -> Result<String, ClientEr
             let d = load_demonstration_csv(path)?;
             (d.t, d.x, v1::LearnParameters::default())
         }
-        _ => return Err(ClientError::argument("--scenario / --csv", "give one of them")),
+        _ => return Err(DmpctlError::argument("--scenario / --csv", "give one of them")),
     };
     if let Some(n) = a.n_basis {
         params.n_basis = n;
@@ -68,7 +69,7 @@ pub async fn learn(client: &DmpClient, a: &LearnArgs) -> Result<String, ClientEr
 }
 
 /// `list`: one line per primitive of the robot.
-pub async fn list(client: &DmpClient, robot: &str) -> Result<String, ClientError> {
+pub async fn list(client: &DmpClient, robot: &str) -> Result<String, DmpctlError> {
     let records = client.list(robot).await?;
     if records.is_empty() {
         return Ok(format!("robot `{robot}` has no primitives"));
@@ -87,12 +88,12 @@ pub async fn list(client: &DmpClient, robot: &str) -> Result<String, ClientError
 }
 
 /// `show`: the record as JSON (the primitive in the engine's serde form).
-pub async fn show(client: &DmpClient, robot: &str, name: &str, version: u64) -> Result<String, ClientError> {
+pub async fn show(client: &DmpClient, robot: &str, name: &str, version: u64) -> Result<String, DmpctlError> {
     Ok(to_json(&record_json(&client.get(robot, name, version).await?)?))
 }
 
 /// `delete`: every version of `(robot, name)`.
-pub async fn delete(client: &DmpClient, robot: &str, name: &str) -> Result<String, ClientError> {
+pub async fn delete(client: &DmpClient, robot: &str, name: &str) -> Result<String, DmpctlError> {
     let n = client.delete(robot, name).await?;
     Ok(format!("deleted {n} version{} of {robot}/{name}", if n == 1 { "" } else { "s" }))
 }
@@ -113,17 +114,17 @@ pub fn motion_spec(m: &MotionArgs) -> v1::MotionSpec {
 }
 
 /// `plan`: the whole trajectory, written to `DIR/trajectory.csv`.
-pub async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, ClientError> {
+pub async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, DmpctlError> {
     let request = v1::PlanRequest {
         motion: Some(motion_spec(&a.motion)),
         dt: a.dt.unwrap_or(0.0),
         duration: a.duration.unwrap_or(0.0),
     };
     let r = client.plan(request).await?;
-    let seg = r.trajectory.ok_or_else(|| ClientError::Protocol("the plan has no trajectory".into()))?;
+    let seg = r.trajectory.ok_or_else(|| DmpctlError::protocol("the plan has no trajectory".into()))?;
     let mut s = Setpoints::new();
     s.push(&seg)?;
-    let traj = s.trajectory().ok_or_else(|| ClientError::Protocol("the plan has no points".into()))?;
+    let traj = s.trajectory().ok_or_else(|| DmpctlError::protocol("the plan has no points".into()))?;
     write_file(&a.out, "trajectory.csv", trajectory_csv(traj).as_bytes())?;
     let collisions = if r.collisions.is_empty() { "none".to_string() } else { r.collisions.join(", ") };
     Ok(format!(
@@ -159,7 +160,7 @@ pub fn segment_line(seg: &v1::Segment) -> String {
 
 /// `stream`: executes, prints a line per segment on stderr, writes the setpoints in force to `DIR/trajectory.csv`.
 /// Ctrl-C ends the stream early and still writes what was received.
-pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, ClientError> {
+pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, DmpctlError> {
     use tokio_stream::StreamExt;
     let pacing = if a.realtime { v1::Pacing::Realtime } else { v1::Pacing::AsFastAsRead };
     let request = v1::ExecuteRequest {
@@ -198,7 +199,7 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Client
     let n = s.segments();
     let traj = s.into_trajectory();
     if traj.is_empty() {
-        return Err(ClientError::Protocol(format!("the stream ended after {n} segments without any point")));
+        return Err(DmpctlError::protocol(format!("the stream ended after {n} segments without any point")));
     }
     write_file(&a.out, "trajectory.csv", trajectory_csv(&traj).as_bytes())?;
     Ok(format!(
@@ -215,10 +216,10 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Client
 /// Reads the obstacles of `path`: one JSON obstacle, or a file (e.g. a scenario) whose `obstacles` are all taken.
 /// Every obstacle is validated with the engine; `ttl_s` replaces each one's time to live. Errors name the file and
 /// the field.
-pub fn read_obstacles(path: &Path, ttl_s: Option<f64>) -> Result<Vec<JsonObstacle>, ClientError> {
+pub fn read_obstacles(path: &Path, ttl_s: Option<f64>) -> Result<Vec<JsonObstacle>, DmpctlError> {
     let text = std::fs::read_to_string(path).map_err(io(path))?;
     let at_file =
-        |field: String, message: String| ClientError::Parse { path: path.to_path_buf(), field, message };
+        |field: String, message: String| DmpctlError::Parse { path: path.to_path_buf(), field, message };
     let value: Value =
         serde_json::from_str(&text).map_err(|e| at_file("(document)".into(), e.to_string()))?;
     let items: Vec<(String, &Value)> = match value.get("obstacles") {
@@ -235,7 +236,7 @@ pub fn read_obstacles(path: &Path, ttl_s: Option<f64>) -> Result<Vec<JsonObstacl
     for (prefix, v) in items {
         let mut o = obstacle_from_json(v, &prefix).map_err(|e| match e {
             ClientError::Argument { field, message } => at_file(field, message),
-            other => other,
+            other => other.into(),
         })?;
         if let Some(ttl) = ttl_s {
             o.ttl_s = ttl;
@@ -245,7 +246,7 @@ pub fn read_obstacles(path: &Path, ttl_s: Option<f64>) -> Result<Vec<JsonObstacl
                 let field = if prefix.is_empty() { i.field } else { format!("{prefix}.{}", i.field) };
                 at_file(field, i.rule)
             }
-            other => ClientError::Invalid { path: path.to_path_buf(), source: other },
+            other => DmpctlError::Invalid { path: path.to_path_buf(), source: other },
         })?;
         out.push(o);
     }
@@ -261,7 +262,7 @@ pub struct ZenohArgs {
     pub connect: Vec<String>,
 }
 
-async fn publisher(z: &ZenohArgs) -> Result<ObstaclePublisher, ClientError> {
+async fn publisher(z: &ZenohArgs) -> Result<ObstaclePublisher, DmpctlError> {
     let p = ObstaclePublisher::open(&z.cell, &z.connect, &[]).await?;
     p.wait_for_subscriber(ZENOH_SUBSCRIBER_WAIT).await?;
     Ok(p)
@@ -274,7 +275,7 @@ pub async fn scene_put(
     file: &Path,
     via: Via,
     ttl_s: Option<f64>,
-) -> Result<String, ClientError> {
+) -> Result<String, DmpctlError> {
     let obstacles = read_obstacles(file, ttl_s)?;
     let mut lines = Vec::with_capacity(obstacles.len());
     match via {
@@ -298,7 +299,7 @@ pub async fn scene_put(
 }
 
 /// `scene delete ID`.
-pub async fn scene_delete(server: &str, z: &ZenohArgs, id: &str, via: Via) -> Result<String, ClientError> {
+pub async fn scene_delete(server: &str, z: &ZenohArgs, id: &str, via: Via) -> Result<String, DmpctlError> {
     match via {
         Via::Grpc => {
             let c = DmpClient::connect(server).await?.delete_obstacle(id).await?;
@@ -318,7 +319,7 @@ pub async fn scene_delete(server: &str, z: &ZenohArgs, id: &str, via: Via) -> Re
 }
 
 /// `scene list`: the scene as JSON.
-pub async fn scene_list(client: &DmpClient) -> Result<String, ClientError> {
+pub async fn scene_list(client: &DmpClient) -> Result<String, DmpctlError> {
     let s = client.list_obstacles().await?;
     let obstacles: Vec<Value> = s.obstacles.iter().map(obstacle_json).collect();
     Ok(to_json(&json!({"scene_version": s.scene_version, "obstacles": obstacles})))
@@ -345,8 +346,8 @@ mod tests {
         let o = read_obstacles(&one, None).unwrap();
         assert_eq!((o.len(), o[0].ttl_s), (1, 3.0));
         assert_eq!(read_obstacles(&one, Some(0.5)).unwrap()[0].ttl_s, 0.5);
-        let scenario =
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/static_point.json");
+        let scenario = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenarios/paper-one-obstacle/static_point.json");
         let o = read_obstacles(&scenario, None).unwrap();
         assert!(!o.is_empty());
 

@@ -17,7 +17,7 @@
 //!
 //! | concept | file |
 //! | --- | --- |
-//! | input, errors, entry point, figure layout | `mod.rs` |
+//! | input, errors, entry point, figure layout | `lib.rs` |
 //! | what is drawn: robots, decimated curves, start and goal | `run.rs` |
 //! | thinning curves (rows, then pixels) | `decimate.rs` |
 //! | data ranges and equal aspect ratio | `bounds.rs` |

@@ -1,59 +1,14 @@
-//! Tests of the client against the real server in-process, and the fixture the other client tests share.
+//! The client library's calls against the real server (gRPC only): primitives, execution streams, sessions.
 
-use std::future::Future;
-
-use dmp_server::config::Config;
-use dmp_server::run::ServerHandle;
-
-use super::*;
-
-/// Bound on every await of the tests (a hung call fails the test instead of hanging it).
-const T: Duration = Duration::from_secs(30);
+use dmp_client::grpc::{collect_setpoints, record_primitive};
+use dmp_client::setpoints::segments_to_trajectory;
+use dmp_client::{ClientError, DmpClient, Setpoints};
+use dmp_proto::v1;
+use dmp_tests::{TestServer, within};
+use tokio_stream::StreamExt;
 
 /// Points per segment of the server's streams by default: segments of 10 ms at dt = 1 ms.
 const SEGMENT_POINTS: usize = 10;
-
-/// `f` under the tests' timeout.
-pub(crate) async fn within<F: Future>(what: &str, f: F) -> F::Output {
-    tokio::time::timeout(T, f).await.unwrap_or_else(|_| panic!("timed out: {what}"))
-}
-
-/// The real server, in-process on `127.0.0.1:0`, gRPC only (no Zenoh), its store in a temporary directory.
-#[derive(Debug)]
-pub(crate) struct TestServer {
-    handle: ServerHandle,
-    _dir: tempfile::TempDir,
-}
-
-impl TestServer {
-    /// Starts a server (it serves when this returns).
-    pub(crate) async fn start() -> Self {
-        let dir = tempfile::tempdir().unwrap();
-        let mut config = Config {
-            grpc_addr: "127.0.0.1:0".parse().unwrap(),
-            data_dir: dir.path().to_path_buf(),
-            ..Default::default()
-        };
-        config.zenoh.disabled = true;
-        let handle = within("server start", dmp_server::run::start(config)).await.expect("server starts");
-        Self { handle, _dir: dir }
-    }
-
-    /// Its address as an `http://` URL.
-    pub(crate) fn url(&self) -> String {
-        format!("http://{}", self.handle.grpc_addr)
-    }
-
-    /// A client connected to it.
-    pub(crate) async fn client(&self) -> DmpClient {
-        within("connect", DmpClient::connect(self.url())).await.unwrap()
-    }
-
-    /// Stops it and waits until it is down.
-    pub(crate) async fn stop(self) {
-        within("server shutdown", self.handle.shutdown()).await.unwrap();
-    }
-}
 
 fn demo() -> (Vec<f64>, Vec<Vec<f64>>) {
     let t: Vec<f64> = (0..=200).map(|k| k as f64 / 200.0).collect();
@@ -63,9 +18,9 @@ fn demo() -> (Vec<f64>, Vec<Vec<f64>>) {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn primitives_learn_get_list_put_delete() {
-    let server = TestServer::start().await;
+    let server = TestServer::grpc_only().await;
     // A bare HOST:PORT means http://.
-    let c = within("connect", DmpClient::connect(server.handle.grpc_addr.to_string())).await.unwrap();
+    let c = within("connect", DmpClient::connect(server.handle().grpc_addr.to_string())).await.unwrap();
     let (t, x) = demo();
     let params = v1::LearnParameters { n_basis: 20, ..Default::default() };
     let r = within("learn", c.learn("r1", "wave", &t, &x, params)).await.unwrap();
@@ -99,7 +54,7 @@ async fn primitives_learn_get_list_put_delete() {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn execute_streams_reassemble_into_the_plan() {
-    let server = TestServer::start().await;
+    let server = TestServer::grpc_only().await;
     let c = server.client().await;
     let (t, x) = demo();
     within("learn", c.learn("r", "p", &t, &x, Default::default())).await.unwrap();
@@ -108,7 +63,7 @@ async fn execute_streams_reassemble_into_the_plan() {
         within("plan", c.plan(v1::PlanRequest { motion: Some(motion.clone()), dt: 0.002, duration: 0.5 }))
             .await
             .unwrap();
-    let planned = crate::setpoints::segments_to_trajectory(plan.trajectory.as_ref()).unwrap();
+    let planned = segments_to_trajectory(plan.trajectory.as_ref()).unwrap();
     assert_eq!(planned.len(), 251);
     let request =
         v1::ExecuteRequest { motion: Some(motion), dt: 0.002, max_duration_s: 0.5, ..Default::default() };
@@ -134,7 +89,7 @@ fn row(traj: &dmp::Trajectory, t: f64, dt: f64) -> usize {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn a_session_sends_commands_and_receives_superseding_segments() {
-    let server = TestServer::start().await;
+    let server = TestServer::grpc_only().await;
     let c = server.client().await;
     let (t, x) = demo();
     within("learn", c.learn("r", "p", &t, &x, Default::default())).await.unwrap();
@@ -151,7 +106,7 @@ async fn a_session_sends_commands_and_receives_superseding_segments() {
     // Where the run goes without commands.
     let plan = v1::PlanRequest { motion: Some(motion.clone()), dt: 0.001, duration: 2.0 };
     let plan = within("plan", c.plan(plan)).await.unwrap();
-    let planned = crate::setpoints::segments_to_trajectory(plan.trajectory.as_ref()).unwrap();
+    let planned = segments_to_trajectory(plan.trajectory.as_ref()).unwrap();
     let start = v1::ExecuteRequest {
         motion: Some(motion),
         pacing: v1::Pacing::Realtime as i32,
@@ -234,13 +189,4 @@ async fn a_session_sends_commands_and_receives_superseding_segments() {
     assert!(matches!(e, ClientError::Closed(_)), "{e}");
     drop(sender);
     server.stop().await;
-}
-
-#[tokio::test(flavor = "multi_thread")]
-async fn connection_failures_and_bad_addresses() {
-    let e = within("connect", DmpClient::connect("http://127.0.0.1:1")).await.unwrap_err();
-    assert!(matches!(e, ClientError::Connect { .. }) && !e.is_bad_input(), "{e}");
-    assert!(e.to_string().contains("http://127.0.0.1:1"), "{e}");
-    let e = within("connect", DmpClient::connect("http://not a host")).await.unwrap_err();
-    assert!(e.is_bad_input(), "{e}");
 }

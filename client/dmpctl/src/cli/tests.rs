@@ -1,7 +1,9 @@
-//! Tests of the command line: parsing, refusals naming the flag, and the commands against a real server.
+//! Tests of the command line: parsing, refusals naming the flag. The commands against the real server are
+//! end-to-end tests (`tests/tests/client/dmpctl.rs`).
+
+use dmp_client::ClientError;
 
 use super::*;
-use crate::grpc::tests::{TestServer, within};
 
 fn parse(args: &[&str]) -> Cli {
     Cli::try_parse_from(std::iter::once("dmpctl").chain(args.iter().copied()))
@@ -93,7 +95,7 @@ fn load_takes_its_flags_and_the_global_server() {
         (Some("http://h:1"), &["tcp/h:2".into()][..])
     );
     let Command::Load(a) = c.command else { panic!() };
-    let expected = crate::load::LoadArgs {
+    let expected = dmp_sim::load::LoadArgs {
         robots: 20,
         rate: 500.0,
         segment_ms: 20.0,
@@ -105,7 +107,7 @@ fn load_takes_its_flags_and_the_global_server() {
     };
     assert_eq!(a, expected);
     let Command::Load(a) = parse(&["load"]).command else { panic!() };
-    assert_eq!(a, crate::load::LoadArgs::default());
+    assert_eq!(a, dmp_sim::load::LoadArgs::default());
     // The server's adaptive step (at most 30 ms, tolerance 3e-6) unless told otherwise; a zero tolerance asks
     // for a fixed RK4 step, and a zero step for the server's default.
     assert_eq!((a.integration_step_ms, a.integration_tolerance), (30.0, 3e-6));
@@ -175,7 +177,7 @@ fn plan_parses_vectors_with_negative_entries_and_avoidance() {
     assert_eq!((a.motion.tau, a.duration, a.dt), (Some(2.0), Some(3.0), Some(0.002)));
     assert_eq!(a.motion.avoidance, Some(dmp::Avoidance::NONE));
     assert!(a.motion.ignore_scene);
-    let spec = remote::motion_spec(&a.motion);
+    let spec = server_commands::motion_spec(&a.motion);
     assert_eq!((spec.goal, spec.tau), (vec![-1.0, 0.5], 2.0));
     assert!(spec.avoidance.is_some());
 
@@ -192,7 +194,7 @@ fn plan_parses_vectors_with_negative_entries_and_avoidance() {
     ]);
     let Command::Plan(a) = c.command else { panic!() };
     assert_eq!(a.motion.avoidance.unwrap().method.name(), "static_volumetric");
-    let spec = remote::motion_spec(&a.motion);
+    let spec = server_commands::motion_spec(&a.motion);
     assert!(spec.goal.is_empty() && spec.start.is_empty() && spec.tau == 0.0);
 
     let e = refused(&["plan", "--robot", "r", "--name", "p", "--goal", "1,x", "--out", "o"]);
@@ -264,113 +266,9 @@ fn scene_commands() {
 fn a_closed_port_is_a_connection_failure_not_bad_input() {
     // Port 1 on loopback: nothing listens.
     let e = run(parse(&["--server", "http://127.0.0.1:1", "list", "--robot", "r"])).unwrap_err();
-    assert!(matches!(e, ClientError::Connect { .. }), "{e}");
+    assert!(matches!(e, DmpctlError::Client(ClientError::Connect { .. })), "{e}");
     assert!(!e.is_bad_input());
     assert!(e.to_string().contains("127.0.0.1:1"), "{e}");
     let e = run(parse(&["--server", "http://bad host:1", "list", "--robot", "r"])).unwrap_err();
     assert!(e.is_bad_input(), "{e}");
-}
-
-/// Runs `dmpctl --server URL ARGS...` (under the tests' timeout).
-async fn run_at(url: &str, args: &[&str]) -> Result<String, ClientError> {
-    let mut all = vec!["--server", url];
-    all.extend_from_slice(args);
-    within(&all.join(" "), run_async(parse(&all))).await
-}
-
-#[tokio::test(flavor = "multi_thread")]
-async fn server_commands_against_the_server() {
-    let server = TestServer::start().await;
-    let url = server.url();
-    let dir = tempfile::tempdir().unwrap();
-    let d = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
-    let csv: String = std::iter::once("t,x1,x2".to_string())
-        .chain((0..=100).map(|k| {
-            let t = k as f64 / 100.0;
-            format!("{t},{},{}", t * t, 1.0 - t)
-        }))
-        .collect::<Vec<_>>()
-        .join("\n");
-    std::fs::write(d("demo.csv"), csv).unwrap();
-
-    let out =
-        run_at(&url, &["learn", "--robot", "r", "--name", "p", "--csv", &d("demo.csv"), "--n-basis", "15"])
-            .await
-            .unwrap();
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-    assert_eq!(
-        (v["version"].as_u64(), v["dim"].as_u64(), v["n_basis"].as_u64()),
-        (Some(1), Some(2), Some(15))
-    );
-    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/none.json");
-    run_at(&url, &["learn", "--robot", "r", "--name", "paper", "--scenario", scenario.to_str().unwrap()])
-        .await
-        .unwrap();
-    let listed = run_at(&url, &["list", "--robot", "r"]).await.unwrap();
-    assert!(listed.starts_with("p\tv1\tdim 2\tN 15") && listed.contains("\npaper\tv1"), "{listed}");
-
-    let shown: serde_json::Value =
-        serde_json::from_str(&run_at(&url, &["show", "--robot", "r", "--name", "p"]).await.unwrap()).unwrap();
-    let p: dmp::Primitive = serde_json::from_value(shown["primitive"].clone()).unwrap();
-    assert_eq!(p.n_basis, 15);
-
-    let said = run_at(
-        &url,
-        &["plan", "--robot", "r", "--name", "p", "--goal", "2,-1", "--duration", "1.5", "--out", &d("plan")],
-    )
-    .await
-    .unwrap();
-    assert!(said.contains("1501 points"), "{said}");
-    let plan = std::fs::read_to_string(dir.path().join("plan/trajectory.csv")).unwrap();
-    assert_eq!(plan.lines().next(), Some("t,x1,x2,xd1,xd2,a1,a2"));
-    assert_eq!(plan.lines().count(), 1502);
-    let last: Vec<f64> = plan.lines().last().unwrap().split(',').map(|c| c.parse().unwrap()).collect();
-    assert!((last[1] - 2.0).abs() < 0.05 && (last[2] + 1.0).abs() < 0.05, "{last:?}");
-
-    let said = run_at(
-        &url,
-        &[
-            "stream",
-            "--robot",
-            "r",
-            "--name",
-            "p",
-            "--goal",
-            "2,-1",
-            "--max-duration",
-            "1.5",
-            "--out",
-            &d("stream"),
-        ],
-    )
-    .await
-    .unwrap();
-    // 1501 points in segments of 10, the last one the point at 1.5 s; the goal is not reached to within 1 mm
-    // by then, so the run ends at its maximum duration.
-    assert!(
-        said.contains("151 segments, 1501 setpoints in force up to t = 1.5 s, last status STOPPED"),
-        "{said}"
-    );
-    let streamed = std::fs::read_to_string(dir.path().join("stream/trajectory.csv")).unwrap();
-    assert_eq!(streamed.lines().count(), plan.lines().count());
-
-    let run = run_at(&url, &["scenario", "run", scenario.to_str().unwrap(), "--out", &d("scenario")])
-        .await
-        .unwrap();
-    assert!(run.contains("through http://"), "{run}");
-    assert!(dir.path().join("scenario/metrics.json").exists());
-
-    assert_eq!(
-        run_at(&url, &["delete", "--robot", "r", "--name", "p"]).await.unwrap(),
-        "deleted 1 version of r/p"
-    );
-    let e = run_at(&url, &["show", "--robot", "r", "--name", "p"]).await.unwrap_err();
-    assert!(e.is_bad_input() && e.to_string().contains("NotFound"), "{e}");
-    let e = run_at(&url, &["plan", "--robot", "r", "--name", "nothing", "--out", &d("x")]).await.unwrap_err();
-    assert!(e.is_bad_input(), "{e}");
-    let e = run_at(&url, &["learn", "--robot", "r", "--name", "p", "--csv", &d("missing.csv")])
-        .await
-        .unwrap_err();
-    assert!(!e.is_bad_input() && e.to_string().contains("missing.csv"), "{e}");
-    server.stop().await;
 }

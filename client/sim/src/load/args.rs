@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use super::{MAX_DURATION_SLACK_S, MAX_STAGGER_S, layout};
-use crate::error::ClientError;
+use crate::error::SimError;
 
 const DEFAULT_ROBOTS: usize = 100;
 const DEFAULT_RATE: f64 = 1000.0;
@@ -128,11 +128,11 @@ pub struct Params {
     pub stagger_s: f64,
 }
 
-fn bad(flag: &str, message: impl Into<String>) -> ClientError {
-    ClientError::argument(flag, message)
+fn bad(flag: &str, message: impl Into<String>) -> SimError {
+    SimError::argument(flag, message)
 }
 
-fn in_range(flag: &str, x: f64, lo: f64, hi: f64, unit: &str) -> Result<(), ClientError> {
+fn in_range(flag: &str, x: f64, lo: f64, hi: f64, unit: &str) -> Result<(), SimError> {
     if x.is_finite() && x >= lo && x <= hi {
         Ok(())
     } else {
@@ -142,7 +142,7 @@ fn in_range(flag: &str, x: f64, lo: f64, hi: f64, unit: &str) -> Result<(), Clie
 
 impl LoadArgs {
     /// Checks every flag (the error names it) and derives the run's parameters.
-    pub fn validate(&self) -> Result<Params, ClientError> {
+    pub fn validate(&self) -> Result<Params, SimError> {
         in_range("--integration-step-ms", self.integration_step_ms, 0.0, 100.0, "")?;
         // The server's own bound (it refuses a looser tolerance too).
         in_range("--integration-tolerance", self.integration_tolerance, 0.0, 1e-2, "")?;

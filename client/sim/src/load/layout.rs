@@ -16,7 +16,7 @@ use std::f64::consts::PI;
 
 use dmp_proto::v1;
 
-use crate::error::ClientError;
+use crate::error::SimError;
 
 /// Radius of the circle the robots start on, metres.
 pub const START_RADIUS: f64 = 0.6;
@@ -90,7 +90,7 @@ pub fn robots(count: usize, cell_size: usize, dim: usize, prefix: &str) -> Vec<R
 }
 
 /// The primitive of a robot: from its start to its first goal in `tau` seconds.
-pub fn primitive(robot: &RobotPlan, tau: f64) -> Result<dmp::Primitive, ClientError> {
+pub fn primitive(robot: &RobotPlan, tau: f64) -> Result<dmp::Primitive, SimError> {
     let dim = robot.start.len();
     dmp::Primitive::straight_line(
         N_BASIS,
@@ -101,7 +101,7 @@ pub fn primitive(robot: &RobotPlan, tau: f64) -> Result<dmp::Primitive, ClientEr
         robot.start.clone(),
         robot.goals[0].clone(),
     )
-    .map_err(|e| ClientError::argument("--tau", format!("no primitive for {}: {e}", robot.id)))
+    .map_err(|e| SimError::argument("--tau", format!("no primitive for {}: {e}", robot.id)))
 }
 
 /// A robot's footprint.

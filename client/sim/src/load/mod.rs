@@ -47,6 +47,8 @@ use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use dmp_client::grpc::DmpClient;
+use dmp_client::zenoh_pub::ObstaclePublisher;
 use tokio::task::JoinSet;
 use tokio::time::Instant;
 
@@ -58,9 +60,7 @@ use self::report::{ErrorCount, LATENESS_DEFINITION, LoadReport};
 use self::robot::{Ledger, RobotOutcome, RobotTask, STOP_TIMEOUT, Shared};
 use self::scene::{CellProbe, Updates};
 use self::stats::{Percentiles, SignedPercentiles};
-use crate::error::ClientError;
-use crate::grpc::DmpClient;
-use crate::zenoh_pub::ObstaclePublisher;
+use crate::error::SimError;
 
 /// The Zenoh endpoint of a server on this machine.
 pub const DEFAULT_ZENOH: &str = "tcp/127.0.0.1:7447";
@@ -121,7 +121,7 @@ pub fn unix_now_ns() -> u64 {
 /// Runs the load against the server at `server` (gRPC) and `zenoh_connect` (its Zenoh endpoints; empty:
 /// [`DEFAULT_ZENOH`]). Fails on bad flags, when the server cannot be reached, or when nothing could be set up;
 /// failed streams are in the report.
-pub async fn run(args: &LoadArgs, server: &str, zenoh_connect: &[String]) -> Result<LoadReport, ClientError> {
+pub async fn run(args: &LoadArgs, server: &str, zenoh_connect: &[String]) -> Result<LoadReport, SimError> {
     let p = args.validate()?;
     let a = &p.args;
     let setup_started = Instant::now();
@@ -303,7 +303,7 @@ pub async fn run(args: &LoadArgs, server: &str, zenoh_connect: &[String]) -> Res
     };
     if let Some(path) = &a.out {
         let json = serde_json::to_string_pretty(&report).unwrap_or_default();
-        std::fs::write(path, json + "\n").map_err(|source| ClientError::Io { path: path.clone(), source })?;
+        std::fs::write(path, json + "\n").map_err(|source| SimError::Io { path: path.clone(), source })?;
     }
     Ok(report)
 }
@@ -318,7 +318,7 @@ mod tests {
         let e = run(&bad, "http://127.0.0.1:1", &[]).await.unwrap_err();
         assert!(e.is_bad_input() && e.to_string().starts_with("--dim"), "{e}");
         let e = run(&LoadArgs::default(), "http://127.0.0.1:1", &[]).await.unwrap_err();
-        assert!(matches!(e, ClientError::Connect { .. }), "{e}");
+        assert!(matches!(e, SimError::Client(dmp_client::ClientError::Connect { .. })), "{e}");
     }
 
     #[test]

@@ -2,11 +2,11 @@
 
 use std::time::Duration;
 
+use dmp_client::grpc::DmpClient;
 use dmp_proto::v1;
 use tokio::time::{Instant, MissedTickBehavior};
 
 use super::Errors;
-use crate::grpc::DmpClient;
 
 /// Longest wait for one GetStats.
 const CALL_TIMEOUT: Duration = Duration::from_secs(2);

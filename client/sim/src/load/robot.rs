@@ -18,6 +18,7 @@ use std::collections::VecDeque;
 use std::sync::Arc;
 use std::time::Duration;
 
+use dmp_client::grpc::DmpClient;
 use dmp_proto::v1;
 use tokio::time::{Instant, MissedTickBehavior};
 use tokio_stream::StreamExt;
@@ -28,7 +29,6 @@ use super::scene::CellProbe;
 use super::segment_view::SegmentView;
 use super::stats::{Histogram, SignedHistogram};
 use super::{unix_now, unix_now_ns};
-use crate::grpc::DmpClient;
 
 /// Runs whose points were all due this long before the latest arrival are final.
 pub const FINALIZE_AFTER_S: f64 = 1.0;

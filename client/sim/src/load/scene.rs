@@ -11,12 +11,12 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
+use dmp_client::grpc::DmpClient;
+use dmp_client::zenoh_pub::ObstaclePublisher;
 use tokio::time::{Instant, MissedTickBehavior};
 
 use super::layout::{FIXED_OBSTACLES, OBSTACLE_SHIFT, fixed_obstacle};
 use super::{Errors, unix_now_ns};
-use crate::grpc::DmpClient;
-use crate::zenoh_pub::ObstaclePublisher;
 
 /// A probe that is not armed.
 const UNARMED: u64 = u64::MAX;

@@ -4,14 +4,15 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use dmp_client::ClientError;
+use dmp_client::grpc::DmpClient;
 use dmp_proto::v1;
 use tokio::sync::Semaphore;
 use tokio::task::JoinSet;
 
 use super::layout::{self, FIXED_OBSTACLES, PRIMITIVE, RobotPlan};
 use super::{MAX_DURATION_SLACK_S, Params};
-use crate::error::ClientError;
-use crate::grpc::DmpClient;
+use crate::error::SimError;
 
 /// Setup calls (puts of obstacles and primitives) in flight at once.
 pub const SETUP_CONCURRENCY: usize = 32;
@@ -34,7 +35,7 @@ pub async fn set_up(
     clients: &[DmpClient],
     cells: &[String],
     robots: &[RobotPlan],
-) -> Result<Vec<Option<String>>, ClientError> {
+) -> Result<Vec<Option<String>>, SimError> {
     let permits = Arc::new(Semaphore::new(SETUP_CONCURRENCY));
     let mut obstacles = JoinSet::new();
     for (c, cell) in cells.iter().enumerate() {
@@ -68,8 +69,8 @@ pub async fn set_up(
     while let Some(done) = obstacles.join_next().await {
         match done {
             Ok(Ok(_)) => {}
-            Ok(Err(e)) => return Err(ClientError::Protocol(e)),
-            Err(e) => return Err(ClientError::Protocol(format!("setup task: {e}"))),
+            Ok(Err(e)) => return Err(SimError::protocol(e)),
+            Err(e) => return Err(SimError::protocol(format!("setup task: {e}"))),
         }
     }
     let mut failed: Vec<Option<String>> = vec![Some("setup: the task failed".into()); robots.len()];
@@ -80,7 +81,7 @@ pub async fn set_up(
     }
     if failed.iter().all(Option::is_some) {
         let e = failed[0].clone().unwrap_or_default();
-        return Err(ClientError::Protocol(format!("no robot could be set up: {e}")));
+        return Err(SimError::protocol(format!("no robot could be set up: {e}")));
     }
     Ok(failed)
 }

@@ -118,7 +118,7 @@ pub fn closest_approach(trajs: &[&Trajectory]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::world::{Solid, robot_body};
+    use crate::robots::world::{Solid, robot_body};
 
     #[test]
     fn clearance_is_the_exact_minimum() {

@@ -33,12 +33,12 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use dmp::Trajectory;
+use dmp_client::grpc::DmpClient;
 use dmp_proto::v1;
 use tokio_stream::StreamExt;
 
 use self::robot::{Controller, Executed};
-use crate::error::ClientError;
-use crate::grpc::DmpClient;
+use crate::error::SimError;
 
 pub use self::report::{RobotReport, SimReport};
 
@@ -118,7 +118,7 @@ pub async fn run_sim(
     server: &str,
     cell: &str,
     zenoh_connect: &[String],
-) -> Result<SimReport, ClientError> {
+) -> Result<SimReport, SimError> {
     let options = SimOptions {
         realtime: args.realtime,
         out: args.out.clone(),
@@ -129,10 +129,10 @@ pub async fn run_sim(
 }
 
 /// Runs one simulation against the server at `url`.
-pub async fn run(url: &str, name: SimName, options: &SimOptions) -> Result<SimReport, ClientError> {
+pub async fn run(url: &str, name: SimName, options: &SimOptions) -> Result<SimReport, SimError> {
     let client = DmpClient::connect(url).await?;
     std::fs::create_dir_all(&options.out)
-        .map_err(|source| ClientError::Io { path: options.out.clone(), source })?;
+        .map_err(|source| SimError::Io { path: options.out.clone(), source })?;
     let report = match name {
         SimName::Panda => panda::run(&client, options).await?,
         SimName::YoubotPerception => perception::run(&client, options).await?,
@@ -144,10 +144,10 @@ pub async fn run(url: &str, name: SimName, options: &SimOptions) -> Result<SimRe
 }
 
 /// `f`, failing after [`STEP_TIMEOUT`].
-pub async fn within<F: Future>(what: &str, f: F) -> Result<F::Output, ClientError> {
+pub async fn within<F: Future>(what: &str, f: F) -> Result<F::Output, SimError> {
     tokio::time::timeout(STEP_TIMEOUT, f)
         .await
-        .map_err(|_| ClientError::Protocol(format!("timed out after {STEP_TIMEOUT:?}: {what}")))
+        .map_err(|_| SimError::protocol(format!("timed out after {STEP_TIMEOUT:?}: {what}")))
 }
 
 /// The pacing of `options`.
@@ -162,7 +162,7 @@ pub async fn execute(
     request: v1::ExecuteRequest,
     realtime: bool,
     mut on_segment: impl FnMut(&Controller),
-) -> Result<Executed, ClientError> {
+) -> Result<Executed, SimError> {
     let id = request.motion.as_ref().map(|m| m.robot_id.clone()).unwrap_or_default();
     let mut stream = within("execute", client.execute(request)).await??;
     let mut robot = Controller::new(id, realtime);
@@ -174,18 +174,14 @@ pub async fn execute(
 }
 
 /// The obstacle-free trajectory of a motion (the server's plan, no avoidance, no scene).
-pub async fn free_plan(
-    client: &DmpClient,
-    motion: &v1::MotionSpec,
-    dt: f64,
-) -> Result<Trajectory, ClientError> {
+pub async fn free_plan(client: &DmpClient, motion: &v1::MotionSpec, dt: f64) -> Result<Trajectory, SimError> {
     let mut m = motion.clone();
     m.avoidance = Some(avoidance(Method::None));
     m.ignore_scene = true;
     m.extra_obstacles.clear();
     let plan = within("plan", client.plan(v1::PlanRequest { motion: Some(m), dt, duration: 0.0 })).await??;
-    let seg = plan.trajectory.ok_or_else(|| ClientError::Protocol("the plan has no trajectory".into()))?;
-    crate::setpoints::segments_to_trajectory(std::iter::once(&seg))
+    let seg = plan.trajectory.ok_or_else(|| SimError::protocol("the plan has no trajectory".into()))?;
+    Ok(dmp_client::setpoints::segments_to_trajectory(std::iter::once(&seg))?)
 }
 
 /// The avoidance methods the simulations use.
@@ -229,7 +225,7 @@ pub async fn execute_group(
     client: &DmpClient,
     request: v1::ExecuteGroupRequest,
     realtime: bool,
-) -> Result<Vec<Executed>, ClientError> {
+) -> Result<Vec<Executed>, SimError> {
     let mut robots: Vec<Controller> = request
         .members
         .iter()
@@ -239,7 +235,7 @@ pub async fn execute_group(
     while let Some(group) = within("a group segment", stream.next()).await? {
         let group = group?;
         if group.segments.len() != robots.len() {
-            return Err(ClientError::Protocol(format!(
+            return Err(SimError::protocol(format!(
                 "a group step has {} segments for {} members",
                 group.segments.len(),
                 robots.len()

@@ -27,6 +27,8 @@
 //! must also stay within the Panda's Cartesian limits ([`MAX_SPEED`], [`MAX_ACCELERATION`], [`MAX_JERK`]), which
 //! the report's peaks are checked against.
 
+use dmp_client::convert::JsonObstacle;
+use dmp_client::grpc::DmpClient;
 use dmp_proto::v1;
 
 use super::demonstration::min_jerk;
@@ -34,9 +36,7 @@ use super::report::{Figure, SimReport, measure, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
 use super::{Method, SimOptions, avoidance, execute, free_plan, pacing, superquadric, within};
-use crate::convert::JsonObstacle;
-use crate::error::ClientError;
-use crate::grpc::DmpClient;
+use crate::error::SimError;
 
 /// Control period: 1 kHz.
 pub const DT: f64 = 1e-3;
@@ -97,7 +97,7 @@ async fn learn(
     start: &[f64],
     goal: &[f64],
     tau: f64,
-) -> Result<(), ClientError> {
+) -> Result<(), SimError> {
     let (t, rows) = min_jerk(start, goal, tau, 0.0, 0.01);
     let parameters = super::learn_parameters(3050.0);
     within("learn", client.learn(ROBOT, name, &t, &rows, parameters)).await??;
@@ -131,7 +131,7 @@ impl Motion {
         }
     }
 
-    async fn run(&self, client: &DmpClient, options: &SimOptions) -> Result<Executed, ClientError> {
+    async fn run(&self, client: &DmpClient, options: &SimOptions) -> Result<Executed, SimError> {
         let request = v1::ExecuteRequest {
             motion: Some(self.spec()),
             dt: DT,
@@ -149,7 +149,7 @@ impl Motion {
         options: &SimOptions,
         exec: &Executed,
         report: &mut SimReport,
-    ) -> Result<(), ClientError> {
+    ) -> Result<(), SimError> {
         let body = robot_body(ROBOT, self.body);
         let r = measure(exec, DT, &self.goal, &body, &world(), &[]);
         report.add(&format!("{ROBOT}/{}", self.key), r);
@@ -159,7 +159,7 @@ impl Motion {
             .iter()
             .map(JsonObstacle::to_engine)
             .collect::<Result<_, _>>()
-            .map_err(|e| ClientError::Plot(e.to_string()))?;
+            .map_err(|e| SimError::Plot(e.to_string()))?;
         let name = format!("{}.svg", self.key);
         let fig = Figure {
             title: self.title,
@@ -177,7 +177,7 @@ impl Motion {
 }
 
 /// Runs the pick and place: the move to the ring, then both carries (at once: they are alternatives).
-pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, ClientError> {
+pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     learn(client, "move-to-ring", &HOME, &RING, TAU_REACH).await?;
     learn(client, "carry", &RING, &PLACE, TAU_CARRY).await?;
     let dynamic = Method::Dynamic { lambda: 10.0, beta: 2.0, eta: 2.0 };
@@ -198,7 +198,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     };
     let mut report = SimReport::new("panda", options.realtime);
     report.notes.push(
-        "geometry and gains: see client/src/sim/panda.rs (board box, red and green pegs as cylinders; \
+        "geometry and gains: see client/sim/src/robots/panda.rs (board box, red and green pegs as cylinders; \
          pegs planned as superquadrics (1, 1, 2), board as a rounded box of exponent 2)"
             .into(),
     );
@@ -210,7 +210,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     to_ring.record(client, options, &moved, &mut report).await?;
     // Carry from where the gripper actually stopped.
     if moved.traj.is_empty() {
-        return Err(ClientError::Protocol("the move to the ring streamed no setpoint".into()));
+        return Err(SimError::protocol("the move to the ring streamed no setpoint".into()));
     }
     let grasp = super::report::position(&moved.traj, moved.traj.len() - 1).to_vec();
     let carry = |key, title, method| Motion {

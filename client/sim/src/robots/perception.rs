@@ -36,6 +36,9 @@
 use std::time::Duration;
 
 use dmp::scenario::ObstacleSpec;
+use dmp_client::convert::JsonObstacle;
+use dmp_client::grpc::DmpClient;
+use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
 use tokio::sync::watch;
 
@@ -45,10 +48,7 @@ use super::report::{Figure, SimReport, measure, position, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
 use super::{Method, SimOptions, avoidance, execute, free_plan, within};
-use crate::convert::JsonObstacle;
-use crate::error::ClientError;
-use crate::grpc::DmpClient;
-use crate::zenoh_pub::ObstaclePublisher;
+use crate::error::SimError;
 
 /// Control period (and integration step): 1 kHz.
 pub const DT: f64 = 1e-3;
@@ -144,8 +144,8 @@ pub fn point_cloud(center: [f64; 2], half: f64) -> Vec<[f64; 2]> {
 }
 
 /// The obstacle the perception node publishes for a cloud.
-pub fn fitted_obstacle(id: &str, cloud: &[[f64; 2]]) -> Result<JsonObstacle, ClientError> {
-    let e = Ellipse::fit(cloud).ok_or_else(|| ClientError::argument("cloud", "no finite ellipse fits"))?;
+pub fn fitted_obstacle(id: &str, cloud: &[[f64; 2]]) -> Result<JsonObstacle, SimError> {
+    let e = Ellipse::fit(cloud).ok_or_else(|| SimError::argument("cloud", "no finite ellipse fits"))?;
     Ok(JsonObstacle {
         spec: ObstacleSpec {
             id: id.into(),
@@ -197,10 +197,10 @@ async fn perceive(
     publisher: &ObstaclePublisher,
     event: Event,
     mut origin: watch::Receiver<Option<f64>>,
-) -> Result<(), ClientError> {
+) -> Result<(), SimError> {
     let origin = within("the run's start", origin.wait_for(Option::is_some))
         .await?
-        .map_err(|_| ClientError::Closed("the robot".into()))?
+        .map_err(|_| SimError::closed("the robot".into()))?
         .unwrap_or_default();
     sleep_until_run_time(origin, event.add_at).await;
     let obstacle = fitted_obstacle(event.id, &point_cloud(event.center, BOX_HALF))?;
@@ -213,12 +213,12 @@ async fn perceive(
 }
 
 /// Waits until the server's scene has no obstacle `id`.
-async fn wait_absent(client: &DmpClient, id: &str) -> Result<(), ClientError> {
+async fn wait_absent(client: &DmpClient, id: &str) -> Result<(), SimError> {
     within("scene cleared", async {
         loop {
             let snap = client.list_obstacles().await?;
             if snap.obstacles.iter().all(|o| o.id != id) {
-                return Ok::<_, ClientError>(());
+                return Ok::<_, SimError>(());
             }
             tokio::time::sleep(Duration::from_millis(5)).await;
         }
@@ -227,7 +227,7 @@ async fn wait_absent(client: &DmpClient, id: &str) -> Result<(), ClientError> {
 }
 
 /// Runs both scenarios, each with both potentials.
-pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, ClientError> {
+pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     let (t, rows) = ramped_line(&START, &GOAL, TAU, RAMP_S, DT);
     let parameters = super::learn_parameters(STIFFNESS);
     within("learn", client.learn("youbot", "corridor", &t, &rows, parameters)).await??;
@@ -235,7 +235,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
         within("zenoh open", ObstaclePublisher::open(&options.cell, &options.zenoh_connect, &[])).await??;
     within("zenoh subscriber", publisher.wait_for_subscriber(super::STEP_TIMEOUT)).await??;
     let mut report = SimReport::new("youbot-perception", true);
-    report.notes.push("set-up: see client/src/sim/perception.rs; always paced in real time".into());
+    report.notes.push("set-up: see client/sim/src/robots/perception.rs; always paced in real time".into());
     let methods = [
         ("static", Method::Static { a: 10.0, eta: 2.0 }),
         ("dynamic", Method::Dynamic { lambda: 1.0, beta: 2.0, eta: 2.0 }),
@@ -265,7 +265,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
                 record(client, options, event, name, method, exec, &mut report).await?;
             }
         }
-        Ok::<_, ClientError>(())
+        Ok::<_, SimError>(())
     }
     .await;
     within("zenoh close", publisher.close()).await??;
@@ -281,7 +281,7 @@ async fn record(
     method: Method,
     exec: &Executed,
     report: &mut SimReport,
-) -> Result<(), ClientError> {
+) -> Result<(), SimError> {
     let mut world: Vec<Body> =
         WALLS.iter().map(|(id, c)| Body::new(*id, Solid::rectangle(WALL_HALF[0], WALL_HALF[1]), c)).collect();
     let until = event.remove_at.unwrap_or(f64::INFINITY);
@@ -304,10 +304,10 @@ async fn record(
         .iter()
         .map(JsonObstacle::to_engine)
         .collect::<Result<_, _>>()
-        .map_err(|e| ClientError::Plot(e.to_string()))?;
+        .map_err(|e| SimError::Plot(e.to_string()))?;
     if event.remove_at.is_none() {
         let o = fitted_obstacle(event.id, &point_cloud(event.center, BOX_HALF))?;
-        planned.push(o.to_engine().map_err(|e| ClientError::Plot(e.to_string()))?);
+        planned.push(o.to_engine().map_err(|e| SimError::Plot(e.to_string()))?);
     }
     let title = format!("youBot: {} obstacle, {name} potential", event.key);
     let file = format!("{}-{name}.svg", event.key);

@@ -56,6 +56,8 @@
 //! arm>`): they show what avoidance prevented.
 
 use dmp::{Agent, Shape, Superquadric, Trajectory};
+use dmp_client::convert::JsonObstacle;
+use dmp_client::grpc::DmpClient;
 use dmp_proto::v1;
 
 use super::clearance::{closest_approach, distance, side_by_side};
@@ -64,9 +66,7 @@ use super::report::{CONTACT_M, Figure, Other, RobotReport, SimReport, measure, p
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
 use super::{Method, SimOptions, avoidance, execute_group, pacing, superquadric, within};
-use crate::convert::JsonObstacle;
-use crate::error::ClientError;
-use crate::grpc::DmpClient;
+use crate::error::SimError;
 
 /// Control period: 1 kHz.
 pub const DT: f64 = 1e-3;
@@ -276,15 +276,15 @@ impl Stage {
 }
 
 /// Row `k` of an execution (`usize::MAX`: the last row).
-fn row_of(exec: &Executed, k: usize) -> Result<Vec<f64>, ClientError> {
+fn row_of(exec: &Executed, k: usize) -> Result<Vec<f64>, SimError> {
     if exec.traj.is_empty() {
-        return Err(ClientError::Protocol(format!("{} streamed no setpoint", exec.id)));
+        return Err(SimError::protocol(format!("{} streamed no setpoint", exec.id)));
     }
     Ok(position(&exec.traj, k.min(exec.traj.len() - 1)).to_vec())
 }
 
 /// The last position of an execution.
-fn last(exec: &Executed) -> Result<Vec<f64>, ClientError> {
+fn last(exec: &Executed) -> Result<Vec<f64>, SimError> {
     row_of(exec, usize::MAX)
 }
 
@@ -318,7 +318,7 @@ fn measure_leg(stage: &Stage, i: usize, runs: &[Executed; 2]) -> RobotReport {
 }
 
 /// Runs the three stages and records them.
-pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, ClientError> {
+pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     let stages = stages();
     for stage in &stages {
         for leg in &stage.legs {
@@ -329,7 +329,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     }
     let mut report = SimReport::new("psm", options.realtime);
     report.notes.push(
-        "geometry, stages and gains: see client/src/sim/psm.rs (two PSMs on one 6-D DMP; pegs planned as \
+        "geometry, stages and gains: see client/sim/src/robots/psm.rs (two PSMs on one 6-D DMP; pegs planned as \
          superquadrics (1, 1, 2) with the static potential, the arms avoid each other's jaws with the dynamic \
          potential)"
             .into(),
@@ -342,7 +342,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
             let request = stage.request(from, avoid, options.realtime);
             let runs = execute_group(client, request, options.realtime).await?;
             <[Executed; 2]>::try_from(runs)
-                .map_err(|_| ClientError::Protocol("a group of two answered for another count".into()))
+                .map_err(|_| SimError::protocol("a group of two answered for another count".into()))
         };
         // The three runs are independent (each its own phase): at once.
         let (runs, without_robots, free) =
@@ -369,7 +369,7 @@ fn record(
     free: &[Executed; 2],
     clock: f64,
     report: &mut SimReport,
-) -> Result<(), ClientError> {
+) -> Result<(), SimError> {
     let key = stage.key;
     let starts = [row_of(&runs[0], 0)?, row_of(&runs[1], 0)?];
     for i in 0..2 {
@@ -416,10 +416,10 @@ fn record(
         .iter()
         .map(JsonObstacle::to_engine)
         .collect::<Result<_, _>>()
-        .map_err(|e| ClientError::Plot(e.to_string()))?;
+        .map_err(|e| SimError::Plot(e.to_string()))?;
     let shape = Superquadric::ellipsoid(footprint_semi_axes().to_vec())
         .map(Shape::Superquadric)
-        .map_err(|e| ClientError::Plot(e.to_string()))?;
+        .map_err(|e| SimError::Plot(e.to_string()))?;
     let agents: Vec<Agent> = stage
         .legs
         .iter()

@@ -4,13 +4,13 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use dmp::{Agent, Trajectory};
+use dmp_plot::{PlotInput, render_svg};
 use dmp_proto::v1;
 use serde::Serialize;
 
 use super::robot::{Executed, check};
 use super::world::{Body, point3};
-use crate::error::ClientError;
-use crate::plot::{PlotInput, render_svg};
+use crate::error::SimError;
 
 /// A robot ends at its goal when its last setpoint is this close (metres) and the server said GOAL_REACHED.
 pub const GOAL_TOLERANCE_M: f64 = 1e-2;
@@ -109,10 +109,10 @@ impl SimReport {
     }
 
     /// Writes `report.json` in `dir`.
-    pub fn write(&self, dir: &Path) -> Result<(), ClientError> {
+    pub fn write(&self, dir: &Path) -> Result<(), SimError> {
         let path = dir.join("report.json");
-        let text = serde_json::to_string_pretty(self).map_err(|e| ClientError::Plot(e.to_string()))?;
-        std::fs::write(&path, text + "\n").map_err(|source| ClientError::Io { path, source })
+        let text = serde_json::to_string_pretty(self).map_err(|e| SimError::Plot(e.to_string()))?;
+        std::fs::write(&path, text + "\n").map_err(|source| SimError::Io { path, source })
     }
 }
 
@@ -223,7 +223,7 @@ pub struct Figure<'a> {
 }
 
 /// Renders `fig` to `dir/name`.
-pub fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), ClientError> {
+pub fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), SimError> {
     let demo = vec![fig.line.0.to_vec(), fig.line.1.to_vec()];
     let input = PlotInput {
         title: fig.title,
@@ -236,7 +236,7 @@ pub fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), Clie
         robots: fig.robots,
         obstacle_time: fig.time,
     };
-    let svg = render_svg(&input).map_err(|e| ClientError::Plot(e.to_string()))?;
+    let svg = render_svg(&input).map_err(|e| SimError::Plot(e.to_string()))?;
     let path = dir.join(name);
-    std::fs::write(&path, svg).map_err(|source| ClientError::Io { path, source })
+    std::fs::write(&path, svg).map_err(|source| SimError::Io { path, source })
 }

@@ -15,10 +15,10 @@
 //! A jump of a superseding segment that does not continue from the current state breaks one of the two.
 
 use dmp::Trajectory;
+use dmp_client::setpoints::Setpoints;
 use dmp_proto::v1;
 
-use crate::error::ClientError;
-use crate::setpoints::Setpoints;
+use crate::error::SimError;
 
 /// Slack factor of the continuity bounds (the acceleration varies within a step).
 pub const CONT_FACTOR: f64 = 1.5;
@@ -102,7 +102,7 @@ impl Controller {
     }
 
     /// Reads one segment (arriving now).
-    pub fn push(&mut self, seg: &v1::Segment) -> Result<(), ClientError> {
+    pub fn push(&mut self, seg: &v1::Segment) -> Result<(), SimError> {
         self.segments += 1;
         self.status = v1::SegmentStatus::try_from(seg.status).unwrap_or(v1::SegmentStatus::Unspecified);
         let now = if self.realtime && seg.start_unix_s > 0.0 {

@@ -53,6 +53,8 @@
 
 use dmp::scenario::ObstacleSpec;
 use dmp::{Agent, Integrator, Motion, NoPerturbation, Primitive, Shape, State, Superquadric, Trajectory};
+use dmp_client::convert::JsonObstacle;
+use dmp_client::grpc::DmpClient;
 use dmp_proto::v1;
 
 use super::clearance::{closest_approach, measure_fast, side_by_side};
@@ -61,9 +63,7 @@ use super::report::{Figure, Other, SimReport, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
 use super::{Method, SimOptions, avoidance, execute_group, free_plan, pacing, within};
-use crate::convert::JsonObstacle;
-use crate::error::ClientError;
-use crate::grpc::DmpClient;
+use crate::error::SimError;
 
 /// Control period (and integration step): 1 kHz.
 pub const DT: f64 = 1e-3;
@@ -141,11 +141,10 @@ impl Kind {
 }
 
 /// Peak speed of a null-weight DMP over a unit distance with `tau = 1` (so `peak * length / tau` in general).
-fn null_weight_peak_speed() -> Result<f64, ClientError> {
+fn null_weight_peak_speed() -> Result<f64, SimError> {
     let p = Primitive::straight_line(N_BASIS, ALPHA, vec![K], None, 1.0, vec![0.0], vec![1.0])
-        .map_err(|e| ClientError::argument("primitive", e.to_string()))?;
-    let mut integrator =
-        Integrator::new(&p).map_err(|e| ClientError::argument("primitive", e.to_string()))?;
+        .map_err(|e| SimError::argument("primitive", e.to_string()))?;
+    let mut integrator = Integrator::new(&p).map_err(|e| SimError::argument("primitive", e.to_string()))?;
     let motion = Motion::of(&p);
     let mut state = State::at_rest(&p.start);
     let mut acc = [0.0];
@@ -197,7 +196,7 @@ fn world() -> Vec<Body> {
 }
 
 /// Stores both primitives of every robot; returns the `tau` of each.
-async fn store_primitives(client: &DmpClient) -> Result<(f64, f64), ClientError> {
+async fn store_primitives(client: &DmpClient) -> Result<(f64, f64), SimError> {
     let tau_line = null_weight_peak_speed()? * longest() / NULL_PEAK_SPEED;
     let duration = ramped_duration(longest(), CRUISE_SPEED, RAMP_S);
     for b in &BOTS {
@@ -210,7 +209,7 @@ async fn store_primitives(client: &DmpClient) -> Result<(f64, f64), ClientError>
             b.start.to_vec(),
             b.goal.to_vec(),
         )
-        .map_err(|e| ClientError::argument("primitive", e.to_string()))?;
+        .map_err(|e| SimError::argument("primitive", e.to_string()))?;
         within("put", client.put_primitive(b.id, Kind::Line.name(), &line)).await??;
         let (t, rows) = ramped_line(&b.start, &b.goal, duration, RAMP_S, DT);
         let parameters =
@@ -245,7 +244,7 @@ async fn run_one(
     (method_name, method): (&str, Method),
     tau: f64,
     report: &mut SimReport,
-) -> Result<(), ClientError> {
+) -> Result<(), SimError> {
     let specs: Vec<v1::MotionSpec> = BOTS.iter().map(|b| spec(b, kind, method, tau)).collect();
     let request = v1::ExecuteGroupRequest {
         members: specs.iter().map(|m| v1::GroupMember { motion: Some(m.clone()) }).collect(),
@@ -306,9 +305,9 @@ async fn run_one(
         .iter()
         .map(|b| planned(b).to_engine())
         .collect::<Result<_, _>>()
-        .map_err(|e| ClientError::Plot(e.to_string()))?;
+        .map_err(|e| SimError::Plot(e.to_string()))?;
     let shape =
-        Superquadric::new(footprint_axes(), vec![1.0, 1.0]).map_err(|e| ClientError::Plot(e.to_string()))?;
+        Superquadric::new(footprint_axes(), vec![1.0, 1.0]).map_err(|e| SimError::Plot(e.to_string()))?;
     let agents: Vec<Agent> = BOTS
         .iter()
         .enumerate()
@@ -341,11 +340,11 @@ async fn run_one(
 }
 
 /// Runs both primitives with both potentials, one group after the other.
-pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, ClientError> {
+pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     let (tau_line, tau_constant) = store_primitives(client).await?;
     let mut report = SimReport::new("youbots", options.realtime);
     report.notes.push(format!(
-        "set-up: see client/src/sim/youbots.rs; tau {tau_line:.2} s (null weights, peak {NULL_PEAK_SPEED} m/s), \
+        "set-up: see client/sim/src/robots/youbots.rs; tau {tau_line:.2} s (null weights, peak {NULL_PEAK_SPEED} m/s), \
          {tau_constant:.2} s (constant speed, cruise {CRUISE_SPEED} m/s)"
     ));
     for (kind, tau) in [(Kind::Line, tau_line), (Kind::ConstantSpeed, tau_constant)] {
