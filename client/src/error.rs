@@ -1,42 +1,14 @@
 //! Errors of the client library.
 
-use std::path::PathBuf;
-
 use thiserror::Error;
 
 /// What can go wrong in the client.
 #[derive(Debug, Error)]
 pub enum ClientError {
-    /// A file could not be read or written.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
-    /// A scenario file is not valid JSON of the scenario format; `field` is the path of the bad value.
-    #[error("{path}: {field}: {message}")]
-    Parse {
-        /// The file.
-        path: PathBuf,
-        /// Path of the value at fault, e.g. `obstacles[0].semi_axes`, or `(document)`.
-        field: String,
-        /// What is wrong.
-        message: String,
-    },
-    /// The scenario parses but breaks a rule of the engine.
-    #[error("{path}: {source}")]
-    Invalid {
-        /// The file.
-        path: PathBuf,
-        /// The rule.
-        source: dmp::DmpError,
-    },
-    /// An argument of a call or of the command line breaks a rule.
+    /// An argument of a call breaks a rule.
     #[error("{field}: {message}")]
     Argument {
-        /// The argument or field at fault, e.g. `--goal` or `demonstration.positions[3]`.
+        /// The argument or field at fault, e.g. `server` or `demonstration.x[3]`.
         field: String,
         /// What is wrong.
         message: String,
@@ -65,19 +37,17 @@ pub enum ClientError {
     #[error("{0} has ended")]
     Closed(String),
     /// Zenoh failed (opening the session, publishing), or nobody subscribes.
+    #[cfg(feature = "zenoh")]
     #[error("zenoh: {0}")]
     Zenoh(String),
-    /// The plot could not be drawn.
-    #[error("plot: {0}")]
-    Plot(String),
 }
 
 impl ClientError {
-    /// True when the user's input is at fault (the CLI exits with code 2): a bad scenario or argument, or a
-    /// request the server refused as InvalidArgument or NotFound.
+    /// True when the caller's input is at fault: a bad argument, or a request the server refused as
+    /// InvalidArgument or NotFound.
     pub fn is_bad_input(&self) -> bool {
         match self {
-            ClientError::Parse { .. } | ClientError::Invalid { .. } | ClientError::Argument { .. } => true,
+            ClientError::Argument { .. } => true,
             ClientError::Status { code, .. } => {
                 matches!(code, tonic::Code::InvalidArgument | tonic::Code::NotFound)
             }

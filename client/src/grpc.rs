@@ -460,4 +460,4 @@ impl Stream for Session {
 }
 
 #[cfg(test)]
-pub(crate) mod tests;
+mod tests;

@@ -1,36 +1,21 @@
-//! The client side of the DMP cell: the `dmpctl` command line and what it is built from.
+//! The client library of the DMP cell, for robot drivers and perception nodes: tonic, the schema and tokio.
 //!
 //! | concept | module |
 //! | --- | --- |
-//! | reading scenario files, errors at the field | [`scenario_file`] |
-//! | offline runs and timing | [`offline`] |
-//! | output files | [`outputs`] |
-//! | figures | [`plot`] |
-//! | the gRPC client of the server's three services | [`grpc`] |
-//! | the JSON of a stored record (the wire's conversions are `dmp_proto`'s) | [`convert`] |
+//! | the gRPC client of the server's services | [`grpc`] |
 //! | the setpoints in force after a stream of segments (supersession) | [`setpoints`] |
-//! | publishing obstacles over Zenoh (perception nodes) | [`zenoh_pub`] |
-//! | demonstrations from CSV | [`demo_csv`] |
-//! | the server-side commands of `dmpctl` | [`remote`] |
-//! | `scenario run` through the server | [`remote_scenario`] |
-//! | simulated robots (`dmpctl sim`) | [`sim`] |
-//! | the load generator (`dmpctl load`) | [`load`] |
-//! | the command line | [`cli`] |
+//! | the JSON of a stored record (the wire's conversions are `dmp_proto`'s) | [`convert`] |
+//! | publishing obstacles over Zenoh (perception nodes; feature `zenoh`) | `zenoh_pub` |
+//! | errors | [`error`] |
+//!
+//! The `dmpctl` command line is the `dmpctl` crate; simulated robots and the load generator are `dmp-sim`; figures
+//! are `dmp-plot`.
 
-pub mod cli;
 pub mod convert;
-pub mod demo_csv;
 pub mod error;
 pub mod grpc;
-pub mod load;
-pub mod offline;
-pub mod outputs;
-pub mod plot;
-pub mod remote;
-pub mod remote_scenario;
-pub mod scenario_file;
 pub mod setpoints;
-pub mod sim;
+#[cfg(feature = "zenoh")]
 pub mod zenoh_pub;
 
 pub use error::ClientError;

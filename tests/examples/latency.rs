@@ -6,10 +6,9 @@
 
 use std::time::{Duration, Instant};
 
-use dmp_client::grpc::DmpClient;
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
-use dmp_server::config::Config;
+use dmp_tests::TestServer;
 use tokio_stream::StreamExt;
 
 fn percentile(v: &mut [f64], p: f64) -> f64 {
@@ -20,16 +19,9 @@ fn percentile(v: &mut [f64], p: f64) -> f64 {
 #[tokio::main(flavor = "multi_thread")]
 async fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats: usize = std::env::args().nth(1).map(|s| s.parse()).transpose()?.unwrap_or(50);
-    let dir = tempfile::tempdir()?;
-    let mut config = Config {
-        grpc_addr: "127.0.0.1:0".parse()?,
-        data_dir: dir.path().to_path_buf(),
-        ..Default::default()
-    };
-    config.zenoh.listen = vec!["tcp/127.0.0.1:0".into()];
-    config.zenoh.multicast_scouting = false;
-    let handle = dmp_server::run::start(config).await?;
-    let client = DmpClient::connect(format!("http://{}", handle.grpc_addr)).await?;
+    let server = TestServer::start().await;
+    let handle = server.handle();
+    let client = server.client().await;
 
     // A 3-D demonstration (the bench scenario's curve) and ten superquadrics along it.
     let t: Vec<f64> = (0..=2000).map(|i| i as f64 * 1e-3).collect();
@@ -138,6 +130,6 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
         "zenoh_put_to_segment_ms": {"p50": percentile(&mut update_ms, 0.5), "p99": percentile(&mut update_ms, 0.99)},
     });
     println!("{report}");
-    handle.shutdown().await?;
+    server.stop().await;
     Ok(())
 }

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use dmp_client::offline::run_scenario;
+use dmpctl::offline::run_scenario;
 use serde_json::Value;
 
 fn scenarios() -> PathBuf {

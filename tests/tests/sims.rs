@@ -1,28 +1,24 @@
-//! The simulated robots (`dmp_client::sim`) against the real server, in-process on 127.0.0.1:0 with Zenoh on
+//! The simulated robots (`dmp_sim::robots`) against the real server, in-process on 127.0.0.1:0 with Zenoh on
 //! loopback (multicast off). Each asserts what the issue asks of every simulation: goals reached, no contact with
 //! any true shape or other robot, nothing non-finite, continuous setpoints. Every await is under a timeout.
 
-mod common;
-
-use common::{config, within};
-use dmp_client::sim::{SimName, SimOptions, SimReport, run};
-use dmp_server::run::{ServerHandle, start};
+use dmp_sim::robots::{SimName, SimOptions, SimReport, run};
+use dmp_tests::{TestServer, within};
 
 /// Starts a server, runs `name` against it (simulated clock), shuts the server down; returns the report and
 /// checks that the report and the figures were written.
 async fn simulate(name: SimName) -> SimReport {
+    let server = TestServer::start().await;
     let dir = tempfile::tempdir().unwrap();
-    let handle: ServerHandle = within("server start", start(config(&dir.path().join("data")))).await.unwrap();
     let out = dir.path().join("out");
     let options = SimOptions {
         realtime: false,
         out: out.clone(),
-        zenoh_connect: handle.zenoh_locators.clone(),
+        zenoh_connect: server.handle().zenoh_locators.clone(),
         cell: "default".into(),
     };
-    let url = format!("http://{}", handle.grpc_addr);
-    let report = within("simulation", run(&url, name, &options)).await.expect("the simulation runs");
-    within("shutdown", handle.shutdown()).await.unwrap();
+    let report = within("simulation", run(&server.url(), name, &options)).await.expect("the simulation runs");
+    server.stop().await;
     let written: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(written["collision"], serde_json::Value::Bool(report.collision));
@@ -50,7 +46,7 @@ fn assert_clean(report: &SimReport) {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn panda_picks_and_places_past_the_red_peg() {
-    use dmp_client::sim::panda;
+    use dmp_sim::robots::panda;
     let report = simulate(SimName::Panda).await;
     assert_clean(&report);
     assert_eq!(report.robots.len(), 3);
@@ -102,7 +98,7 @@ async fn youbot_avoids_a_box_published_by_a_perception_node() {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn psm_arms_hand_the_ring_over_and_place_it_on_the_peg() {
-    use dmp_client::sim::psm;
+    use dmp_sim::robots::psm;
     let wall = std::time::Instant::now();
     let report = simulate(SimName::Psm).await;
     println!("psm: {:.2} s of wall clock", wall.elapsed().as_secs_f64());

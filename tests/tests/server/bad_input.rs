@@ -3,8 +3,8 @@
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
 
-use crate::common::{T, within};
 use crate::{dynamic_volumetric, ellipse, line, paper_curve, serve, spec, until};
+use dmp_tests::{T, within};
 
 #[tokio::test(flavor = "multi_thread")]
 async fn bad_input_gets_a_clear_status_and_the_server_keeps_serving() {

@@ -3,8 +3,8 @@
 use dmp_proto::v1;
 use tokio_stream::StreamExt;
 
-use crate::common::within;
 use crate::{line, serve, spec, until};
+use dmp_tests::within;
 
 #[tokio::test(flavor = "multi_thread")]
 async fn a_hundred_concurrent_streams_complete_and_a_leaving_client_frees_its_stream() {
@@ -60,7 +60,7 @@ async fn a_smoke_load_streams_twenty_robots_in_two_cells() {
     let dir = tempfile::tempdir().unwrap();
     let (handle, _client) = serve(dir.path()).await;
     let out = dir.path().join("load.json");
-    let args = dmp_client::load::LoadArgs {
+    let args = dmp_sim::load::LoadArgs {
         robots: 20,
         rate: 1000.0,
         segment_ms: 10.0,
@@ -70,7 +70,7 @@ async fn a_smoke_load_streams_twenty_robots_in_two_cells() {
         ..Default::default()
     };
     let url = format!("http://{}", handle.grpc_addr);
-    let report = within("the load", dmp_client::load::run(&args, &url, &handle.zenoh_locators))
+    let report = within("the load", dmp_sim::load::run(&args, &url, &handle.zenoh_locators))
         .await
         .expect("the load runs");
     let json = serde_json::to_value(&report).unwrap();

@@ -1,9 +1,6 @@
 //! The real server, in-process on 127.0.0.1:0 with Zenoh on loopback (multicast off), driven through the client
 //! library exactly as robots and perception nodes drive it. Every await is under a timeout.
 
-#[path = "../common/mod.rs"]
-mod common;
-
 mod bad_input;
 mod load;
 mod matches_the_engine;
@@ -14,11 +11,11 @@ mod sessions_and_groups;
 use std::path::Path;
 use std::time::Duration;
 
-use common::{config, within};
 use dmp::Primitive;
 use dmp_client::grpc::DmpClient;
 use dmp_proto::v1;
 use dmp_server::run::{ServerHandle, start};
+use dmp_tests::{config, within};
 
 async fn serve(dir: &Path) -> (ServerHandle, DmpClient) {
     let handle = within("server start", start(config(dir))).await.expect("server starts");

@@ -5,8 +5,8 @@ use std::path::Path;
 use dmp_proto::v1;
 use tokio_stream::StreamExt;
 
-use crate::common::within;
 use crate::{dynamic_volumetric, ellipse, paper_curve, serve, spec};
+use dmp_tests::within;
 
 #[tokio::test(flavor = "multi_thread")]
 async fn scenario_run_through_the_server_gives_the_offline_metrics() {
@@ -21,12 +21,14 @@ async fn scenario_run_through_the_server_gives_the_offline_metrics() {
     ] {
         let path = scenarios.join(file);
         let (off, on) = (dir.path().join("off"), dir.path().join("on"));
-        let offline = dmp_client::offline::run_scenario(&path, &off).unwrap().metrics;
-        let remote =
-            within("remote scenario", dmp_client::remote_scenario::run_scenario_remote(&client, &path, &on))
-                .await
-                .unwrap()
-                .metrics;
+        let offline = dmpctl::offline::run_scenario(&path, &off).unwrap().metrics;
+        let remote = within(
+            "remote scenario",
+            dmpctl::scenario_through_server::run_scenario_through_server(&client, &path, &on),
+        )
+        .await
+        .unwrap()
+        .metrics;
         let strip = |m: &dmp::metrics::Metrics| {
             let mut v = serde_json::to_value(m).unwrap();
             v.as_object_mut().unwrap().remove("compute_seconds");

@@ -2,8 +2,8 @@
 
 use dmp_proto::v1;
 
-use crate::common::within;
 use crate::{dynamic_volumetric, ellipse, line, paper_curve, serve, spec};
+use dmp_tests::within;
 
 #[tokio::test(flavor = "multi_thread")]
 async fn primitives_survive_a_restart_and_a_plan_equals_the_engine() {

@@ -5,8 +5,8 @@ use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
 use tokio_stream::StreamExt;
 
-use crate::common::{T, within};
 use crate::{dynamic_volumetric, line, serve, spec};
+use dmp_tests::{T, within};
 
 #[tokio::test(flavor = "multi_thread")]
 async fn an_obstacle_published_over_zenoh_changes_the_stream_and_is_cleared() {

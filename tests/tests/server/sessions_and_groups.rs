@@ -4,8 +4,8 @@ use dmp::Isopotential;
 use dmp_proto::v1;
 use tokio_stream::StreamExt;
 
-use crate::common::within;
 use crate::{dynamic_volumetric, line, rows, serve, spec};
+use dmp_tests::within;
 
 #[tokio::test(flavor = "multi_thread")]
 async fn a_goal_change_mid_session_converges_with_continuous_motion() {

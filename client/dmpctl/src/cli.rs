@@ -1,0 +1,402 @@
+//! The `dmpctl` command line: argument parsing and dispatch (the binary only sets up and calls [`run`]).
+//!
+//! Offline: `scenario run FILE --out DIR` (without `--server`) and `scenario bench`. Everything else talks to the
+//! server at `--server` (gRPC), or publishes over Zenoh (`scene ... --via zenoh`).
+
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use dmp_client::grpc::{DEFAULT_SERVER, DmpClient};
+
+use crate::error::DmpctlError;
+use crate::offline::{RunSummary, bench_scenario, run_scenario};
+use crate::outputs::to_json;
+use crate::scenario_through_server::run_scenario_through_server;
+use crate::server_commands::{self, ZenohArgs};
+
+/// Command line of the DMP cell.
+#[derive(Debug, Parser)]
+#[command(
+    name = "dmpctl",
+    version,
+    about = "Learn, plan and replay Dynamic Movement Primitives around obstacles"
+)]
+pub struct Cli {
+    /// gRPC address of the server [default: http://127.0.0.1:50051]. `scenario run` uses the server only when
+    /// this is given.
+    #[arg(long, global = true, value_name = "URL")]
+    pub server: Option<String>,
+    /// The robot cell (Zenoh keys `dmp/<cell>/...`).
+    #[arg(long, global = true, default_value = "default")]
+    pub cell: String,
+    /// Zenoh endpoint to connect to, e.g. `tcp/127.0.0.1:7447` (repeatable); none: multicast scouting.
+    #[arg(long = "zenoh-connect", global = true, value_name = "ENDPOINT")]
+    pub zenoh_connect: Vec<String>,
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Top-level commands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Reproducible experiments in the scenario format (shared/scenarios/SPEC.md).
+    #[command(subcommand)]
+    Scenario(ScenarioCommand),
+    /// Learn a primitive from one demonstration and store it as the next version of (robot, name).
+    Learn(LearnArgs),
+    /// A simulated robot against the server: writes report.json and figures into --out.
+    Sim(dmp_sim::robots::SimArgs),
+    /// The primitives of a robot (latest version of each).
+    List {
+        /// The robot.
+        #[arg(long)]
+        robot: String,
+    },
+    /// One stored primitive, as JSON.
+    Show {
+        /// The robot.
+        #[arg(long)]
+        robot: String,
+        /// The primitive.
+        #[arg(long)]
+        name: String,
+        /// Its version (default: the latest).
+        #[arg(long, default_value_t = 0)]
+        version: u64,
+    },
+    /// Delete every version of a primitive.
+    Delete {
+        /// The robot.
+        #[arg(long)]
+        robot: String,
+        /// The primitive.
+        #[arg(long)]
+        name: String,
+    },
+    /// Plan a whole trajectory around the cell's obstacles and write DIR/trajectory.csv.
+    Plan(PlanArgs),
+    /// Execute as a stream of segments (a line per segment on stderr) and write the setpoints in force to
+    /// DIR/trajectory.csv.
+    Stream(StreamArgs),
+    /// The cell's obstacles.
+    #[command(subcommand)]
+    Scene(SceneCommand),
+    /// Many robots streaming in real time against the server (cells of robots avoiding each other, obstacle
+    /// updates over Zenoh); prints one JSON object: setpoints on time, lateness, scene update latency, server CPU
+    /// and memory. `--zenoh-connect` defaults to tcp/127.0.0.1:7447; `--cell` is not used (cells are
+    /// `<prefix>-<c>`).
+    Load(dmp_sim::load::LoadArgs),
+}
+
+/// `dmpctl scenario ...`
+#[derive(Debug, Subcommand)]
+pub enum ScenarioCommand {
+    /// Learn, roll out with and without obstacles, write trajectory.csv, metrics.json and plot.svg. Offline,
+    /// unless `--server URL` is given: then the server learns and plans.
+    Run {
+        /// The scenario file.
+        file: PathBuf,
+        /// Output directory (created).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Time the avoidance rollout and print one JSON object.
+    Bench {
+        /// The scenario file.
+        file: PathBuf,
+        /// Timed repetitions (the median is reported).
+        #[arg(long, default_value_t = 5)]
+        repeat: usize,
+    },
+}
+
+/// Where a demonstration comes from.
+#[derive(Debug, Args)]
+#[group(required = true, multiple = false)]
+pub struct LearnSource {
+    /// A scenario file: its demonstration and its `dmp` parameters.
+    #[arg(long, value_name = "FILE")]
+    pub scenario: Option<PathBuf>,
+    /// A CSV file: first column the time, then the positions (optional header `t,x1..xd`).
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+}
+
+/// `dmpctl learn`.
+#[derive(Debug, Args)]
+pub struct LearnArgs {
+    /// The robot.
+    #[arg(long)]
+    pub robot: String,
+    /// The primitive's name.
+    #[arg(long)]
+    pub name: String,
+    /// The demonstration.
+    #[command(flatten)]
+    pub source: LearnSource,
+    /// The paper's N (N + 1 Gaussians) [default: the scenario's, or 50].
+    #[arg(long = "n-basis", value_name = "N")]
+    pub n_basis: Option<u32>,
+    /// Stiffness K, one value or one per dimension [default: the scenario's, or 1050].
+    #[arg(long, value_name = "K,..", allow_hyphen_values = true)]
+    pub k: Option<Vector>,
+    /// Damping D, like K [default: the scenario's, or 2 sqrt(K)].
+    #[arg(long, value_name = "D,..", allow_hyphen_values = true)]
+    pub d: Option<Vector>,
+    /// Canonical decay alpha [default: the scenario's, or 4].
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub alpha: Option<f64>,
+}
+
+/// What to replay and how (shared by `plan` and `stream`).
+#[derive(Debug, Args)]
+pub struct MotionArgs {
+    /// The robot.
+    #[arg(long)]
+    pub robot: String,
+    /// The primitive.
+    #[arg(long)]
+    pub name: String,
+    /// Its version (default: the latest).
+    #[arg(long, default_value_t = 0)]
+    pub version: u64,
+    /// Start [default: the primitive's].
+    #[arg(long, value_name = "X,Y,..", allow_hyphen_values = true)]
+    pub start: Option<Vector>,
+    /// Goal [default: the primitive's].
+    #[arg(long, value_name = "X,Y,..", allow_hyphen_values = true)]
+    pub goal: Option<Vector>,
+    /// Time scale, seconds; larger is slower [default: the primitive's].
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub tau: Option<f64>,
+    /// Avoidance as in the scenario format, e.g. `{"method": "dynamic_volumetric", "lambda": 10, "beta": 2,
+    /// "eta": 0.5}`, or `none` [default: the server's].
+    #[arg(long, value_name = "JSON", value_parser = parse_avoidance)]
+    pub avoidance: Option<dmp::Avoidance>,
+    /// Boundary samples per obstacle for the point methods [default: 50].
+    #[arg(long = "point-samples", value_name = "N")]
+    pub point_samples: Option<usize>,
+    /// Ignore the cell's scene.
+    #[arg(long = "ignore-scene")]
+    pub ignore_scene: bool,
+}
+
+/// `dmpctl plan`.
+#[derive(Debug, Args)]
+pub struct PlanArgs {
+    /// What to replay.
+    #[command(flatten)]
+    pub motion: MotionArgs,
+    /// Length of the plan, seconds [default: 1.2 tau].
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub duration: Option<f64>,
+    /// Step, seconds [default: 0.001].
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub dt: Option<f64>,
+    /// Output directory (created).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `dmpctl stream`.
+#[derive(Debug, Args)]
+pub struct StreamArgs {
+    /// What to replay.
+    #[command(flatten)]
+    pub motion: MotionArgs,
+    /// Pace segments on the wall clock (default: as fast as they are read).
+    #[arg(long)]
+    pub realtime: bool,
+    /// Step, seconds [default: 0.001].
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub dt: Option<f64>,
+    /// Segment length, seconds [default: 0.01].
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub segment: Option<f64>,
+    /// Real-time lookahead, seconds [default: 0.05].
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub lookahead: Option<f64>,
+    /// Stop after this long, seconds [default: at the goal, or 3 tau].
+    #[arg(long = "max-duration", value_parser = positive, allow_hyphen_values = true)]
+    pub max_duration: Option<f64>,
+    /// Output directory (created).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// How an obstacle update travels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Via {
+    /// The scene service.
+    Grpc,
+    /// A put or delete on `dmp/<cell>/obstacles/<id>`.
+    Zenoh,
+}
+
+/// `dmpctl scene ...`
+#[derive(Debug, Subcommand)]
+pub enum SceneCommand {
+    /// Add or replace obstacles: FILE is one JSON obstacle of the scenario format (plus optional `margin`,
+    /// `ttl_s`), or a file whose `obstacles` are all put (e.g. a scenario).
+    Put {
+        /// The file.
+        file: PathBuf,
+        /// Transport.
+        #[arg(long, value_enum, default_value_t = Via::Grpc)]
+        via: Via,
+        /// Seconds after which the obstacles expire (replaces the file's `ttl_s`; 0: never).
+        #[arg(long, value_parser = non_negative, allow_hyphen_values = true)]
+        ttl: Option<f64>,
+    },
+    /// Remove an obstacle.
+    Delete {
+        /// Its id.
+        id: String,
+        /// Transport.
+        #[arg(long, value_enum, default_value_t = Via::Grpc)]
+        via: Via,
+    },
+    /// The current obstacles, as JSON.
+    List,
+}
+
+/// A vector on the command line: comma-separated finite numbers, e.g. `0.5,-1,2e-3`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Vector(pub Vec<f64>);
+
+impl FromStr for Vector {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let mut v = Vec::new();
+        for (i, part) in s.split(',').enumerate() {
+            let part = part.trim();
+            match part.parse::<f64>() {
+                Ok(x) if x.is_finite() => v.push(x),
+                _ => return Err(format!("entry {} (`{part}`) is not a finite number", i + 1)),
+            }
+        }
+        Ok(Vector(v))
+    }
+}
+
+fn positive(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err(format!("`{s}` is not a finite number greater than zero")),
+    }
+}
+
+fn non_negative(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        _ => Err(format!("`{s}` is not a finite number >= 0")),
+    }
+}
+
+/// The scenario format's avoidance object, or a bare method name (`none`).
+fn parse_avoidance(s: &str) -> Result<dmp::Avoidance, String> {
+    let t = s.trim();
+    let json = if t.starts_with('{') { t.to_string() } else { format!("{{\"method\": \"{t}\"}}") };
+    serde_json::from_str(&json).map_err(|e| e.to_string())
+}
+
+/// Runs a parsed command line; returns what to print on standard output. Offline commands run on this thread;
+/// the others on a multi-threaded tokio runtime (Zenoh needs one).
+pub fn run(cli: Cli) -> Result<String, DmpctlError> {
+    match (&cli.command, &cli.server) {
+        (Command::Scenario(ScenarioCommand::Run { file, out }), None) => offline_run(file, out),
+        (Command::Scenario(ScenarioCommand::Bench { file, repeat }), _) => bench(file, *repeat),
+        (command, _) => {
+            let mut builder = tokio::runtime::Builder::new_multi_thread();
+            if let Command::Load(a) = command {
+                // Checked with the other flags once running; the runtime needs at least one.
+                builder.worker_threads(a.threads.max(1));
+            }
+            builder
+                .enable_all()
+                .build()
+                .map_err(|source| DmpctlError::Io { path: PathBuf::from("(tokio runtime)"), source })?
+                .block_on(run_async(cli))
+        }
+    }
+}
+
+/// Runs a parsed command line inside a multi-threaded tokio runtime.
+pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
+    let server = cli.server.clone().unwrap_or_else(|| DEFAULT_SERVER.to_string());
+    let zenoh = ZenohArgs { cell: cli.cell.clone(), connect: cli.zenoh_connect.clone() };
+    let connect = || DmpClient::connect(server.as_str());
+    match &cli.command {
+        Command::Scenario(ScenarioCommand::Run { file, out }) => match &cli.server {
+            None => offline_run(file, out),
+            Some(url) => {
+                let summary = run_scenario_through_server(&connect().await?, file, out).await?;
+                for n in &summary.notes {
+                    eprintln!("dmpctl: note: {n}");
+                }
+                Ok(format!("{} (through {url})", summary_line(file, &summary, out)))
+            }
+        },
+        Command::Scenario(ScenarioCommand::Bench { file, repeat }) => bench(file, *repeat),
+        Command::Learn(a) => server_commands::learn(&connect().await?, a).await,
+        Command::List { robot } => server_commands::list(&connect().await?, robot).await,
+        Command::Show { robot, name, version } => {
+            server_commands::show(&connect().await?, robot, name, *version).await
+        }
+        Command::Delete { robot, name } => server_commands::delete(&connect().await?, robot, name).await,
+        Command::Plan(a) => server_commands::plan(&connect().await?, a).await,
+        Command::Stream(a) => server_commands::stream(&connect().await?, a).await,
+        Command::Scene(SceneCommand::Put { file, via, ttl }) => {
+            server_commands::scene_put(&server, &zenoh, file, *via, *ttl).await
+        }
+        Command::Scene(SceneCommand::Delete { id, via }) => {
+            server_commands::scene_delete(&server, &zenoh, id, *via).await
+        }
+        Command::Scene(SceneCommand::List) => server_commands::scene_list(&connect().await?).await,
+        Command::Load(a) => {
+            let report = dmp_sim::load::run(a, &server, &cli.zenoh_connect).await?;
+            Ok(to_json(&report))
+        }
+        Command::Sim(a) => {
+            let report = dmp_sim::robots::run_sim(a, &server, &cli.cell, &cli.zenoh_connect).await?;
+            let problems = report.problems();
+            Ok(format!(
+                "{}: {} robots, collision: {}, {}; wrote {}",
+                report.sim,
+                report.robots.len(),
+                report.collision,
+                if problems.is_empty() { "no problem".to_string() } else { problems.join("; ") },
+                a.out.display()
+            ))
+        }
+    }
+}
+
+fn summary_line(file: &Path, summary: &RunSummary, out: &Path) -> String {
+    let m = &summary.metrics;
+    format!(
+        "{}: {} steps in {:.3} s, collision: {}, eps_max {:.4}, final goal distance {:.2e}; wrote {}",
+        file.display(),
+        m.steps,
+        m.compute_seconds,
+        m.collision,
+        m.eps_max,
+        m.final_goal_distance,
+        out.display()
+    )
+}
+
+fn offline_run(file: &Path, out: &Path) -> Result<String, DmpctlError> {
+    Ok(summary_line(file, &run_scenario(file, out)?, out))
+}
+
+fn bench(file: &Path, repeat: usize) -> Result<String, DmpctlError> {
+    let report = bench_scenario(file, repeat)?;
+    Ok(serde_json::to_string(&report).unwrap_or_else(|_| to_json(&report)))
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,274 @@
+//! Tests of the command line: parsing, refusals naming the flag. The commands against the real server are
+//! end-to-end tests (`tests/tests/client/dmpctl.rs`).
+
+use dmp_client::ClientError;
+
+use super::*;
+
+fn parse(args: &[&str]) -> Cli {
+    Cli::try_parse_from(std::iter::once("dmpctl").chain(args.iter().copied()))
+        .unwrap_or_else(|e| panic!("{args:?}: {e}"))
+}
+
+fn refused(args: &[&str]) -> String {
+    match Cli::try_parse_from(std::iter::once("dmpctl").chain(args.iter().copied())) {
+        Ok(c) => panic!("{args:?} parsed: {c:?}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn scenario_commands_stay_offline_without_server() {
+    let c = parse(&["scenario", "run", "s.json", "--out", "o"]);
+    assert!(c.server.is_none());
+    assert!(matches!(c.command, Command::Scenario(ScenarioCommand::Run { .. })));
+    let c = parse(&["scenario", "run", "s.json", "--server", "http://127.0.0.1:9", "--out", "o"]);
+    assert_eq!(c.server.as_deref(), Some("http://127.0.0.1:9"));
+    let c = parse(&["scenario", "bench", "s.json", "--repeat", "3"]);
+    assert!(matches!(c.command, Command::Scenario(ScenarioCommand::Bench { repeat: 3, .. })));
+}
+
+#[test]
+fn global_options_go_anywhere() {
+    let c = parse(&["--server", "http://h:1", "--cell", "c1", "list", "--robot", "r"]);
+    assert_eq!((c.server.as_deref(), c.cell.as_str()), (Some("http://h:1"), "c1"));
+    let c = parse(&["list", "--robot", "r", "--zenoh-connect", "tcp/a:1", "--zenoh-connect", "tcp/b:2"]);
+    assert_eq!(c.zenoh_connect, vec!["tcp/a:1", "tcp/b:2"]);
+    assert_eq!(c.cell, "default");
+}
+
+#[test]
+fn learn_takes_exactly_one_source() {
+    let c = parse(&[
+        "learn",
+        "--robot",
+        "r",
+        "--name",
+        "p",
+        "--csv",
+        "d.csv",
+        "--k",
+        "100,200",
+        "--n-basis",
+        "20",
+    ]);
+    let Command::Learn(a) = c.command else { panic!() };
+    assert_eq!(a.source.csv.as_deref(), Some(Path::new("d.csv")));
+    assert_eq!(a.k, Some(Vector(vec![100.0, 200.0])));
+    assert_eq!(a.n_basis, Some(20));
+    let c = parse(&["learn", "--robot", "r", "--name", "p", "--scenario", "s.json"]);
+    let Command::Learn(a) = c.command else { panic!() };
+    assert!(a.source.scenario.is_some() && a.source.csv.is_none());
+    refused(&["learn", "--robot", "r", "--name", "p"]);
+    refused(&["learn", "--robot", "r", "--name", "p", "--csv", "a", "--scenario", "b"]);
+    assert!(refused(&["learn", "--name", "p", "--csv", "a"]).contains("--robot"));
+    assert!(
+        refused(&["learn", "--robot", "r", "--name", "p", "--csv", "a", "--alpha", "-1"]).contains("--alpha")
+    );
+}
+
+#[test]
+fn load_takes_its_flags_and_the_global_server() {
+    let c = parse(&[
+        "--server",
+        "http://h:1",
+        "load",
+        "--robots",
+        "20",
+        "--rate",
+        "500",
+        "--segment-ms",
+        "20",
+        "--duration",
+        "3",
+        "--scene-updates",
+        "5",
+        "--zenoh-connect",
+        "tcp/h:2",
+        "--dim",
+        "2",
+        "--out",
+        "r.json",
+    ]);
+    assert_eq!(
+        (c.server.as_deref(), c.zenoh_connect.as_slice()),
+        (Some("http://h:1"), &["tcp/h:2".into()][..])
+    );
+    let Command::Load(a) = c.command else { panic!() };
+    let expected = dmp_sim::load::LoadArgs {
+        robots: 20,
+        rate: 500.0,
+        segment_ms: 20.0,
+        duration: 3.0,
+        scene_updates: 5.0,
+        dim: 2,
+        out: Some(PathBuf::from("r.json")),
+        ..Default::default()
+    };
+    assert_eq!(a, expected);
+    let Command::Load(a) = parse(&["load"]).command else { panic!() };
+    assert_eq!(a, dmp_sim::load::LoadArgs::default());
+    // The server's adaptive step (at most 30 ms, tolerance 3e-6) unless told otherwise; a zero tolerance asks
+    // for a fixed RK4 step, and a zero step for the server's default.
+    assert_eq!((a.integration_step_ms, a.integration_tolerance), (30.0, 3e-6));
+    let Command::Load(a) =
+        parse(&["load", "--integration-step-ms", "5", "--integration-tolerance", "0"]).command
+    else {
+        panic!()
+    };
+    assert_eq!((a.integration_step_ms, a.integration_tolerance), (5.0, 0.0));
+    assert!(a.validate().is_ok());
+    let Command::Load(a) = parse(&["load", "--integration-step-ms", "0"]).command else { panic!() };
+    assert_eq!(a.integration_step_ms, 0.0);
+    assert!(a.validate().is_ok());
+    let Command::Load(a) = parse(&["load", "--integration-tolerance", "0.5"]).command else { panic!() };
+    assert!(a.validate().unwrap_err().to_string().contains("--integration-tolerance"));
+    assert!(refused(&["load", "--robots", "many"]).contains("--robots"));
+    // Numbers clap accepts are checked by the load itself, naming the flag.
+    let Command::Load(a) = parse(&["load", "--rate", "-1"]).command else { panic!() };
+    assert!(a.validate().unwrap_err().to_string().starts_with("--rate"));
+}
+
+#[test]
+fn list_show_delete() {
+    assert!(matches!(parse(&["list", "--robot", "r"]).command, Command::List { .. }));
+    let Command::Show { version, .. } = parse(&["show", "--robot", "r", "--name", "p"]).command else {
+        panic!()
+    };
+    assert_eq!(version, 0);
+    let Command::Show { version, .. } =
+        parse(&["show", "--robot", "r", "--name", "p", "--version", "3"]).command
+    else {
+        panic!()
+    };
+    assert_eq!(version, 3);
+    assert!(matches!(parse(&["delete", "--robot", "r", "--name", "p"]).command, Command::Delete { .. }));
+    assert!(refused(&["delete", "--robot", "r"]).contains("--name"));
+    assert!(refused(&["show", "--robot", "r", "--name", "p", "--version", "x"]).contains("--version"));
+}
+
+#[test]
+fn plan_parses_vectors_with_negative_entries_and_avoidance() {
+    let c = parse(&[
+        "plan",
+        "--robot",
+        "r",
+        "--name",
+        "p",
+        "--goal",
+        "-1,0.5",
+        "--start",
+        "0,0",
+        "--tau",
+        "2",
+        "--duration",
+        "3",
+        "--dt",
+        "0.002",
+        "--out",
+        "o",
+        "--avoidance",
+        "none",
+        "--ignore-scene",
+    ]);
+    let Command::Plan(a) = c.command else { panic!() };
+    assert_eq!(a.motion.goal, Some(Vector(vec![-1.0, 0.5])));
+    assert_eq!(a.motion.start, Some(Vector(vec![0.0, 0.0])));
+    assert_eq!((a.motion.tau, a.duration, a.dt), (Some(2.0), Some(3.0), Some(0.002)));
+    assert_eq!(a.motion.avoidance, Some(dmp::Avoidance::NONE));
+    assert!(a.motion.ignore_scene);
+    let spec = server_commands::motion_spec(&a.motion);
+    assert_eq!((spec.goal, spec.tau), (vec![-1.0, 0.5], 2.0));
+    assert!(spec.avoidance.is_some());
+
+    let c = parse(&[
+        "plan",
+        "--robot",
+        "r",
+        "--name",
+        "p",
+        "--out",
+        "o",
+        "--avoidance",
+        r#"{"method": "static_volumetric", "A": 10, "eta": 1}"#,
+    ]);
+    let Command::Plan(a) = c.command else { panic!() };
+    assert_eq!(a.motion.avoidance.unwrap().method.name(), "static_volumetric");
+    let spec = server_commands::motion_spec(&a.motion);
+    assert!(spec.goal.is_empty() && spec.start.is_empty() && spec.tau == 0.0);
+
+    let e = refused(&["plan", "--robot", "r", "--name", "p", "--goal", "1,x", "--out", "o"]);
+    assert!(e.contains("--goal") && e.contains("entry 2"), "{e}");
+    assert!(
+        refused(&["plan", "--robot", "r", "--name", "p", "--goal", "1,NaN", "--out", "o"]).contains("--goal")
+    );
+    assert!(refused(&["plan", "--robot", "r", "--name", "p", "--tau", "0", "--out", "o"]).contains("--tau"));
+    assert!(refused(&["plan", "--robot", "r", "--name", "p"]).contains("--out"));
+    let e = refused(&["plan", "--robot", "r", "--name", "p", "--out", "o", "--avoidance", "magic"]);
+    assert!(e.contains("--avoidance") && e.contains("magic"), "{e}");
+}
+
+#[test]
+fn stream_options() {
+    let c = parse(&[
+        "stream",
+        "--robot",
+        "r",
+        "--name",
+        "p",
+        "--realtime",
+        "--goal",
+        "1,1",
+        "--tau",
+        "0.5",
+        "--segment",
+        "0.02",
+        "--lookahead",
+        "0.1",
+        "--max-duration",
+        "4",
+        "--out",
+        "o",
+    ]);
+    let Command::Stream(a) = c.command else { panic!() };
+    assert!(a.realtime);
+    assert_eq!((a.segment, a.lookahead, a.max_duration), (Some(0.02), Some(0.1), Some(4.0)));
+    let Command::Stream(a) = parse(&["stream", "--robot", "r", "--name", "p", "--out", "o"]).command else {
+        panic!()
+    };
+    assert!(!a.realtime && a.motion.goal.is_none());
+}
+
+#[test]
+fn scene_commands() {
+    let Command::Scene(SceneCommand::Put { via, ttl, .. }) = parse(&["scene", "put", "o.json"]).command
+    else {
+        panic!()
+    };
+    assert_eq!((via, ttl), (Via::Grpc, None));
+    let c =
+        parse(&["scene", "put", "o.json", "--via", "zenoh", "--ttl", "2.5", "--zenoh-connect", "tcp/h:7447"]);
+    let Command::Scene(SceneCommand::Put { via, ttl, .. }) = c.command else { panic!() };
+    assert_eq!((via, ttl), (Via::Zenoh, Some(2.5)));
+    assert_eq!(c.zenoh_connect, vec!["tcp/h:7447"]);
+    let Command::Scene(SceneCommand::Delete { id, via }) =
+        parse(&["scene", "delete", "box1", "--via", "zenoh"]).command
+    else {
+        panic!()
+    };
+    assert_eq!((id.as_str(), via), ("box1", Via::Zenoh));
+    assert!(matches!(parse(&["scene", "list"]).command, Command::Scene(SceneCommand::List)));
+    assert!(refused(&["scene", "put", "o.json", "--via", "carrier-pigeon"]).contains("--via"));
+    assert!(refused(&["scene", "put", "o.json", "--ttl", "-1"]).contains("--ttl"));
+}
+
+#[test]
+fn a_closed_port_is_a_connection_failure_not_bad_input() {
+    // Port 1 on loopback: nothing listens.
+    let e = run(parse(&["--server", "http://127.0.0.1:1", "list", "--robot", "r"])).unwrap_err();
+    assert!(matches!(e, DmpctlError::Client(ClientError::Connect { .. })), "{e}");
+    assert!(!e.is_bad_input());
+    assert!(e.to_string().contains("127.0.0.1:1"), "{e}");
+    let e = run(parse(&["--server", "http://bad host:1", "list", "--robot", "r"])).unwrap_err();
+    assert!(e.is_bad_input(), "{e}");
+}

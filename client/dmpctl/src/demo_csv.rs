@@ -1,0 +1,127 @@
+//! Demonstrations from CSV files (`dmpctl learn --csv FILE`).
+//!
+//! The first column is the time, the others are positions. An optional header names the columns (`t,x1,x2` or any
+//! names after `t`); when it has columns named `x1..xd` (e.g. a `trajectory.csv` written by `dmpctl`, whose other
+//! columns are velocities and accelerations), only those are read. Blank lines and lines starting with `#` are
+//! skipped.
+
+use std::path::Path;
+
+use crate::error::DmpctlError;
+
+/// Sample times and one row of positions per sample.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CsvDemonstration {
+    /// Times, as written (the server checks that they increase).
+    pub t: Vec<f64>,
+    /// Positions, one row per time.
+    pub x: Vec<Vec<f64>>,
+}
+
+/// Parses CSV text; `path` only names the source in errors, which give the line and column (from 1).
+pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstration, DmpctlError> {
+    let err =
+        |field: String, message: String| DmpctlError::Parse { path: path.to_path_buf(), field, message };
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
+        .peekable();
+    // Which columns hold positions: all after the first, or the header's `x1..xd`.
+    let mut columns: Option<Vec<usize>> = None;
+    let mut width = None;
+    if let Some(&(n, first)) = lines.peek() {
+        let cells: Vec<&str> = first.split(',').map(str::trim).collect();
+        if cells[0].parse::<f64>().is_err() {
+            lines.next();
+            if cells.len() < 2 {
+                return Err(err(
+                    format!("line {n}"),
+                    "the header needs a time column and at least one position".into(),
+                ));
+            }
+            // Columns named x1, x2, ... (in that order of names, wherever they sit), else all after the time.
+            let xs: Vec<usize> = (1..)
+                .map_while(|j| cells[1..].iter().position(|c| *c == format!("x{j}")).map(|i| i + 1))
+                .collect();
+            columns = Some(if xs.is_empty() { (1..cells.len()).collect() } else { xs });
+            width = Some(cells.len());
+        }
+    }
+    let (mut t, mut x) = (Vec::new(), Vec::new());
+    for (n, line) in lines {
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let w = *width.get_or_insert(cells.len());
+        if cells.len() != w {
+            return Err(err(format!("line {n}"), format!("has {} columns, expected {w}", cells.len())));
+        }
+        if w < 2 {
+            return Err(err(format!("line {n}"), "needs a time column and at least one position".into()));
+        }
+        let mut values = Vec::with_capacity(w);
+        for (c, cell) in cells.iter().enumerate() {
+            let v: f64 = cell.parse().map_err(|_| {
+                err(format!("line {n}, column {}", c + 1), format!("`{cell}` is not a number"))
+            })?;
+            if !v.is_finite() {
+                return Err(err(format!("line {n}, column {}", c + 1), "must be a finite number".into()));
+            }
+            values.push(v);
+        }
+        t.push(values[0]);
+        let cols = columns.get_or_insert_with(|| (1..w).collect());
+        x.push(cols.iter().map(|&c| values[c]).collect());
+    }
+    if t.len() < 2 {
+        return Err(err("(document)".into(), format!("needs at least 2 samples, found {}", t.len())));
+    }
+    Ok(CsvDemonstration { t, x })
+}
+
+/// Reads and parses a CSV demonstration.
+pub fn load_demonstration_csv(path: &Path) -> Result<CsvDemonstration, DmpctlError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| DmpctlError::Io { path: path.to_path_buf(), source })?;
+    parse_demonstration_csv(&text, path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<CsvDemonstration, DmpctlError> {
+        parse_demonstration_csv(text, Path::new("demo.csv"))
+    }
+
+    #[test]
+    fn header_or_not_the_first_column_is_time() {
+        let d = parse("t,x1,x2\n0,0,1\n0.5,0.25,1.5\n1,1,2\n").unwrap();
+        assert_eq!(d.t, vec![0.0, 0.5, 1.0]);
+        assert_eq!(d.x, vec![vec![0.0, 1.0], vec![0.25, 1.5], vec![1.0, 2.0]]);
+        let d = parse("time, shoulder, elbow, wrist\n0, 1, 2, 3\n0.1, 1, 2, 4\n").unwrap();
+        assert_eq!(d.x[1], vec![1.0, 2.0, 4.0]);
+        let d = parse("# recorded by hand\n\n0,5\n1,6\n").unwrap();
+        assert_eq!((d.t, d.x), (vec![0.0, 1.0], vec![vec![5.0], vec![6.0]]));
+    }
+
+    #[test]
+    fn a_trajectory_csv_reads_its_positions_only() {
+        let d = parse("t,x1,x2,xd1,xd2,a1,a2\n0,0,0,0,0,9,9\n0.001,1e-6,2e-6,1,1,9,9\n").unwrap();
+        assert_eq!(d.x, vec![vec![0.0, 0.0], vec![1e-6, 2e-6]]);
+    }
+
+    #[test]
+    fn bad_files_name_the_line_and_column() {
+        let e = parse("t,x1\n0,0\n0.1,oops\n").unwrap_err();
+        assert!(e.is_bad_input());
+        assert!(e.to_string().contains("line 3, column 2") && e.to_string().contains("oops"), "{e}");
+        let e = parse("t,x1,x2\n0,0,0\n0.1,1\n").unwrap_err();
+        assert!(e.to_string().contains("line 3") && e.to_string().contains("2 columns, expected 3"), "{e}");
+        let e = parse("t,x1\n0,NaN\n1,1\n").unwrap_err();
+        assert!(e.to_string().contains("finite"), "{e}");
+        assert!(parse("t,x1\n0,1\n").unwrap_err().to_string().contains("at least 2 samples"));
+        assert!(parse("t\n0\n1\n").is_err());
+        assert!(parse("0\n1\n").is_err());
+    }
+}

@@ -1,0 +1,79 @@
+//! Errors of `dmpctl`: its own (files, scenarios, flags, figures) and those of the libraries it calls.
+
+use std::path::PathBuf;
+
+use dmp_client::ClientError;
+use dmp_plot::PlotError;
+use dmp_sim::SimError;
+use thiserror::Error;
+
+/// What can go wrong in a `dmpctl` command.
+#[derive(Debug, Error)]
+pub enum DmpctlError {
+    /// A call to the server or a Zenoh publication failed, or an answer broke the schema's contract.
+    #[error(transparent)]
+    Client(#[from] ClientError),
+    /// A simulation or a load run failed.
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A scenario file is not valid JSON of the scenario format; `field` is the path of the bad value.
+    #[error("{path}: {field}: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// Path of the value at fault, e.g. `obstacles[0].semi_axes`, or `(document)`.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The scenario parses but breaks a rule of the engine.
+    #[error("{path}: {source}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// The rule.
+        source: dmp::DmpError,
+    },
+    /// An argument of the command line breaks a rule.
+    #[error("{field}: {message}")]
+    Argument {
+        /// The flag or field at fault, e.g. `--scenario / --csv`.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The plot could not be drawn.
+    #[error("plot: {0}")]
+    Plot(#[from] PlotError),
+}
+
+impl DmpctlError {
+    /// True when the user's input is at fault (`dmpctl` exits with code 2): a bad scenario or argument, or a
+    /// request the server refused as InvalidArgument or NotFound.
+    pub fn is_bad_input(&self) -> bool {
+        match self {
+            DmpctlError::Parse { .. } | DmpctlError::Invalid { .. } | DmpctlError::Argument { .. } => true,
+            DmpctlError::Client(e) => e.is_bad_input(),
+            DmpctlError::Sim(e) => e.is_bad_input(),
+            DmpctlError::Io { .. } | DmpctlError::Plot(_) => false,
+        }
+    }
+
+    /// An argument error.
+    pub fn argument(field: impl Into<String>, message: impl Into<String>) -> Self {
+        DmpctlError::Argument { field: field.into(), message: message.into() }
+    }
+
+    /// The server's answer breaks what the command expects ([`ClientError::Protocol`]).
+    pub fn protocol(message: String) -> Self {
+        DmpctlError::Client(ClientError::Protocol(message))
+    }
+}

@@ -1,0 +1,24 @@
+//! `dmpctl`, the command line of the DMP cell, and what it is built from: offline scenario runs with their files
+//! and figures, the commands that talk to the server, and the simulations and load of `dmp-sim`.
+//!
+//! | concept | module |
+//! | --- | --- |
+//! | the command line: flags and dispatch | [`cli`] |
+//! | reading scenario files, errors at the field | [`scenario_file`] |
+//! | offline runs and timing | [`offline`] |
+//! | output files | [`outputs`] |
+//! | demonstrations from CSV | [`demo_csv`] |
+//! | the commands that talk to the server (`learn`, `list`, `plan`, `stream`, `scene` ...) | [`server_commands`] |
+//! | `scenario run --server`: the offline experiment computed by the server | [`scenario_through_server`] |
+//! | errors and the exit code | [`error`] |
+
+pub mod cli;
+pub mod demo_csv;
+pub mod error;
+pub mod offline;
+pub mod outputs;
+pub mod scenario_file;
+pub mod scenario_through_server;
+pub mod server_commands;
+
+pub use error::DmpctlError;

@@ -1,0 +1,381 @@
+//! The commands of `dmpctl` that talk to the server (gRPC, or Zenoh for `scene --via zenoh`); each returns what to
+//! print on standard output. Argument types are in [`crate::cli`].
+
+use std::path::Path;
+use std::time::Duration;
+
+use dmp_client::convert::record_json;
+use dmp_client::grpc::{DmpClient, record_primitive};
+use dmp_client::setpoints::Setpoints;
+use dmp_client::zenoh_pub::ObstaclePublisher;
+use dmp_proto::avoidance::avoidance_to_proto;
+use dmp_proto::keys::obstacle_key;
+use dmp_proto::learning::learn_parameters_to_proto;
+use dmp_proto::obstacle_json::{JsonObstacle, obstacle_to_json};
+use dmp_proto::v1;
+use serde_json::{Value, json};
+
+use crate::cli::{LearnArgs, LearnSource, MotionArgs, PlanArgs, StreamArgs, Via};
+use crate::demo_csv::load_demonstration_csv;
+use crate::error::DmpctlError;
+use crate::outputs::{to_json, trajectory_csv, write_file};
+use crate::scenario_file::load_scenario;
+
+/// How long `scene ... --via zenoh` waits for the server's subscriber.
+pub const ZENOH_SUBSCRIBER_WAIT: Duration = Duration::from_secs(5);
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> DmpctlError + '_ {
+    move |source| DmpctlError::Io { path: path.to_path_buf(), source }
+}
+
+/// `learn`: one demonstration (a scenario's, or a CSV file's) to the next version of `(robot, name)`.
+pub async fn learn(client: &DmpClient, a: &LearnArgs) -> Result<String, DmpctlError> {
+    let (t, x, mut params) = match &a.source {
+        LearnSource { scenario: Some(path), .. } => {
+            let s = load_scenario(path)?;
+            (s.demonstration.t, s.demonstration.x, learn_parameters_to_proto(&s.dmp))
+        }
+        LearnSource { csv: Some(path), .. } => {
+            let d = load_demonstration_csv(path)?;
+            (d.t, d.x, v1::LearnParameters::default())
+        }
+        _ => return Err(DmpctlError::argument("--scenario / --csv", "give one of them")),
+    };
+    if let Some(n) = a.n_basis {
+        params.n_basis = n;
+    }
+    if let Some(k) = &a.k {
+        params.k = k.0.clone();
+    }
+    if let Some(d) = &a.d {
+        params.d = d.0.clone();
+    }
+    if let Some(alpha) = a.alpha {
+        params.alpha = alpha;
+    }
+    let samples = t.len();
+    let r = client.learn(&a.robot, &a.name, &t, &x, params).await?;
+    let p = record_primitive(&r)?;
+    Ok(to_json(&json!({
+        "robot_id": r.robot_id,
+        "name": r.name,
+        "version": r.version,
+        "samples": samples,
+        "dim": p.dim,
+        "n_basis": p.n_basis,
+        "tau": p.tau,
+        "start": p.start,
+        "goal": p.goal,
+    })))
+}
+
+/// `list`: one line per primitive of the robot.
+pub async fn list(client: &DmpClient, robot: &str) -> Result<String, DmpctlError> {
+    let records = client.list(robot).await?;
+    if records.is_empty() {
+        return Ok(format!("robot `{robot}` has no primitives"));
+    }
+    let lines: Vec<String> = records
+        .iter()
+        .map(|r| {
+            let (dim, n, tau) = r.primitive.as_ref().map_or((0, 0, 0.0), |p| (p.dim, p.n_basis, p.tau));
+            format!(
+                "{}\tv{}\tdim {dim}\tN {n}\ttau {tau} s\tcreated_unix_ms {}",
+                r.name, r.version, r.created_unix_ms
+            )
+        })
+        .collect();
+    Ok(lines.join("\n"))
+}
+
+/// `show`: the record as JSON (the primitive in the engine's serde form).
+pub async fn show(client: &DmpClient, robot: &str, name: &str, version: u64) -> Result<String, DmpctlError> {
+    Ok(to_json(&record_json(&client.get(robot, name, version).await?)?))
+}
+
+/// `delete`: every version of `(robot, name)`.
+pub async fn delete(client: &DmpClient, robot: &str, name: &str) -> Result<String, DmpctlError> {
+    let n = client.delete(robot, name).await?;
+    Ok(format!("deleted {n} version{} of {robot}/{name}", if n == 1 { "" } else { "s" }))
+}
+
+/// The motion of a `plan` or `stream` command.
+pub fn motion_spec(m: &MotionArgs) -> v1::MotionSpec {
+    v1::MotionSpec {
+        robot_id: m.robot.clone(),
+        primitive: m.name.clone(),
+        version: m.version,
+        start: m.start.as_ref().map(|v| v.0.clone()).unwrap_or_default(),
+        goal: m.goal.as_ref().map(|v| v.0.clone()).unwrap_or_default(),
+        tau: m.tau.unwrap_or(0.0),
+        avoidance: m.avoidance.as_ref().map(|a| avoidance_to_proto(a, m.point_samples.unwrap_or(0))),
+        ignore_scene: m.ignore_scene,
+        ..Default::default()
+    }
+}
+
+/// `plan`: the whole trajectory, written to `DIR/trajectory.csv`.
+pub async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, DmpctlError> {
+    let request = v1::PlanRequest {
+        motion: Some(motion_spec(&a.motion)),
+        dt: a.dt.unwrap_or(0.0),
+        duration: a.duration.unwrap_or(0.0),
+    };
+    let r = client.plan(request).await?;
+    let seg = r.trajectory.ok_or_else(|| DmpctlError::protocol("the plan has no trajectory".into()))?;
+    let mut s = Setpoints::new();
+    s.push(&seg)?;
+    let traj = s.trajectory().ok_or_else(|| DmpctlError::protocol("the plan has no points".into()))?;
+    write_file(&a.out, "trajectory.csv", trajectory_csv(traj).as_bytes())?;
+    let collisions = if r.collisions.is_empty() { "none".to_string() } else { r.collisions.join(", ") };
+    Ok(format!(
+        "{}/{}: {} points over {} s (dt {}), scene version {}, collisions: {collisions}, stalled: {}; wrote {}",
+        a.motion.robot,
+        a.motion.name,
+        traj.len(),
+        traj.t.last().copied().unwrap_or(0.0),
+        seg.dt,
+        seg.scene_version,
+        r.stalled,
+        a.out.join("trajectory.csv").display()
+    ))
+}
+
+/// The status name of a segment.
+pub fn status_name(seg: &v1::Segment) -> &'static str {
+    v1::SegmentStatus::try_from(seg.status).map_or("UNKNOWN", |s| s.as_str_name())
+}
+
+/// The stderr line of a segment.
+pub fn segment_line(seg: &v1::Segment) -> String {
+    let points = if seg.dim == 0 { 0 } else { seg.positions.len() / seg.dim as usize };
+    format!(
+        "segment {} t {:.4} s points {} status {} scene_version {}",
+        seg.sequence,
+        seg.start_time,
+        points,
+        status_name(seg),
+        seg.scene_version
+    )
+}
+
+/// `stream`: executes, prints a line per segment on stderr, writes the setpoints in force to `DIR/trajectory.csv`.
+/// Ctrl-C ends the stream early and still writes what was received.
+pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, DmpctlError> {
+    use tokio_stream::StreamExt;
+    let pacing = if a.realtime { v1::Pacing::Realtime } else { v1::Pacing::AsFastAsRead };
+    let request = v1::ExecuteRequest {
+        motion: Some(motion_spec(&a.motion)),
+        dt: a.dt.unwrap_or(0.0),
+        segment_s: a.segment.unwrap_or(0.0),
+        pacing: pacing as i32,
+        lookahead_s: a.lookahead.unwrap_or(0.0),
+        max_duration_s: a.max_duration.unwrap_or(0.0),
+        integration_step_s: 0.0,
+        integration_tolerance: 0.0,
+    };
+    let mut segments = client.execute(request).await?;
+    let mut s = Setpoints::new();
+    let mut interrupted = false;
+    let ctrl_c = tokio::signal::ctrl_c();
+    tokio::pin!(ctrl_c);
+    loop {
+        tokio::select! {
+            next = segments.next() => match next {
+                None => break,
+                Some(seg) => {
+                    let seg = seg?;
+                    eprintln!("{}", segment_line(&seg));
+                    s.push(&seg)?;
+                }
+            },
+            _ = &mut ctrl_c => {
+                interrupted = true;
+                break;
+            }
+        }
+    }
+    drop(segments);
+    let status = s.last_status().map_or("none", |st| st.as_str_name());
+    let n = s.segments();
+    let traj = s.into_trajectory();
+    if traj.is_empty() {
+        return Err(DmpctlError::protocol(format!("the stream ended after {n} segments without any point")));
+    }
+    write_file(&a.out, "trajectory.csv", trajectory_csv(&traj).as_bytes())?;
+    Ok(format!(
+        "{}/{}: {n} segments{}, {} setpoints in force up to t = {} s, last status {status}; wrote {}",
+        a.motion.robot,
+        a.motion.name,
+        if interrupted { " (interrupted)" } else { "" },
+        traj.len(),
+        traj.t.last().copied().unwrap_or(0.0),
+        a.out.join("trajectory.csv").display()
+    ))
+}
+
+/// Reads the obstacles of `path`: one JSON obstacle, or a file (e.g. a scenario) whose `obstacles` are all taken.
+/// Every obstacle is validated with the engine; `ttl_s` replaces each one's time to live. Errors name the file and
+/// the field.
+pub fn read_obstacles(path: &Path, ttl_s: Option<f64>) -> Result<Vec<JsonObstacle>, DmpctlError> {
+    let text = std::fs::read_to_string(path).map_err(io(path))?;
+    let at_file =
+        |field: String, message: String| DmpctlError::Parse { path: path.to_path_buf(), field, message };
+    let value: Value =
+        serde_json::from_str(&text).map_err(|e| at_file("(document)".into(), e.to_string()))?;
+    let items: Vec<(String, &Value)> = match value.get("obstacles") {
+        Some(Value::Array(list)) => {
+            list.iter().enumerate().map(|(i, v)| (format!("obstacles[{i}]"), v)).collect()
+        }
+        Some(_) => return Err(at_file("obstacles".into(), "must be an array".into())),
+        None => vec![(String::new(), &value)],
+    };
+    if items.is_empty() {
+        return Err(at_file("obstacles".into(), "the file has no obstacles".into()));
+    }
+    let mut out = Vec::with_capacity(items.len());
+    for (prefix, v) in items {
+        let mut o = JsonObstacle::parse(v, &prefix).map_err(|e| at_file(e.field, e.rule))?;
+        if let Some(ttl) = ttl_s {
+            o.ttl_s = ttl;
+        }
+        o.validate().map_err(|e| {
+            let e = if prefix.is_empty() { e } else { e.within(&prefix) };
+            at_file(e.field, e.rule)
+        })?;
+        out.push(o);
+    }
+    Ok(out)
+}
+
+/// Zenoh settings of the command line.
+#[derive(Debug, Clone)]
+pub struct ZenohArgs {
+    /// The cell.
+    pub cell: String,
+    /// Endpoints to connect to.
+    pub connect: Vec<String>,
+}
+
+async fn publisher(z: &ZenohArgs) -> Result<ObstaclePublisher, DmpctlError> {
+    let p = ObstaclePublisher::open(&z.cell, &z.connect, &[]).await?;
+    p.wait_for_subscriber(ZENOH_SUBSCRIBER_WAIT).await?;
+    Ok(p)
+}
+
+/// `scene put FILE`.
+pub async fn scene_put(
+    server: &str,
+    z: &ZenohArgs,
+    file: &Path,
+    via: Via,
+    ttl_s: Option<f64>,
+) -> Result<String, DmpctlError> {
+    let obstacles = read_obstacles(file, ttl_s)?;
+    let mut lines = Vec::with_capacity(obstacles.len());
+    match via {
+        Via::Grpc => {
+            let client = DmpClient::connect(server).await?;
+            for o in &obstacles {
+                let c = client.put_obstacle(o.to_proto()).await?;
+                lines.push(format!("put `{}`: scene version {}", o.spec.id, c.scene_version));
+            }
+        }
+        Via::Zenoh => {
+            let p = publisher(z).await?;
+            for o in &obstacles {
+                p.put_obstacle(o).await?;
+                lines.push(format!("published `{}` on {}", o.spec.id, obstacle_key(&z.cell, &o.spec.id)));
+            }
+            p.close().await?;
+        }
+    }
+    Ok(lines.join("\n"))
+}
+
+/// `scene delete ID`.
+pub async fn scene_delete(server: &str, z: &ZenohArgs, id: &str, via: Via) -> Result<String, DmpctlError> {
+    match via {
+        Via::Grpc => {
+            let c = DmpClient::connect(server).await?.delete_obstacle(id).await?;
+            Ok(if c.changed {
+                format!("deleted `{id}`: scene version {}", c.scene_version)
+            } else {
+                format!("no obstacle `{id}` in the scene (version {})", c.scene_version)
+            })
+        }
+        Via::Zenoh => {
+            let p = publisher(z).await?;
+            p.delete(id).await?;
+            p.close().await?;
+            Ok(format!("published the deletion of {}", obstacle_key(&z.cell, id)))
+        }
+    }
+}
+
+/// `scene list`: the scene as JSON.
+pub async fn scene_list(client: &DmpClient) -> Result<String, DmpctlError> {
+    let s = client.list_obstacles().await?;
+    let obstacles: Vec<Value> = s.obstacles.iter().map(obstacle_to_json).collect();
+    Ok(to_json(&json!({"scene_version": s.scene_version, "obstacles": obstacles})))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn obstacle_files_hold_one_obstacle_or_a_list() {
+        let dir = tempfile::tempdir().unwrap();
+        let one = write(
+            dir.path(),
+            "one.json",
+            r#"{"id": "a", "center": [0, 0], "semi_axes": [1, 1], "ttl_s": 3}"#,
+        );
+        let o = read_obstacles(&one, None).unwrap();
+        assert_eq!((o.len(), o[0].ttl_s), (1, 3.0));
+        assert_eq!(read_obstacles(&one, Some(0.5)).unwrap()[0].ttl_s, 0.5);
+        let scenario = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenarios/paper-one-obstacle/static_point.json");
+        let o = read_obstacles(&scenario, None).unwrap();
+        assert!(!o.is_empty());
+
+        let bad = write(
+            dir.path(),
+            "bad.json",
+            r#"{"obstacles": [{"id": "a", "center": [0, 0], "semi_axes": [1, 1]},
+                              {"id": "b", "center": [0, 0], "semi_axes": [1, 0]}]}"#,
+        );
+        let e = read_obstacles(&bad, None).unwrap_err();
+        assert!(e.is_bad_input() && e.to_string().contains("obstacles[1].semi_axes[1]"), "{e}");
+        let bad =
+            write(dir.path(), "bad2.json", r#"{"id": "a", "center": [0, 0], "semi_axes": [1, 1], "ttl": 1}"#);
+        let e = read_obstacles(&bad, None).unwrap_err();
+        assert!(e.is_bad_input() && e.to_string().contains("ttl"), "{e}");
+        let e = read_obstacles(&one, Some(-1.0)).unwrap_err();
+        assert!(e.to_string().contains("ttl_s"), "{e}");
+        let e = read_obstacles(&dir.path().join("missing.json"), None).unwrap_err();
+        assert!(!e.is_bad_input());
+    }
+
+    #[test]
+    fn segment_lines_name_sequence_status_and_scene_version() {
+        let seg = v1::Segment {
+            sequence: 7,
+            start_time: 0.07,
+            dt: 0.001,
+            dim: 2,
+            positions: vec![0.0; 20],
+            status: v1::SegmentStatus::GoalReached as i32,
+            scene_version: 3,
+            ..Default::default()
+        };
+        assert_eq!(segment_line(&seg), "segment 7 t 0.0700 s points 10 status GOAL_REACHED scene_version 3");
+    }
+}

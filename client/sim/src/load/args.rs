@@ -1,0 +1,255 @@
+//! `dmpctl load`'s flags, their validation (the error names the flag) and what follows from them.
+
+use std::path::PathBuf;
+
+use super::{MAX_DURATION_SLACK_S, MAX_STAGGER_S, layout};
+use crate::error::SimError;
+
+const DEFAULT_ROBOTS: usize = 100;
+const DEFAULT_RATE: f64 = 1000.0;
+const DEFAULT_SEGMENT_MS: f64 = 10.0;
+const DEFAULT_DURATION: f64 = 10.0;
+const DEFAULT_CELL_SIZE: usize = 10;
+const DEFAULT_DIM: usize = 3;
+const DEFAULT_TAU: f64 = 2.0;
+const DEFAULT_PREFIX: &str = "load";
+/// Worker threads of the generator by default.
+pub const DEFAULT_THREADS: usize = 1;
+/// Most connections by default (one per cell up to this, and at least one per 125 robots). In one pair of 20 s
+/// runs of 1,000 robots on two cores, 8 connections instead of 16 took on time from 97.0 to 99.8 % and the server
+/// from 152 to 146 % of a core (BENCHMARKS.md).
+pub const MAX_DEFAULT_CONNECTIONS: usize = 8;
+/// Robots per connection the default aims at most (HTTP/2 servers often allow 100 to 250 concurrent streams).
+pub const STREAMS_PER_CONNECTION: usize = 125;
+/// The largest internal step the load asks the server for by default, milliseconds (its adaptive step; a fixed
+/// RK4 step is at most one segment).
+pub const DEFAULT_INTEGRATION_STEP_MS: f64 = 30.0;
+/// The local error tolerance of the server's adaptive step the load asks for by default. A load robot stays
+/// within 2.2e-4 of the engine's RK4 at 1 ms with it (at either refill cadence), for 2.3 times fewer evaluations
+/// of the field than a fixed 5 ms RK4 step (`accuracy.rs`; with 1e-5 it deviated by up to 9.6e-4).
+pub const DEFAULT_INTEGRATION_TOLERANCE: f64 = 3e-6;
+
+/// `dmpctl load`: the server is `--server` (default http://127.0.0.1:50051), its Zenoh endpoint `--zenoh-connect`
+/// (default tcp/127.0.0.1:7447).
+#[derive(Debug, Clone, PartialEq, clap::Args)]
+pub struct LoadArgs {
+    /// Robots streaming at once.
+    #[arg(long, default_value_t = DEFAULT_ROBOTS, value_name = "N")]
+    pub robots: usize,
+    /// Setpoints per second per robot (dt = 1 / rate).
+    #[arg(long, default_value_t = DEFAULT_RATE, value_name = "HZ", allow_hyphen_values = true)]
+    pub rate: f64,
+    /// Segment length, milliseconds (a whole number of setpoints).
+    #[arg(long = "segment-ms", default_value_t = DEFAULT_SEGMENT_MS, value_name = "MS", allow_hyphen_values = true)]
+    pub segment_ms: f64,
+    /// Length of the measurement, seconds, from the first robot's start to the stops.
+    #[arg(long, default_value_t = DEFAULT_DURATION, value_name = "S", allow_hyphen_values = true)]
+    pub duration: f64,
+    /// Obstacle updates per second over Zenoh, round-robin over the cells (0: none).
+    #[arg(long = "scene-updates", default_value_t = 0.0, value_name = "HZ", allow_hyphen_values = true)]
+    pub scene_updates: f64,
+    /// Robots per cell (each avoids its cell-mates and its cell's five fixed obstacles).
+    #[arg(long = "cell-size", default_value_t = DEFAULT_CELL_SIZE, value_name = "N")]
+    pub cell_size: usize,
+    /// Dimension of the motions: 2 or 3.
+    #[arg(long, default_value_t = DEFAULT_DIM)]
+    pub dim: usize,
+    /// The primitives' time scale, seconds; each robot changes its goal every tau.
+    #[arg(long, default_value_t = DEFAULT_TAU, value_name = "S", allow_hyphen_values = true)]
+    pub tau: f64,
+    /// The server's largest internal step, milliseconds, with the output points interpolated exactly (quintic
+    /// Hermite) in between. With `--integration-tolerance 0` it is a fixed RK4 step (at most one segment; 5 ms
+    /// keeps a load robot within 1e-3 of RK4 at 1 ms, `load/accuracy.rs`); 0 asks for the server's default.
+    #[arg(
+        long = "integration-step-ms",
+        default_value_t = DEFAULT_INTEGRATION_STEP_MS,
+        value_name = "MS",
+        allow_hyphen_values = true
+    )]
+    pub integration_step_ms: f64,
+    /// The server's adaptive internal step: the local error tolerance of its Dormand–Prince 5(4) steps, with
+    /// `--integration-step-ms` the largest step (`load/accuracy.rs` checks the default against RK4 at 1 ms);
+    /// 0 asks for a fixed RK4 step of `--integration-step-ms`. At most 0.01.
+    #[arg(
+        long = "integration-tolerance",
+        default_value_t = DEFAULT_INTEGRATION_TOLERANCE,
+        value_name = "TOL",
+        allow_hyphen_values = true
+    )]
+    pub integration_tolerance: f64,
+    /// HTTP/2 connections [default: one per cell, at most 8, and at least one per 125 robots].
+    #[arg(long, value_name = "N")]
+    pub connections: Option<usize>,
+    /// Worker threads of the generator's runtime. One keeps up with 1,000 robots at 1 kHz in a third of a core
+    /// and leaves the rest of a small machine to the server under test; more spread it over more cores.
+    #[arg(long, default_value_t = DEFAULT_THREADS, value_name = "N")]
+    pub threads: usize,
+    /// Prefix of the cells (`<prefix>-<c>`) and robots (`<prefix>-<c>-<k>`).
+    #[arg(long, default_value = DEFAULT_PREFIX)]
+    pub prefix: String,
+    /// Also write the JSON report to this file.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+}
+
+impl Default for LoadArgs {
+    fn default() -> Self {
+        Self {
+            robots: DEFAULT_ROBOTS,
+            rate: DEFAULT_RATE,
+            segment_ms: DEFAULT_SEGMENT_MS,
+            duration: DEFAULT_DURATION,
+            scene_updates: 0.0,
+            cell_size: DEFAULT_CELL_SIZE,
+            dim: DEFAULT_DIM,
+            tau: DEFAULT_TAU,
+            integration_step_ms: DEFAULT_INTEGRATION_STEP_MS,
+            integration_tolerance: DEFAULT_INTEGRATION_TOLERANCE,
+            connections: None,
+            threads: DEFAULT_THREADS,
+            prefix: DEFAULT_PREFIX.into(),
+            out: None,
+        }
+    }
+}
+
+/// Validated flags and what follows from them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Params {
+    /// The flags.
+    pub args: LoadArgs,
+    /// Cells.
+    pub cells: usize,
+    /// Connections.
+    pub connections: usize,
+    /// Setpoint step, seconds.
+    pub dt: f64,
+    /// Seconds the starts are spread over.
+    pub stagger_s: f64,
+}
+
+fn bad(flag: &str, message: impl Into<String>) -> SimError {
+    SimError::argument(flag, message)
+}
+
+fn in_range(flag: &str, x: f64, lo: f64, hi: f64, unit: &str) -> Result<(), SimError> {
+    if x.is_finite() && x >= lo && x <= hi {
+        Ok(())
+    } else {
+        Err(bad(flag, format!("{x} is not between {lo} and {hi}{unit}")))
+    }
+}
+
+impl LoadArgs {
+    /// Checks every flag (the error names it) and derives the run's parameters.
+    pub fn validate(&self) -> Result<Params, SimError> {
+        in_range("--integration-step-ms", self.integration_step_ms, 0.0, 100.0, "")?;
+        // The server's own bound (it refuses a looser tolerance too).
+        in_range("--integration-tolerance", self.integration_tolerance, 0.0, 1e-2, "")?;
+        if !(1..=100_000).contains(&self.robots) {
+            return Err(bad("--robots", format!("{} is not between 1 and 100000", self.robots)));
+        }
+        in_range("--rate", self.rate, 10.0, 10_000.0, " Hz")?;
+        let dt = 1.0 / self.rate;
+        in_range("--segment-ms", self.segment_ms, 0.0, 10_000.0, " ms")?;
+        let points = self.segment_ms * 1e-3 / dt;
+        if points.round() < 1.0 || (points - points.round()).abs() > 1e-6 {
+            return Err(bad(
+                "--segment-ms",
+                format!(
+                    "{} ms is not a whole number (at least one) of setpoints of {} ms (--rate {})",
+                    self.segment_ms,
+                    dt * 1e3,
+                    self.rate
+                ),
+            ));
+        }
+        in_range("--duration", self.duration, 0.1, 86_400.0, " s")?;
+        let steps = (self.duration + MAX_DURATION_SLACK_S) * self.rate;
+        if steps > dmp::rollout::MAX_ROLLOUT_STEPS as f64 {
+            return Err(bad(
+                "--duration",
+                format!(
+                    "{} s at {} Hz (plus {MAX_DURATION_SLACK_S} s for the stop) exceeds the server's limit of {} steps \
+                     per stream",
+                    self.duration,
+                    self.rate,
+                    dmp::rollout::MAX_ROLLOUT_STEPS
+                ),
+            ));
+        }
+        in_range("--scene-updates", self.scene_updates, 0.0, 1_000.0, " Hz")?;
+        if !(1..=1_000).contains(&self.cell_size) {
+            return Err(bad("--cell-size", format!("{} is not between 1 and 1000", self.cell_size)));
+        }
+        if !matches!(self.dim, 2 | 3) {
+            return Err(bad("--dim", format!("{} is neither 2 nor 3", self.dim)));
+        }
+        in_range("--tau", self.tau, 0.1, 3_600.0, " s")?;
+        if let Some(c) = self.connections
+            && !(1..=1_024).contains(&c)
+        {
+            return Err(bad("--connections", format!("{c} is not between 1 and 1024")));
+        }
+        if !(1..=256).contains(&self.threads) {
+            return Err(bad("--threads", format!("{} is not between 1 and 256", self.threads)));
+        }
+        let p = &self.prefix;
+        if p.is_empty()
+            || p.len() > 64
+            || !p.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '.' | '-'))
+        {
+            return Err(bad("--prefix", format!("`{p}` is not 1 to 64 characters of [A-Za-z0-9_.-]")));
+        }
+        let cells = layout::cell_count(self.robots, self.cell_size);
+        let connections = self.connections.unwrap_or_else(|| {
+            cells.min(MAX_DEFAULT_CONNECTIONS).max(self.robots.div_ceil(STREAMS_PER_CONNECTION))
+        });
+        let stagger_s = (self.duration / 4.0).min(MAX_STAGGER_S);
+        Ok(Params { args: self.clone(), cells, connections, dt, stagger_s })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(f: impl FnOnce(&mut LoadArgs)) -> Result<Params, String> {
+        let mut a = LoadArgs::default();
+        f(&mut a);
+        a.validate().map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn flags_are_validated_with_their_name() {
+        let p = check(|_| {}).unwrap();
+        assert_eq!((p.cells, p.connections, p.dt, p.stagger_s), (10, 8, 0.001, 1.0));
+        let p = check(|a| a.robots = 1000).unwrap();
+        assert_eq!((p.cells, p.connections), (100, 8));
+        let p = check(|a| (a.robots, a.cell_size, a.duration) = (5000, 1000, 2.0)).unwrap();
+        assert_eq!((p.cells, p.connections, p.stagger_s), (5, 40, 0.5));
+        type Edit = fn(&mut LoadArgs);
+        let cases: [(&str, Edit); 13] = [
+            ("--robots", |a| a.robots = 0),
+            ("--rate", |a| a.rate = f64::NAN),
+            ("--rate", |a| a.rate = -5.0),
+            ("--segment-ms", |a| a.segment_ms = 0.5),
+            ("--segment-ms", |a| a.segment_ms = 10.5),
+            ("--duration", |a| a.duration = 0.0),
+            ("--duration", |a| a.duration = 2000.0),
+            ("--scene-updates", |a| a.scene_updates = -1.0),
+            ("--cell-size", |a| a.cell_size = 0),
+            ("--dim", |a| a.dim = 4),
+            ("--tau", |a| a.tau = 0.0),
+            ("--prefix", |a| a.prefix = "a/b".into()),
+            ("--threads", |a| a.threads = 0),
+        ];
+        for (flag, f) in cases {
+            let e = check(f).unwrap_err();
+            assert!(e.starts_with(flag), "{flag}: {e}");
+        }
+        assert!(check(|a| a.connections = Some(0)).unwrap_err().starts_with("--connections"));
+        // 2 ms segments at 500 Hz are one setpoint each.
+        assert!(check(|a| (a.rate, a.segment_ms) = (500.0, 2.0)).is_ok());
+    }
+}

@@ -1,0 +1,335 @@
+//! `dmpctl load`: many robots streaming in real time against a running server, with obstacle updates over Zenoh;
+//! one JSON object of what arrived on time, how late the rest was, how fast scene updates reached the robots, and
+//! what the server used.
+//!
+//! | concept | file |
+//! | --- | --- |
+//! | the run | `mod.rs` |
+//! | the flags and their validation | `args.rs` |
+//! | cells, paths that cross, fixed obstacles, the primitive | `layout.rs` |
+//! | obstacles, primitives and session starts on the server | `setup.rs` |
+//! | one robot's session and the accounting of its setpoints | `robot.rs` |
+//! | a segment as the robots read it (setpoint arrays undecoded) | `dmp_proto::segment_view` (re-exported by `segment_view.rs`) |
+//! | the Zenoh obstacle updater and the update-to-segment latency | `scene.rs` |
+//! | the server's CPU and memory over the run | `monitor.rs` |
+//! | histograms and percentiles | `stats.rs` |
+//! | the JSON report | `report.rs` |
+//!
+//! # The run
+//! 1. Connect (`--connections` HTTP/2 connections; a cell's robots share one), open the Zenoh publisher and wait
+//!    until the server's subscriber is matched (a put before that would be lost).
+//! 2. Set up, at most [`setup::SETUP_CONCURRENCY`] calls at once: five fixed obstacles per cell (gRPC, in the cell) and a
+//!    primitive per robot (primitives are stored per robot).
+//! 3. Start the robots spread over the first [`MAX_STAGGER_S`] seconds (a quarter of the run if shorter): each opens
+//!    a session (real-time pacing, its cell, its footprint), changes its goal every `tau` seconds, and sends a stop
+//!    at the end of the measurement, `--duration` seconds after the first start.
+//! 4. Meanwhile the scene updater moves one obstacle of one cell at a time at `--scene-updates` Hz, and the server
+//!    is sampled once a second.
+//!
+//! Every wait is bounded; a failed setup or stream is counted and reported with its message, never a panic. Due
+//! times are the server's wall clock (`start_unix_s`), arrivals this machine's: run both on one machine (or with
+//! synchronised clocks).
+
+#[cfg(test)]
+mod accuracy;
+pub mod args;
+pub mod layout;
+pub mod monitor;
+pub mod per_second;
+pub mod report;
+pub mod robot;
+pub mod scene;
+pub mod segment_view;
+pub mod setup;
+pub mod stats;
+
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use dmp_client::grpc::DmpClient;
+use dmp_client::zenoh_pub::ObstaclePublisher;
+use tokio::task::JoinSet;
+use tokio::time::Instant;
+
+pub use self::args::{
+    DEFAULT_INTEGRATION_STEP_MS, DEFAULT_INTEGRATION_TOLERANCE, DEFAULT_THREADS, LoadArgs,
+    MAX_DEFAULT_CONNECTIONS, Params, STREAMS_PER_CONNECTION,
+};
+use self::report::{ErrorCount, LATENESS_DEFINITION, LoadReport};
+use self::robot::{Ledger, RobotOutcome, RobotTask, STOP_TIMEOUT, Shared};
+use self::scene::{CellProbe, Updates};
+use self::stats::{Percentiles, SignedPercentiles};
+use crate::error::SimError;
+
+/// The Zenoh endpoint of a server on this machine.
+pub const DEFAULT_ZENOH: &str = "tcp/127.0.0.1:7447";
+/// The robots' starts are spread over this long at most.
+pub const MAX_STAGGER_S: f64 = 1.0;
+/// Longest wait for the server's Zenoh subscriber.
+pub const ZENOH_MATCH_TIMEOUT: Duration = Duration::from_secs(10);
+/// Between the setup and the first start.
+const LEAD_IN: Duration = Duration::from_millis(300);
+/// A stream's `max_duration_s` is the measurement plus this, a bound should the stop get lost.
+pub(crate) const MAX_DURATION_SLACK_S: f64 = 10.0;
+
+/// Messages of what went wrong, counted (shared by every task; rare, so a mutex).
+#[derive(Debug, Default)]
+pub struct Errors {
+    counts: Mutex<BTreeMap<String, (u64, Option<String>)>>,
+}
+
+impl Errors {
+    /// Counts `message`.
+    pub fn add(&self, message: String) {
+        self.add_for(message, None);
+    }
+
+    /// Counts `message`, which happened to `robot`.
+    pub fn add_for(&self, message: String, robot: Option<&str>) {
+        let mut m = self.counts.lock().unwrap_or_else(|e| e.into_inner());
+        let e = m.entry(message).or_insert((0, robot.map(str::to_string)));
+        e.0 += 1;
+    }
+
+    /// Most frequent first.
+    pub fn sorted(&self) -> Vec<ErrorCount> {
+        let m = self.counts.lock().unwrap_or_else(|e| e.into_inner());
+        let mut v: Vec<ErrorCount> = m
+            .iter()
+            .map(|(message, (count, robot))| ErrorCount {
+                message: message.clone(),
+                count: *count,
+                robot: robot.clone(),
+            })
+            .collect();
+        v.sort_by(|a, b| b.count.cmp(&a.count).then_with(|| a.message.cmp(&b.message)));
+        v
+    }
+}
+
+/// Wall clock, Unix seconds.
+pub fn unix_now() -> f64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64())
+}
+
+/// Wall clock, Unix nanoseconds.
+pub fn unix_now_ns() -> u64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
+}
+
+/// Runs the load against the server at `server` (gRPC) and `zenoh_connect` (its Zenoh endpoints; empty:
+/// [`DEFAULT_ZENOH`]). Fails on bad flags, when the server cannot be reached, or when nothing could be set up;
+/// failed streams are in the report.
+pub async fn run(args: &LoadArgs, server: &str, zenoh_connect: &[String]) -> Result<LoadReport, SimError> {
+    let p = args.validate()?;
+    let a = &p.args;
+    let setup_started = Instant::now();
+    let mut clients = Vec::with_capacity(p.connections);
+    for _ in 0..p.connections {
+        clients.push(DmpClient::connect(server).await?);
+    }
+    let cells: Vec<String> = (0..p.cells).map(|c| layout::cell_name(&a.prefix, c)).collect();
+    let robots = layout::robots(a.robots, a.cell_size, a.dim, &a.prefix);
+    eprintln!(
+        "dmpctl load: {} robots in {} cells over {} connections, {} Hz, {} ms segments, {} s",
+        a.robots, p.cells, p.connections, a.rate, a.segment_ms, a.duration
+    );
+    let publisher = if a.scene_updates > 0.0 {
+        let default = [DEFAULT_ZENOH.to_string()];
+        let connect = if zenoh_connect.is_empty() { &default[..] } else { zenoh_connect };
+        let publisher = ObstaclePublisher::open(&cells[0], connect, &[]).await?;
+        publisher.wait_for_subscriber(ZENOH_MATCH_TIMEOUT).await?;
+        Some(publisher)
+    } else {
+        None
+    };
+    let setup_failed = setup::set_up(&p, &clients, &cells, &robots).await?;
+    let setup_s = setup_started.elapsed().as_secs_f64();
+
+    // The schedule, on both clocks.
+    let begin = Instant::now() + LEAD_IN;
+    let unix_of = {
+        let (i0, u0) = (Instant::now(), unix_now());
+        move |i: Instant| u0 + i.saturating_duration_since(i0).as_secs_f64()
+    };
+    let end = begin + Duration::from_secs_f64(a.duration);
+    let end_unix = unix_of(end);
+    let errors = Arc::new(Errors::default());
+    let seconds = (p.stagger_s + a.duration).ceil() as usize + 1;
+    let shared = Arc::new(Shared::new(unix_of(begin), seconds));
+    let probes: Vec<Arc<CellProbe>> = (0..p.cells).map(|_| Arc::new(CellProbe::default())).collect();
+
+    let mut tasks = JoinSet::new();
+    let mut outcomes: Vec<RobotOutcome> = Vec::with_capacity(robots.len());
+    for (i, (r, failed)) in robots.iter().zip(setup_failed).enumerate() {
+        let start_at = begin + Duration::from_secs_f64(p.stagger_s * i as f64 / robots.len() as f64);
+        let task = RobotTask {
+            plan: r.clone(),
+            start: setup::start_request(&p, r, &cells[r.cell]),
+            start_at,
+            end_at: end,
+            start_unix: unix_of(start_at),
+            end_unix,
+            rate: a.rate,
+            retarget_every: Duration::from_secs_f64(a.tau),
+        };
+        if let Some(e) = failed {
+            // Its setpoints are expected all the same, and none is on time.
+            let (expected, on_time) = Ledger::new(end_unix).finish(task.start_unix, a.rate);
+            errors.add_for(e.clone(), Some(&r.id));
+            outcomes.push(RobotOutcome {
+                id: r.id.clone(),
+                expected,
+                on_time,
+                error: Some(e),
+                ..Default::default()
+            });
+            continue;
+        }
+        let client = clients[r.cell % clients.len()].clone();
+        let (probe, shared) = (probes[r.cell].clone(), shared.clone());
+        tasks.spawn(robot::run_robot(client, task, probe, shared));
+    }
+
+    let monitor = {
+        let (client, errors) = (clients[0].clone(), errors.clone());
+        tokio::spawn(async move { monitor::watch(&client, begin, end, &errors).await })
+    };
+    let updater = publisher.map(|publisher| {
+        let (errors, probes) = (errors.clone(), probes.clone());
+        let listing: Vec<DmpClient> = cells
+            .iter()
+            .enumerate()
+            .map(|(c, cell)| clients[c % clients.len()].clone().with_cell(cell.clone()))
+            .collect();
+        let updates = Updates {
+            hz: a.scene_updates,
+            cells: cells.clone(),
+            dim: a.dim,
+            // Once every robot streams, until shortly before the stops.
+            begin: begin + Duration::from_secs_f64(p.stagger_s + 0.2),
+            end: end - Duration::from_millis(250),
+        };
+        tokio::spawn(async move {
+            let settle = end.saturating_duration_since(updates.end);
+            let out = scene::run_updater(&publisher, &listing, &probes, &errors, &updates, settle).await;
+            if let Err(e) = publisher.close().await {
+                errors.add(format!("closing the Zenoh publisher: {e}"));
+            }
+            out
+        })
+    });
+
+    let deadline = end + STOP_TIMEOUT + robot::STALL_TIMEOUT + Duration::from_secs(5);
+    loop {
+        match tokio::time::timeout_at(deadline, tasks.join_next()).await {
+            Ok(Some(Ok(o))) => {
+                if let Some(e) = &o.error {
+                    errors.add_for(e.clone(), Some(&o.id));
+                }
+                outcomes.push(o);
+            }
+            Ok(Some(Err(e))) => errors.add(format!("a robot task failed: {e}")),
+            Ok(None) => break,
+            Err(_) => {
+                errors.add(format!("{} robots still running past the deadline: aborted", tasks.len()));
+                tasks.abort_all();
+                break;
+            }
+        }
+    }
+    let watched = monitor.await.unwrap_or_default();
+    let updated = match updater {
+        Some(u) => u.await.unwrap_or_default(),
+        None => Default::default(),
+    };
+
+    let sum = |f: fn(&RobotOutcome) -> u64| outcomes.iter().map(f).sum::<u64>();
+    let expected = sum(|o| o.expected);
+    let on_time = sum(|o| o.on_time);
+    let rss = watched.rss_mib();
+    let report = LoadReport {
+        robots: a.robots,
+        cells: p.cells,
+        cell_size: a.cell_size,
+        rate_hz: a.rate,
+        segment_ms: a.segment_ms,
+        duration_s: a.duration,
+        scene_updates_hz: a.scene_updates,
+        dim: a.dim,
+        tau_s: a.tau,
+        connections: p.connections,
+        stagger_s: p.stagger_s,
+        setup_s: (setup_s * 1e3).round() / 1e3,
+        streams_started: sum(|o| o.started as u64),
+        streams_failed: outcomes.iter().filter(|o| o.error.is_some()).count() as u64
+            + (a.robots - outcomes.len().min(a.robots)) as u64,
+        setpoints_expected: expected,
+        setpoints_on_time: on_time,
+        setpoints_on_time_percent: if expected > 0 {
+            (1e4 * on_time as f64 / expected as f64).floor() / 1e2
+        } else {
+            0.0
+        },
+        segments: sum(|o| o.segments),
+        late_segments: sum(|o| o.late_segments),
+        late_first_segments: sum(|o| o.late_first_segment as u64),
+        superseding_segments: sum(|o| o.superseding_segments),
+        stalled_segments: sum(|o| o.stalled_segments),
+        collision_segments: sum(|o| o.collision_segments),
+        retargets: sum(|o| o.retargets),
+        lateness_definition: LATENESS_DEFINITION,
+        lateness_ms: Percentiles::clamped(&shared.lateness),
+        superseding_lateness_ms: Percentiles::clamped(&shared.superseding_lateness),
+        late_segments_per_second: shared.late_per_second.counts(),
+        arrival_minus_due_ms: SignedPercentiles::of(&shared.lateness),
+        scene_updates_sent: updated.sent,
+        scene_updates_unanswered: updated.unanswered,
+        scene_update_latency_ms: Percentiles::of(&shared.scene_latency),
+        server_cpu_percent: watched.cpu_percent(),
+        server_rss_mib: watched.end.as_ref().map(|s| monitor::mib(s.rss_bytes)),
+        server_rss_mib_start: watched.begin.as_ref().map(|s| monitor::mib(s.rss_bytes)),
+        server_rss_mib_max: rss.iter().copied().reduce(f64::max),
+        server_rss_mib_series: rss,
+        server_open_streams_max: watched.samples.iter().map(|s| s.open_streams).max(),
+        server_segments_sent: watched
+            .begin
+            .as_ref()
+            .zip(watched.end.as_ref())
+            .map(|(b, e)| e.segments_sent.saturating_sub(b.segments_sent)),
+        generator_cpu_percent: watched.own_cpu_percent(),
+        errors: errors.sorted(),
+    };
+    if let Some(path) = &a.out {
+        let json = serde_json::to_string_pretty(&report).unwrap_or_default();
+        std::fs::write(path, json + "\n").map_err(|source| SimError::Io { path: path.clone(), source })?;
+    }
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn bad_flags_fail_before_connecting_and_a_missing_server_fails_fast() {
+        let bad = LoadArgs { dim: 7, ..Default::default() };
+        let e = run(&bad, "http://127.0.0.1:1", &[]).await.unwrap_err();
+        assert!(e.is_bad_input() && e.to_string().starts_with("--dim"), "{e}");
+        let e = run(&LoadArgs::default(), "http://127.0.0.1:1", &[]).await.unwrap_err();
+        assert!(matches!(e, SimError::Client(dmp_client::ClientError::Connect { .. })), "{e}");
+    }
+
+    #[test]
+    fn errors_are_counted_most_frequent_first() {
+        let e = Errors::default();
+        e.add_for("b".into(), Some("r1"));
+        e.add_for("b".into(), Some("r2"));
+        e.add("a".into());
+        let s = e.sorted();
+        assert_eq!(s.len(), 2);
+        assert_eq!((s[0].message.as_str(), s[0].count, s[0].robot.as_deref()), ("b", 2, Some("r1")));
+        assert_eq!((s[1].message.as_str(), s[1].count, s[1].robot.as_deref()), ("a", 1, None));
+    }
+}

@@ -1,0 +1,249 @@
+//! Simulated robots that drive the real server exactly as real robots and perception nodes would: through gRPC
+//! (Execute, ExecuteGroup) and Zenoh only. Each executes its segments at its control rate on a simulated clock (or
+//! the wall clock), checks that its setpoints are continuous and on time, measures its clearance to the obstacles'
+//! true shapes with parry3d-f64, and writes `report.json` and figures in the paper's style.
+//!
+//! | concept | file |
+//! | --- | --- |
+//! | the command line's arguments, the entry point, shared helpers | `mod.rs` |
+//! | a robot's controller: supersession, clock, lateness, continuity | `robot.rs` |
+//! | true shapes and distances (parry3d-f64) | `world.rs` |
+//! | `report.json` and figures | `report.rs` |
+//! | clearance along a whole run, robots side by side, closest approach | `clearance.rs` |
+//! | the Panda pick and place | `panda.rs` |
+//! | two da Vinci PSMs: ring transfer with a handover, one 6-D phase | `psm.rs` |
+//! | the youBot with a perception node over Zenoh | `perception.rs` |
+//! | three youBots on one phase, walls and cubes | `youbots.rs` |
+//! | fitting an ellipse to a point cloud | `ellipse_fit.rs` |
+//! | synthetic demonstrations: constant-speed line, minimum jerk | `demonstration.rs` |
+
+pub mod clearance;
+pub mod demonstration;
+pub mod ellipse_fit;
+pub mod panda;
+pub mod perception;
+pub mod psm;
+pub mod report;
+pub mod robot;
+pub mod world;
+pub mod youbots;
+
+use std::future::Future;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use dmp::Trajectory;
+use dmp_client::grpc::DmpClient;
+use dmp_proto::v1;
+use tokio_stream::StreamExt;
+
+use self::robot::{Controller, Executed};
+use crate::error::SimError;
+
+pub use self::report::{RobotReport, SimReport};
+
+/// A still superquadric obstacle (no rotation) inflated by `margin`, as the scene takes it.
+pub fn superquadric(
+    id: &str,
+    center: &[f64],
+    semi_axes: Vec<f64>,
+    exponents: Vec<f64>,
+    margin: f64,
+) -> dmp_proto::obstacle_json::JsonObstacle {
+    let spec = dmp::scenario::ObstacleSpec {
+        id: id.into(),
+        center: center.to_vec(),
+        semi_axes,
+        exponents: Some(exponents),
+        rotation: None,
+        velocity: None,
+        nested: None,
+    };
+    dmp_proto::obstacle_json::JsonObstacle { spec, margin, ttl_s: 0.0 }
+}
+
+/// The simulations' learning parameters: `N = 50` basis functions, `alpha = 4`, stiffness `k` (the paper's 3050 for
+/// the arms) and critical damping `D = 2 sqrt(K)` (the server's default).
+pub fn learn_parameters(k: f64) -> v1::LearnParameters {
+    v1::LearnParameters { n_basis: 50, k: vec![k], d: Vec::new(), alpha: 4.0 }
+}
+
+/// Longest wait for any one answer of the server (a segment, a put).
+pub const STEP_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// The simulations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SimName {
+    /// Franka Emika Panda: pick and place past a peg, 3-D at 1 kHz.
+    Panda,
+    /// One youBot; a perception node publishes an unknown box over Zenoh.
+    YoubotPerception,
+    /// Three youBots on one 2-D phase in a walled room with cubes, each a moving obstacle for the others.
+    Youbots,
+    /// Two da Vinci PSMs on one 6-D phase: pick, hand over and place a ring among pegs, 3-D each at 1 kHz.
+    Psm,
+}
+
+/// `dmpctl sim NAME [--server URL] [--realtime] --out DIR`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SimArgs {
+    /// Which simulation.
+    #[arg(value_enum)]
+    pub name: SimName,
+    /// Pace the robots on the wall clock (the server streams in real time) instead of a simulated clock.
+    #[arg(long)]
+    pub realtime: bool,
+    /// Folder of `report.json` and the figures.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// How a simulation runs.
+#[derive(Debug, Clone)]
+pub struct SimOptions {
+    /// Wall-clock pacing.
+    pub realtime: bool,
+    /// Output folder (created).
+    pub out: PathBuf,
+    /// Zenoh endpoints of the server (perception nodes connect there); empty: scouting.
+    pub zenoh_connect: Vec<String>,
+    /// The server's cell.
+    pub cell: String,
+}
+
+/// Runs the simulation of `args` (the `dmpctl sim` command) and writes its report; fails when the simulation
+/// could not run. A run that misses a goal or collides still returns its report (see [`SimReport::problems`]).
+pub async fn run_sim(
+    args: &SimArgs,
+    server: &str,
+    cell: &str,
+    zenoh_connect: &[String],
+) -> Result<SimReport, SimError> {
+    let options = SimOptions {
+        realtime: args.realtime,
+        out: args.out.clone(),
+        zenoh_connect: zenoh_connect.to_vec(),
+        cell: cell.to_string(),
+    };
+    run(server, args.name, &options).await
+}
+
+/// Runs one simulation against the server at `url`.
+pub async fn run(url: &str, name: SimName, options: &SimOptions) -> Result<SimReport, SimError> {
+    let client = DmpClient::connect(url).await?;
+    std::fs::create_dir_all(&options.out)
+        .map_err(|source| SimError::Io { path: options.out.clone(), source })?;
+    let report = match name {
+        SimName::Panda => panda::run(&client, options).await?,
+        SimName::YoubotPerception => perception::run(&client, options).await?,
+        SimName::Youbots => youbots::run(&client, options).await?,
+        SimName::Psm => psm::run(&client, options).await?,
+    };
+    report.write(&options.out)?;
+    Ok(report)
+}
+
+/// `f`, failing after [`STEP_TIMEOUT`].
+pub async fn within<F: Future>(what: &str, f: F) -> Result<F::Output, SimError> {
+    tokio::time::timeout(STEP_TIMEOUT, f)
+        .await
+        .map_err(|_| SimError::protocol(format!("timed out after {STEP_TIMEOUT:?}: {what}")))
+}
+
+/// The pacing of `options`.
+pub fn pacing(realtime: bool) -> i32 {
+    if realtime { v1::Pacing::Realtime as i32 } else { v1::Pacing::AsFastAsRead as i32 }
+}
+
+/// Streams one robot's execution to its end through a [`Controller`]; `on_segment` sees the controller after each
+/// segment (e.g. to trigger perception events at the robot's time).
+pub async fn execute(
+    client: &DmpClient,
+    request: v1::ExecuteRequest,
+    realtime: bool,
+    mut on_segment: impl FnMut(&Controller),
+) -> Result<Executed, SimError> {
+    let id = request.motion.as_ref().map(|m| m.robot_id.clone()).unwrap_or_default();
+    let mut stream = within("execute", client.execute(request)).await??;
+    let mut robot = Controller::new(id, realtime);
+    while let Some(seg) = within("a segment", stream.next()).await? {
+        robot.push(&seg?)?;
+        on_segment(&robot);
+    }
+    Ok(robot.finish())
+}
+
+/// The obstacle-free trajectory of a motion (the server's plan, no avoidance, no scene).
+pub async fn free_plan(client: &DmpClient, motion: &v1::MotionSpec, dt: f64) -> Result<Trajectory, SimError> {
+    let mut m = motion.clone();
+    m.avoidance = Some(avoidance(Method::None));
+    m.ignore_scene = true;
+    m.extra_obstacles.clear();
+    let plan = within("plan", client.plan(v1::PlanRequest { motion: Some(m), dt, duration: 0.0 })).await??;
+    let seg = plan.trajectory.ok_or_else(|| SimError::protocol("the plan has no trajectory".into()))?;
+    Ok(dmp_client::setpoints::segments_to_trajectory(std::iter::once(&seg))?)
+}
+
+/// The avoidance methods the simulations use.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Method {
+    /// No repulsion.
+    None,
+    /// Static volumetric potential (`eq:static_potential_volume`).
+    Static {
+        /// Gain A.
+        a: f64,
+        /// Decay eta.
+        eta: f64,
+    },
+    /// Dynamic volumetric potential (`eq:dynamic_potential_volume`).
+    Dynamic {
+        /// Gain lambda.
+        lambda: f64,
+        /// Exponent beta.
+        beta: f64,
+        /// Exponent eta.
+        eta: f64,
+    },
+}
+
+/// The message of a method.
+pub fn avoidance(m: Method) -> v1::Avoidance {
+    use v1::avoidance as a;
+    let method = match m {
+        Method::None => a::Method::None(a::None {}),
+        Method::Static { a, eta } => a::Method::StaticVolumetric(a::StaticVolumetric { a, eta }),
+        Method::Dynamic { lambda, beta, eta } => {
+            a::Method::DynamicVolumetric(a::DynamicVolumetric { lambda, beta, eta })
+        }
+    };
+    v1::Avoidance { method: Some(method), ..Default::default() }
+}
+
+/// Streams a group's execution to its end, one [`Controller`] per member (in request order).
+pub async fn execute_group(
+    client: &DmpClient,
+    request: v1::ExecuteGroupRequest,
+    realtime: bool,
+) -> Result<Vec<Executed>, SimError> {
+    let mut robots: Vec<Controller> = request
+        .members
+        .iter()
+        .map(|m| Controller::new(m.motion.as_ref().map(|m| m.robot_id.clone()).unwrap_or_default(), realtime))
+        .collect();
+    let mut stream = within("execute group", client.execute_group(request)).await??;
+    while let Some(group) = within("a group segment", stream.next()).await? {
+        let group = group?;
+        if group.segments.len() != robots.len() {
+            return Err(SimError::protocol(format!(
+                "a group step has {} segments for {} members",
+                group.segments.len(),
+                robots.len()
+            )));
+        }
+        for (robot, seg) in robots.iter_mut().zip(&group.segments) {
+            robot.push(seg)?;
+        }
+    }
+    Ok(robots.into_iter().map(Controller::finish).collect())
+}

@@ -1,0 +1,478 @@
+//! The da Vinci peg transfer (the paper's section on the da Vinci): two patient-side manipulators, PSM1 on the right
+//! and PSM2 on the left, on one shared phase (one 6-D DMP, 3-D per arm, 1 kHz like the real arms' controllers).
+//! PSM1 picks the ring and brings it to the centre of the board, hands it over, and PSM2 places it on the target
+//! peg. The pegs are obstacles, and each arm is a moving obstacle for the other.
+//!
+//! # Geometry (metres, a frame common to both arms, `x` right, `y` away from the camera, `z` up)
+//! - Board: a box of centre `(0, 0, -0.003)` and half-extents `(0.08, 0.06, 0.003)` (top at `z = 0`).
+//! - Pegs: cylinders of radius [`PEG_RADIUS`] and height `2` [`PEG_HALF_HEIGHT`] (top at `z = 0.03`) standing
+//!   on the board: `peg-1` at `(0.0264, -0.0141)`, on PSM1's way from the ring to the centre; `peg-2` at
+//!   `(-0.0073, -0.0195)`, on PSM2's way from the centre to the target; `target-peg` at `(-0.02, -0.04)`.
+//!   `peg-1` and `peg-2` sit 3 mm beside the straight lines, so that the way around is not a tie.
+//! - Ring: outer radius [`RING_RADIUS`], inner radius [`RING_INNER_RADIUS`], on a stand, grasped at its centre
+//!   `(0.05, -0.03, 0.015)`.
+//! - Each arm's controlled point is the centre of its jaws; the jaws are a vertical cylinder of radius
+//!   [`JAW_RADIUS`] and length `2` [`JAW_HALF_LENGTH`] (the instruments keep their orientation, as in the paper).
+//! - Handover: the centre [`CENTRE`]; PSM1 holds the ring [`HANDOVER_OFFSET`] in front of it, PSM2 grasps it the
+//!   same distance behind (the jaws then have 4 mm between them).
+//!
+//! # Stages (one `ExecuteGroup` each, PSM1 first; each starts where the previous one ended)
+//! 1. `move-to-ring`: PSM1 from its home `(0.07, 0.02, 0.05)` to the ring; PSM2 from its home
+//!    `(-0.06, 0.04, 0.05)` to a standby point `(-0.02, 0.025, 0.03)` behind the centre, on its side.
+//! 2. `transfer`: PSM1 carries the ring to the handover point in front of the centre, past `peg-1`; PSM2 approaches
+//!    the handover point behind the centre. At the end both are at rest there: the handover (PSM2 closes its
+//!    jaws, PSM1 opens its own) happens at that time.
+//! 3. `move-to-peg`: PSM2 carries the ring past `peg-2` to [`PLACE_HEIGHT`] above the target peg (the ring's hole
+//!    centred on the peg: released, it drops onto it) while PSM1 retreats to `(0.02, 0.045, 0.05)`, behind and
+//!    above. The two cross each other's way (PSM1 goes back, PSM2 forward, from 9 mm apart): without the
+//!    robot term their jaws collide.
+//!
+//! # Primitives
+//! Every arm's motion of every stage is learned with `learn` from a human-like demonstration between the
+//! nominal start and goal: a minimum-jerk curve (Flash and Hogan) with a lift of [`LIFT`] (`16 u^2 (1 - u)^2`) in
+//! `z`, [`TAU`] long, sampled at 100 Hz; `N = 50`, `K = 3050`, `D = 2 sqrt(K)`, `alpha = 4`.
+//!
+//! # The planner's view
+//! Pegs are superquadrics of exponents `(1, 1, 2)` through the cylinders' rims, the board a rounded box of
+//! exponent 2 through its corners (as in `super::panda`), with the static potential (`A =` [`STATIC_A`], `eta = 2`;
+//! the paper found that the dynamic one did not converge on the da Vinci). They are inflated by the jaws' half
+//! length [`JAW_HALF_LENGTH`] in `move-to-ring`, and by the ring's radius while a ring is carried; one inflation
+//! holds for the whole group, so the largest one. The target peg is left out of `move-to-peg` (the ring goes
+//! onto it). Each arm's footprint, which the other arm's controlled point avoids with the dynamic potential
+//! (`lambda =` [`ROBOT_LAMBDA`], `beta = 2`, `eta =` [`ROBOT_ETA`]: it acts only while the arms close in, so
+//! that the handover still converges), is the smallest ellipsoid around the set of positions where the two jaws
+//! touch (a cylinder of twice the jaw's radius and length): semi-axes `sqrt(3/2) 2 r` and `sqrt(3) 2 h`.
+//!
+//! The gains are small because the scene is: `grad C` grows as the shapes shrink. The dynamic term brakes like
+//! a damping of about `lambda eta C^-(eta + 1) |grad C| / tau`, which near a 6 mm footprint reaches RK4's
+//! stability limit at 1 kHz for `lambda` of a few units: the setpoints then break the continuity bounds.
+//!
+//! # The true world
+//! Clearance is measured with parry against the true board and cylinders: of the jaws, or while carrying of the
+//! ring (a ball of [`RING_RADIUS`] around the controlled point, which also holds the jaws); between the arms, of
+//! the two jaws (at the handover the ring touches both on purpose). Each stage is also run without any avoidance
+//! (the free plan of the figures) and without the robot term only; their true clearances are reported as
+//! metrics (`<arm>/<stage>/free_min_clearance_m/<id>`, and `<arm>/<stage>/no_robot_term_min_clearance_m/<other
+//! arm>`): they show what avoidance prevented.
+
+use dmp::{Agent, Shape, Superquadric, Trajectory};
+use dmp_client::convert::JsonObstacle;
+use dmp_client::grpc::DmpClient;
+use dmp_proto::v1;
+
+use super::clearance::{closest_approach, distance, side_by_side};
+use super::demonstration::min_jerk;
+use super::report::{CONTACT_M, Figure, Other, RobotReport, SimReport, measure, position, write_figure};
+use super::robot::Executed;
+use super::world::{Body, Solid, robot_body};
+use super::{Method, SimOptions, avoidance, execute_group, pacing, superquadric, within};
+use crate::error::SimError;
+
+/// Control period: 1 kHz.
+pub const DT: f64 = 1e-3;
+/// Duration of every demonstration (and time scale of every stage), seconds.
+pub const TAU: f64 = 1.5;
+/// Radius of the jaws' cylinder.
+pub const JAW_RADIUS: f64 = 0.0025;
+/// Half length of the jaws' cylinder (1 cm jaws).
+pub const JAW_HALF_LENGTH: f64 = 0.005;
+/// Outer radius of the ring.
+pub const RING_RADIUS: f64 = 0.007;
+/// Inner radius of the ring (its hole).
+pub const RING_INNER_RADIUS: f64 = 0.004;
+/// Radius of the pegs.
+pub const PEG_RADIUS: f64 = 0.002;
+/// Half height of the pegs.
+pub const PEG_HALF_HEIGHT: f64 = 0.015;
+/// Height of the lift of the demonstrations.
+pub const LIFT: f64 = 0.006;
+/// The centre of the board, where the ring changes hands.
+pub const CENTRE: [f64; 3] = [0.0, 0.0, 0.02];
+/// Distance of each arm's jaws from [`CENTRE`] at the handover (PSM1 in front, PSM2 behind).
+pub const HANDOVER_OFFSET: f64 = 0.0045;
+/// Height of the ring's centre above the target peg's top when it is released.
+pub const PLACE_HEIGHT: f64 = 0.009;
+/// Gain `A` of the static potential of the pegs and the board.
+pub const STATIC_A: f64 = 1.0;
+/// Gain `lambda` of the dynamic potential between the arms.
+pub const ROBOT_LAMBDA: f64 = 0.5;
+/// Exponent `eta` of the dynamic potential between the arms.
+pub const ROBOT_ETA: f64 = 2.0;
+
+const PSM1: &str = "psm1";
+const PSM2: &str = "psm2";
+const HOME1: [f64; 3] = [0.07, 0.02, 0.05];
+const HOME2: [f64; 3] = [-0.06, 0.04, 0.05];
+const STANDBY2: [f64; 3] = [-0.02, 0.025, 0.03];
+const RING: [f64; 3] = [0.05, -0.03, 0.015];
+const RETREAT1: [f64; 3] = [0.02, 0.045, 0.05];
+const BOARD_C: [f64; 3] = [0.0, 0.0, -0.003];
+const BOARD_H: [f64; 3] = [0.08, 0.06, 0.003];
+const PEG_1: [f64; 2] = [0.0264, -0.0141];
+const PEG_2: [f64; 2] = [-0.0073, -0.0195];
+const TARGET: [f64; 2] = [-0.02, -0.04];
+
+fn handover(arm: usize) -> Vec<f64> {
+    let dy = if arm == 0 { -HANDOVER_OFFSET } else { HANDOVER_OFFSET };
+    vec![CENTRE[0], CENTRE[1] + dy, CENTRE[2]]
+}
+
+fn place() -> Vec<f64> {
+    vec![TARGET[0], TARGET[1], 2.0 * PEG_HALF_HEIGHT + PLACE_HEIGHT]
+}
+
+fn peg_center(xy: [f64; 2]) -> [f64; 3] {
+    [xy[0], xy[1], PEG_HALF_HEIGHT]
+}
+
+const PEGS: [(&str, [f64; 2]); 3] = [("peg-1", PEG_1), ("peg-2", PEG_2), ("target-peg", TARGET)];
+
+/// A peg's superquadric of exponents (1, 1, 2) through the cylinder's rims (see `super::panda`).
+fn peg(id: &str, xy: [f64; 2], margin: f64) -> JsonObstacle {
+    let a = PEG_RADIUS / 0.8f64.sqrt();
+    let c = PEG_HALF_HEIGHT / 0.2f64.powf(0.25);
+    superquadric(id, &peg_center(xy), vec![a, a, c], vec![1.0, 1.0, 2.0], margin)
+}
+
+fn board(margin: f64) -> JsonObstacle {
+    let k = 3f64.powf(0.25);
+    superquadric("board", &BOARD_C, BOARD_H.iter().map(|h| h * k).collect(), vec![2.0; 3], margin)
+}
+
+/// The planner's obstacles of a stage: the board and the pegs but `skip`, inflated by `margin`.
+fn planned(margin: f64, skip: Option<&str>) -> Vec<JsonObstacle> {
+    let mut v = vec![board(margin)];
+    v.extend(PEGS.iter().filter(|(id, _)| Some(*id) != skip).map(|(id, xy)| peg(id, *xy, margin)));
+    v
+}
+
+/// The true shapes.
+fn world() -> Vec<Body> {
+    let mut v = vec![Body::new("board", Solid::Cuboid { half: BOARD_H }, &BOARD_C)];
+    for (id, xy) in PEGS {
+        let solid = Solid::CylinderZ { radius: PEG_RADIUS, half_height: PEG_HALF_HEIGHT };
+        v.push(Body::new(id, solid, &peg_center(xy)));
+    }
+    v
+}
+
+fn jaws(id: &str) -> Body {
+    robot_body(id, Solid::CylinderZ { radius: JAW_RADIUS, half_height: JAW_HALF_LENGTH })
+}
+
+/// Semi-axes of each arm's footprint (module documentation).
+pub fn footprint_semi_axes() -> [f64; 3] {
+    let (r, h) = (2.0 * JAW_RADIUS, 2.0 * JAW_HALF_LENGTH);
+    [1.5f64.sqrt() * r, 1.5f64.sqrt() * r, 3f64.sqrt() * h]
+}
+
+fn footprint() -> v1::Superquadric {
+    v1::Superquadric { semi_axes: footprint_semi_axes().to_vec(), exponents: vec![1.0; 3] }
+}
+
+/// The demonstration of a motion from `start` to `goal`: minimum jerk with a lift of [`LIFT`], [`TAU`] long, at
+/// 100 Hz.
+pub fn demonstration(start: &[f64], goal: &[f64]) -> (Vec<f64>, Vec<Vec<f64>>) {
+    min_jerk(start, goal, TAU, LIFT, 0.01)
+}
+
+/// One arm's part of a stage.
+#[derive(Debug, Clone)]
+struct Leg {
+    robot: &'static str,
+    /// Nominal start (of the demonstration).
+    start: Vec<f64>,
+    goal: Vec<f64>,
+    carrying: bool,
+}
+
+#[derive(Debug, Clone)]
+struct Stage {
+    key: &'static str,
+    title: &'static str,
+    legs: [Leg; 2],
+    obstacles: Vec<JsonObstacle>,
+}
+
+fn stages() -> Vec<Stage> {
+    let leg =
+        |robot, start: &[f64], goal: Vec<f64>, carrying| Leg { robot, start: start.to_vec(), goal, carrying };
+    vec![
+        Stage {
+            key: "move-to-ring",
+            title: "da Vinci: move to ring (PSM1), PSM2 to standby",
+            legs: [leg(PSM1, &HOME1, RING.to_vec(), false), leg(PSM2, &HOME2, STANDBY2.to_vec(), false)],
+            obstacles: planned(JAW_HALF_LENGTH, None),
+        },
+        Stage {
+            key: "transfer",
+            title: "da Vinci: transfer between PSMs",
+            legs: [leg(PSM1, &RING, handover(0), true), leg(PSM2, &STANDBY2, handover(1), false)],
+            obstacles: planned(RING_RADIUS, None),
+        },
+        Stage {
+            key: "move-to-peg",
+            title: "da Vinci: move to peg (PSM2), PSM1 retreats",
+            legs: [leg(PSM1, &handover(0), RETREAT1.to_vec(), false), leg(PSM2, &handover(1), place(), true)],
+            obstacles: planned(RING_RADIUS, Some("target-peg")),
+        },
+    ]
+}
+
+/// What a run of a stage avoids.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Avoid {
+    /// Nothing (the free plan).
+    Nothing,
+    /// The obstacles, not the other arm.
+    Obstacles,
+    /// The obstacles and the other arm.
+    Everything,
+}
+
+impl Stage {
+    /// The group request, the arms starting at `starts`.
+    fn request(&self, starts: &[Vec<f64>; 2], avoid: Avoid, realtime: bool) -> v1::ExecuteGroupRequest {
+        let free = avoid == Avoid::Nothing;
+        let obstacles = if free { Method::None } else { Method::Static { a: STATIC_A, eta: 2.0 } };
+        let robots = if avoid == Avoid::Everything {
+            Method::Dynamic { lambda: ROBOT_LAMBDA, beta: 2.0, eta: ROBOT_ETA }
+        } else {
+            Method::None
+        };
+        let members = self
+            .legs
+            .iter()
+            .zip(starts)
+            .map(|(leg, start)| v1::GroupMember {
+                motion: Some(v1::MotionSpec {
+                    robot_id: leg.robot.into(),
+                    primitive: self.key.into(),
+                    start: start.clone(),
+                    goal: leg.goal.clone(),
+                    avoidance: Some(avoidance(obstacles)),
+                    robot_avoidance: Some(avoidance(robots)),
+                    footprint: Some(footprint()),
+                    extra_obstacles: if free {
+                        Vec::new()
+                    } else {
+                        self.obstacles.iter().map(JsonObstacle::to_proto).collect()
+                    },
+                    // The scene is known in advance: it travels with the request.
+                    ignore_scene: true,
+                    ..Default::default()
+                }),
+            })
+            .collect();
+        v1::ExecuteGroupRequest {
+            members,
+            dt: DT,
+            segment_s: 0.01,
+            pacing: pacing(realtime),
+            max_duration_s: 4.0 * TAU,
+            ..Default::default()
+        }
+    }
+}
+
+/// Row `k` of an execution (`usize::MAX`: the last row).
+fn row_of(exec: &Executed, k: usize) -> Result<Vec<f64>, SimError> {
+    if exec.traj.is_empty() {
+        return Err(SimError::protocol(format!("{} streamed no setpoint", exec.id)));
+    }
+    Ok(position(&exec.traj, k.min(exec.traj.len() - 1)).to_vec())
+}
+
+/// The last position of an execution.
+fn last(exec: &Executed) -> Result<Vec<f64>, SimError> {
+    row_of(exec, usize::MAX)
+}
+
+/// Largest distance between the executed and the free path at the same times.
+fn deviation(adapted: &Trajectory, free: &Trajectory) -> f64 {
+    (0..adapted.len().min(free.len()))
+        .map(|k| distance(position(adapted, k), position(free, k)))
+        .fold(0.0, f64::max)
+}
+
+/// Measures one arm: its body (or the ring) against the true shapes, its jaws against the other arm's jaws.
+fn measure_leg(stage: &Stage, i: usize, runs: &[Executed; 2]) -> RobotReport {
+    let leg = &stage.legs[i];
+    let other = &stage.legs[1 - i];
+    let body = if leg.carrying {
+        robot_body(leg.robot, Solid::Ball { radius: RING_RADIUS })
+    } else {
+        jaws(leg.robot)
+    };
+    let mut r = measure(&runs[i], DT, &leg.goal, &body, &world(), &[]);
+    let other_jaws = jaws(other.robot);
+    let with_arm = Other { id: other.robot, traj: &runs[1 - i].traj, body: &other_jaws };
+    let arms = measure(&runs[i], DT, &leg.goal, &jaws(leg.robot), &[], &[with_arm]);
+    for (id, d) in arms.min_clearance_m {
+        if d <= CONTACT_M {
+            r.collisions.push(id.clone());
+        }
+        r.min_clearance_m.insert(id, d);
+    }
+    r
+}
+
+/// Runs the three stages and records them.
+pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
+    let stages = stages();
+    for stage in &stages {
+        for leg in &stage.legs {
+            let (t, rows) = demonstration(&leg.start, &leg.goal);
+            within("learn", client.learn(leg.robot, stage.key, &t, &rows, super::learn_parameters(3050.0)))
+                .await??;
+        }
+    }
+    let mut report = SimReport::new("psm", options.realtime);
+    report.notes.push(
+        "geometry, stages and gains: see client/sim/src/robots/psm.rs (two PSMs on one 6-D DMP; pegs planned as \
+         superquadrics (1, 1, 2) with the static potential, the arms avoid each other's jaws with the dynamic \
+         potential)"
+            .into(),
+    );
+    let mut starts = [HOME1.to_vec(), HOME2.to_vec()];
+    let mut clock = 0.0;
+    for stage in &stages {
+        let from = &starts;
+        let group = move |avoid| async move {
+            let request = stage.request(from, avoid, options.realtime);
+            let runs = execute_group(client, request, options.realtime).await?;
+            <[Executed; 2]>::try_from(runs)
+                .map_err(|_| SimError::protocol("a group of two answered for another count".into()))
+        };
+        // The three runs are independent (each its own phase): at once.
+        let (runs, without_robots, free) =
+            tokio::join!(group(Avoid::Everything), group(Avoid::Obstacles), group(Avoid::Nothing));
+        let (runs, without_robots, free) = (runs?, without_robots?, free?);
+        record(options, stage, &runs, &free, clock, &mut report)?;
+        // How close the jaws came without the robot term.
+        for i in 0..2 {
+            let (arm, other) = (stage.legs[i].robot, stage.legs[1 - i].robot);
+            let d = measure_leg(stage, i, &without_robots).min_clearance_m.get(other).copied();
+            let k = format!("{arm}/{}/no_robot_term_min_clearance_m/{other}", stage.key);
+            report.metrics.insert(k, d.unwrap_or(f64::INFINITY));
+        }
+        starts = [last(&runs[0])?, last(&runs[1])?];
+        clock += runs[0].traj.t.last().copied().unwrap_or(0.0);
+    }
+    Ok(report)
+}
+
+fn record(
+    options: &SimOptions,
+    stage: &Stage,
+    runs: &[Executed; 2],
+    free: &[Executed; 2],
+    clock: f64,
+    report: &mut SimReport,
+) -> Result<(), SimError> {
+    let key = stage.key;
+    let starts = [row_of(&runs[0], 0)?, row_of(&runs[1], 0)?];
+    for i in 0..2 {
+        let leg = &stage.legs[i];
+        report.add(&format!("{}/{key}", leg.robot), measure_leg(stage, i, runs));
+        // What the free plan would have touched.
+        for (id, d) in measure_leg(stage, i, free).min_clearance_m {
+            report.metrics.insert(format!("{}/{key}/free_min_clearance_m/{id}", leg.robot), d);
+        }
+        report.metrics.insert(
+            format!("{}/{key}/max_deviation_from_free_m", leg.robot),
+            deviation(&runs[i].traj, &free[i].traj),
+        );
+    }
+    let (t_close, d_close) = closest_approach(&[&runs[0].traj, &runs[1].traj]);
+    report.metrics.insert(format!("{key}/closest_approach_m"), d_close);
+    report.metrics.insert(format!("{key}/closest_approach_time_s"), clock + t_close);
+    report.metrics.insert(format!("{key}/start_time_s"), clock);
+    match key {
+        "transfer" => {
+            let end = runs[0].traj.t.last().copied().unwrap_or(0.0);
+            report.metrics.insert("handover/time_s".into(), clock + end);
+            for (i, arm) in [PSM1, PSM2].iter().enumerate() {
+                let d = distance(&last(&runs[i])?, &CENTRE);
+                report.metrics.insert(format!("handover/{arm}_to_centre_m"), d);
+            }
+        }
+        "move-to-peg" => {
+            let ring = last(&runs[1])?;
+            let offset = distance(&ring[..2], &TARGET);
+            report.metrics.insert("ring/offset_from_peg_axis_m".into(), offset);
+            report.metrics.insert("ring/height_above_peg_top_m".into(), ring[2] - 2.0 * PEG_HALF_HEIGHT);
+            report
+                .metrics
+                .insert("ring/released_at_s".into(), clock + runs[1].traj.t.last().copied().unwrap_or(0.0));
+        }
+        _ => {}
+    }
+    // The figure: both arms' paths in 3-D projections, with the pegs as the planner sees them.
+    let adapted = side_by_side(&[&runs[0].traj, &runs[1].traj]);
+    let free6 = side_by_side(&[&free[0].traj, &free[1].traj]);
+    let engine: Vec<dmp::Obstacle> = stage
+        .obstacles
+        .iter()
+        .map(JsonObstacle::to_engine)
+        .collect::<Result<_, _>>()
+        .map_err(|e| SimError::Plot(e.to_string()))?;
+    let shape = Superquadric::ellipsoid(footprint_semi_axes().to_vec())
+        .map(Shape::Superquadric)
+        .map_err(|e| SimError::Plot(e.to_string()))?;
+    let agents: Vec<Agent> = stage
+        .legs
+        .iter()
+        .enumerate()
+        .map(|(i, leg)| Agent {
+            id: leg.robot.into(),
+            dims: (3 * i..3 * i + 3).collect(),
+            footprint: Some(shape.clone()),
+        })
+        .collect();
+    let start = starts.concat();
+    let goal: Vec<f64> = stage.legs.iter().flat_map(|l| l.goal.clone()).collect();
+    let name = format!("{key}.svg");
+    let fig = Figure {
+        title: stage.title,
+        line: (&start, &goal),
+        free: &free6,
+        adapted: &adapted,
+        obstacles: &engine,
+        robots: &agents,
+        time: t_close,
+    };
+    write_figure(&options.out, &name, &fig)?;
+    report.plots.push(name);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn demonstration_starts_and_ends_at_rest_with_a_lift() {
+        let (t, rows) = demonstration(&RING, &handover(0));
+        assert_eq!(t.len(), rows.len());
+        assert!((t[t.len() - 1] - TAU).abs() < 1e-12);
+        assert!(distance(&rows[0], &RING) < 1e-12);
+        assert!(distance(&rows[rows.len() - 1], &handover(0)) < 1e-12);
+        // Half way: half the way, plus the whole lift.
+        let mid = &rows[rows.len() / 2];
+        let line_z = 0.5 * (RING[2] + CENTRE[2]);
+        assert!((mid[2] - line_z - LIFT).abs() < 1e-12, "{mid:?}");
+    }
+
+    #[test]
+    fn footprint_holds_every_contact_of_the_jaws() {
+        // The jaws touch when the other arm's point is in a cylinder of twice their radius and length: its rims
+        // are on the ellipsoid, the rest inside.
+        let [a, _, c] = footprint_semi_axes();
+        let (r, h) = (2.0 * JAW_RADIUS, 2.0 * JAW_HALF_LENGTH);
+        assert!(((r / a).powi(2) + (h / c).powi(2) - 1.0).abs() < 1e-12);
+        // The jaws have room at the handover: the points are outside each other's footprint.
+        let d = distance(&handover(0), &handover(1));
+        assert!(d > a && d > 2.0 * JAW_RADIUS, "{d}");
+    }
+}

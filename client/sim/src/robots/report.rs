@@ -1,0 +1,242 @@
+//! What a simulation measured: `report.json` and its figures.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use dmp::{Agent, Trajectory};
+use dmp_plot::{PlotInput, render_svg};
+use dmp_proto::v1;
+use serde::Serialize;
+
+use super::robot::{Executed, check};
+use super::world::{Body, point3};
+use crate::error::SimError;
+
+/// A robot ends at its goal when its last setpoint is this close (metres) and the server said GOAL_REACHED.
+pub const GOAL_TOLERANCE_M: f64 = 1e-2;
+
+/// Clearance at or below this (metres) is a contact.
+pub const CONTACT_M: f64 = 1e-9;
+
+/// One robot's figures.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct RobotReport {
+    /// At the goal (within [`GOAL_TOLERANCE_M`]) and the last segment said GOAL_REACHED.
+    pub reached_goal: bool,
+    /// Distance from the last setpoint to the goal, metres.
+    pub final_error_m: f64,
+    /// Status of the last segment.
+    pub final_status: String,
+    /// Smallest distance between the robot's body and each obstacle's true shape (or other robot's body), metres;
+    /// 0 is a contact.
+    pub min_clearance_m: BTreeMap<String, f64>,
+    /// Obstacles or robots touched.
+    pub collisions: Vec<String>,
+    /// Largest acceleration norm of the executed setpoints.
+    pub peak_acceleration: f64,
+    /// Largest speed of the executed setpoints.
+    pub peak_speed: f64,
+    /// Largest jerk norm of the executed setpoints (differences of consecutive accelerations).
+    pub peak_jerk: f64,
+    /// Setpoints that arrived after their time (real time only).
+    pub late_setpoints: u64,
+    /// Setpoints executed.
+    pub setpoints: u64,
+    /// Segments read.
+    pub segments: u64,
+    /// Steps breaking the continuity bounds (`sim::robot`).
+    pub discontinuities: u64,
+    /// Time of the first discontinuous step, seconds of the run.
+    pub first_discontinuity_s: Option<f64>,
+    /// NaN or infinite values.
+    pub non_finite: u64,
+    /// Duration of the run, seconds.
+    pub duration_s: f64,
+}
+
+/// The report of a simulation.
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
+pub struct SimReport {
+    /// Which simulation.
+    pub sim: String,
+    /// Wall-clock pacing.
+    pub realtime: bool,
+    /// Some robot touched an obstacle's true shape or another robot.
+    pub collision: bool,
+    /// Per robot (one id per robot and run).
+    pub robots: BTreeMap<String, RobotReport>,
+    /// Figures specific to a simulation (named `<robot>/<what>`, SI units).
+    pub metrics: BTreeMap<String, f64>,
+    /// The figures written, relative to the output folder.
+    pub plots: Vec<String>,
+    /// What the set-up was (geometry, gains).
+    pub notes: Vec<String>,
+}
+
+impl SimReport {
+    /// An empty report.
+    pub fn new(sim: &str, realtime: bool) -> Self {
+        Self { sim: sim.into(), realtime, ..Default::default() }
+    }
+
+    /// Adds a robot.
+    pub fn add(&mut self, id: &str, r: RobotReport) {
+        self.collision |= !r.collisions.is_empty();
+        self.robots.insert(id.into(), r);
+    }
+
+    /// Everything wrong: goals missed, contacts, discontinuities, non-finite values (empty: all good).
+    pub fn problems(&self) -> Vec<String> {
+        let mut p = Vec::new();
+        for (id, r) in &self.robots {
+            if !r.reached_goal {
+                p.push(format!("{id}: goal not reached ({} m away, {})", r.final_error_m, r.final_status));
+            }
+            for c in &r.collisions {
+                p.push(format!("{id}: touches {c}"));
+            }
+            if r.discontinuities > 0 {
+                p.push(format!("{id}: {} discontinuous steps", r.discontinuities));
+            }
+            if r.non_finite > 0 {
+                p.push(format!("{id}: {} non-finite values", r.non_finite));
+            }
+            if r.setpoints == 0 {
+                p.push(format!("{id}: no setpoints"));
+            }
+        }
+        p
+    }
+
+    /// Writes `report.json` in `dir`.
+    pub fn write(&self, dir: &Path) -> Result<(), SimError> {
+        let path = dir.join("report.json");
+        let text = serde_json::to_string_pretty(self).map_err(|e| SimError::Plot(e.to_string()))?;
+        std::fs::write(&path, text + "\n").map_err(|source| SimError::Io { path, source })
+    }
+}
+
+/// Row `k` of the positions.
+pub fn position(t: &Trajectory, k: usize) -> &[f64] {
+    let d = t.dim();
+    &t.x[k * d..(k + 1) * d]
+}
+
+/// The row of `t` at time `time` (the nearest at or after it; the last one past the end).
+fn row_at(t: &Trajectory, time: f64) -> Option<usize> {
+    if t.is_empty() {
+        return None;
+    }
+    Some(t.t.partition_point(|&s| s < time - 1e-9).min(t.len() - 1))
+}
+
+/// Another robot, for the robot-robot clearance.
+#[derive(Debug, Clone, Copy)]
+pub struct Other<'a> {
+    /// Its id.
+    pub id: &'a str,
+    /// What it executed (same times).
+    pub traj: &'a Trajectory,
+    /// Its body around its controlled point.
+    pub body: &'a Body,
+}
+
+/// Measures one robot: goal, checks, and clearance of `body` (around the controlled point) against the obstacles
+/// present at each time and the other robots at the same time.
+pub fn measure(
+    exec: &Executed,
+    dt: f64,
+    goal: &[f64],
+    body: &Body,
+    obstacles: &[Body],
+    others: &[Other<'_>],
+) -> RobotReport {
+    let traj = &exec.traj;
+    let checks = check(traj, dt);
+    let mut min: BTreeMap<String, f64> = BTreeMap::new();
+    for o in obstacles {
+        min.insert(o.id.clone(), f64::INFINITY);
+    }
+    for o in others {
+        min.insert(o.id.into(), f64::INFINITY);
+    }
+    for k in 0..traj.len() {
+        let t = traj.t[k];
+        let p = point3(position(traj, k));
+        for o in obstacles.iter().filter(|o| o.present_at(t)) {
+            let d = body.distance(p, o, parry3d_f64::math::Vector::ZERO);
+            let m = min.get_mut(&o.id).expect("inserted above");
+            *m = m.min(d);
+        }
+        for o in others {
+            if let Some(j) = row_at(o.traj, t) {
+                let d = body.distance(p, o.body, point3(position(o.traj, j)));
+                let m = min.get_mut(o.id).expect("inserted above");
+                *m = m.min(d);
+            }
+        }
+    }
+    let final_error_m = if traj.is_empty() {
+        f64::INFINITY
+    } else {
+        let end = position(traj, traj.len() - 1);
+        end.iter().zip(goal).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt()
+    };
+    let collisions = min.iter().filter(|(_, d)| **d <= CONTACT_M).map(|(id, _)| id.clone()).collect();
+    RobotReport {
+        reached_goal: final_error_m <= GOAL_TOLERANCE_M
+            && exec.final_status == v1::SegmentStatus::GoalReached,
+        final_error_m,
+        final_status: exec.final_status.as_str_name().to_string(),
+        min_clearance_m: min,
+        collisions,
+        peak_acceleration: checks.peak_acceleration,
+        peak_speed: checks.peak_speed,
+        peak_jerk: checks.peak_jerk,
+        late_setpoints: exec.late_setpoints,
+        setpoints: traj.len() as u64,
+        segments: exec.segments,
+        discontinuities: checks.discontinuities,
+        first_discontinuity_s: checks.first_discontinuity_s,
+        non_finite: checks.non_finite,
+        duration_s: traj.t.last().copied().unwrap_or(0.0) - traj.t.first().copied().unwrap_or(0.0),
+    }
+}
+
+/// One figure in the paper's style.
+#[derive(Debug, Clone, Copy)]
+pub struct Figure<'a> {
+    /// Title.
+    pub title: &'a str,
+    /// Start and goal of the straight line (drawn as the "demonstration").
+    pub line: (&'a [f64], &'a [f64]),
+    /// Obstacle-free rollout.
+    pub free: &'a Trajectory,
+    /// What the robot executed.
+    pub adapted: &'a Trajectory,
+    /// The obstacles the planner sees (superquadrics, inflated).
+    pub obstacles: &'a [dmp::Obstacle],
+    /// Robots sharing the DMP (empty: one).
+    pub robots: &'a [Agent],
+    /// When to draw moving obstacles and footprints.
+    pub time: f64,
+}
+
+/// Renders `fig` to `dir/name`.
+pub fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), SimError> {
+    let demo = vec![fig.line.0.to_vec(), fig.line.1.to_vec()];
+    let input = PlotInput {
+        title: fig.title,
+        demonstration: &demo,
+        demonstration_t: None,
+        free: fig.free,
+        adapted: fig.adapted,
+        goal: Some(fig.line.1),
+        obstacles: fig.obstacles,
+        robots: fig.robots,
+        obstacle_time: fig.time,
+    };
+    let svg = render_svg(&input).map_err(|e| SimError::Plot(e.to_string()))?;
+    let path = dir.join(name);
+    std::fs::write(&path, svg).map_err(|source| SimError::Io { path, source })
+}

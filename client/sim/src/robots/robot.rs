@@ -1,0 +1,269 @@
+//! A simulated robot's controller: it keeps the setpoints in force (later segments supersede earlier ones from
+//! their start time on, [`Setpoints`]), executes them at its control rate on its clock, and checks what it executed.
+//!
+//! # The clock
+//! - Simulated: the robot's time is the start time of the segment it just read (it reads a segment when it needs
+//!   one), so every row before it is executed and nothing is ever late.
+//! - Real time: the robot's time is the wall clock minus the run's origin (`start_unix_s - start_time` of the first
+//!   segment). A row whose time had already passed when its segment arrived is **late**: the robot executed what
+//!   was in force before (or nothing).
+//!
+//! # Continuity
+//! Between two executed rows `k` and `k + 1` (times `dt` apart), per coordinate, with `a` the largest acceleration
+//! magnitude of rows `k - 1 ..= k + 2`:
+//! `|x_{k+1} - x_k - v_k dt| <= CONT_FACTOR a dt^2 + CONT_ABS` and `|v_{k+1} - v_k| <= CONT_FACTOR a dt + CONT_ABS`.
+//! A jump of a superseding segment that does not continue from the current state breaks one of the two.
+
+use dmp::Trajectory;
+use dmp_client::setpoints::Setpoints;
+use dmp_proto::v1;
+
+use crate::error::SimError;
+
+/// Slack factor of the continuity bounds (the acceleration varies within a step).
+pub const CONT_FACTOR: f64 = 1.5;
+/// Absolute slack of the continuity bounds (rounding).
+pub const CONT_ABS: f64 = 1e-9;
+
+/// What one robot executed.
+#[derive(Debug, Clone)]
+pub struct Executed {
+    /// The robot's id.
+    pub id: String,
+    /// Executed rows, in time order.
+    pub traj: Trajectory,
+    /// Rows that arrived after their time.
+    pub late_setpoints: u64,
+    /// Segments read.
+    pub segments: u64,
+    /// Status of the last segment.
+    pub final_status: v1::SegmentStatus,
+}
+
+/// The controller of one robot.
+#[derive(Debug)]
+pub struct Controller {
+    id: String,
+    realtime: bool,
+    setpoints: Setpoints,
+    executed: Option<Trajectory>,
+    /// Rows of `setpoints` already executed, all with times before `clock`.
+    committed: usize,
+    clock: f64,
+    origin_unix: Option<f64>,
+    late: u64,
+    segments: u64,
+    status: v1::SegmentStatus,
+}
+
+fn unix_now() -> f64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64())
+}
+
+impl Controller {
+    /// A robot that has read nothing yet.
+    pub fn new(id: impl Into<String>, realtime: bool) -> Self {
+        Self {
+            id: id.into(),
+            realtime,
+            setpoints: Setpoints::new(),
+            executed: None,
+            committed: 0,
+            clock: f64::NEG_INFINITY,
+            origin_unix: None,
+            late: 0,
+            segments: 0,
+            status: v1::SegmentStatus::Unspecified,
+        }
+    }
+
+    /// The robot's time now (seconds of the run).
+    pub fn clock(&self) -> f64 {
+        self.clock
+    }
+
+    /// The run's origin on the wall clock, once a real-time segment was read.
+    pub fn origin_unix(&self) -> Option<f64> {
+        self.origin_unix
+    }
+
+    /// Executes every row in force before `t`.
+    fn advance(&mut self, t: f64) {
+        let Some(traj) = self.setpoints.trajectory() else { return };
+        let d = traj.dim();
+        let exec = self.executed.get_or_insert_with(|| Trajectory::with_capacity(d, 1024));
+        while self.committed < traj.len() && traj.t[self.committed] < t {
+            let k = self.committed;
+            let r = k * d..(k + 1) * d;
+            exec.push(traj.t[k], &traj.x[r.clone()], &traj.xd[r.clone()], &traj.xdd[r]);
+            self.committed += 1;
+        }
+        self.clock = self.clock.max(t);
+    }
+
+    /// Reads one segment (arriving now).
+    pub fn push(&mut self, seg: &v1::Segment) -> Result<(), SimError> {
+        self.segments += 1;
+        self.status = v1::SegmentStatus::try_from(seg.status).unwrap_or(v1::SegmentStatus::Unspecified);
+        let now = if self.realtime && seg.start_unix_s > 0.0 {
+            let origin = *self.origin_unix.get_or_insert(seg.start_unix_s - seg.start_time);
+            unix_now() - origin
+        } else {
+            seg.start_time
+        };
+        self.advance(now);
+        let d = (seg.dim as usize).max(1);
+        let rows = seg.positions.len() / d;
+        // Rows of this segment before the robot's time are late; the robot keeps what it executed.
+        let late = (0..rows).filter(|&k| seg.start_time + k as f64 * seg.dt < self.clock).count();
+        self.late += late as u64;
+        let before = self.setpoints.trajectory().map_or(0, Trajectory::len);
+        self.setpoints.push(seg)?;
+        let after = self.setpoints.trajectory().map_or(0, Trajectory::len);
+        // Rows cut by supersession that were executed stay executed: never re-execute before the clock.
+        let kept = after.saturating_sub(rows).min(before);
+        if self.committed > kept {
+            let traj = self.setpoints.trajectory().map(|t| t.t.clone()).unwrap_or_default();
+            self.committed = traj.partition_point(|&t| t < self.clock);
+        }
+        Ok(())
+    }
+
+    /// The run ended: executes what is left.
+    pub fn finish(mut self) -> Executed {
+        self.advance(f64::INFINITY);
+        let d = self.setpoints.trajectory().map_or(1, Trajectory::dim);
+        Executed {
+            id: self.id,
+            traj: self.executed.unwrap_or_else(|| Trajectory::with_capacity(d, 0)),
+            late_setpoints: self.late,
+            segments: self.segments,
+            final_status: self.status,
+        }
+    }
+}
+
+/// Checks of an executed trajectory.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Checks {
+    /// Steps that break the continuity bounds (or the time step).
+    pub discontinuities: u64,
+    /// Values that are NaN or infinite.
+    pub non_finite: u64,
+    /// Largest acceleration norm.
+    pub peak_acceleration: f64,
+    /// Largest speed.
+    pub peak_speed: f64,
+    /// Largest jerk norm, from the accelerations of consecutive rows (`|a_{k+1} - a_k| / (t_{k+1} - t_k)`).
+    pub peak_jerk: f64,
+    /// Time of the first discontinuous step, if any.
+    pub first_discontinuity_s: Option<f64>,
+}
+
+fn row(v: &[f64], d: usize, k: usize) -> &[f64] {
+    &v[k * d..(k + 1) * d]
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// Whether `err` breaks `bound` (a NaN error does).
+fn exceeds(err: f64, bound: f64) -> bool {
+    !err.is_finite() || err > bound
+}
+
+/// Checks `traj` (executed at step `dt`).
+pub fn check(traj: &Trajectory, dt: f64) -> Checks {
+    let d = traj.dim();
+    let n = traj.len();
+    let mut c = Checks::default();
+    for v in [&traj.t, &traj.x, &traj.xd, &traj.xdd] {
+        c.non_finite += v.iter().filter(|x| !x.is_finite()).count() as u64;
+    }
+    for k in 0..n {
+        let a = norm(row(&traj.xdd, d, k));
+        let v = norm(row(&traj.xd, d, k));
+        if a.is_finite() {
+            c.peak_acceleration = c.peak_acceleration.max(a);
+        }
+        if v.is_finite() {
+            c.peak_speed = c.peak_speed.max(v);
+        }
+    }
+    for k in 0..n.saturating_sub(1) {
+        let h = traj.t[k + 1] - traj.t[k];
+        let da2: f64 =
+            row(&traj.xdd, d, k + 1).iter().zip(row(&traj.xdd, d, k)).map(|(a, b)| (a - b).powi(2)).sum();
+        let j = da2.sqrt() / h;
+        if j.is_finite() {
+            c.peak_jerk = c.peak_jerk.max(j);
+        }
+        let mut bad = (h - dt).abs() > 1e-6 * dt;
+        let lo = k.saturating_sub(1);
+        let hi = (k + 2).min(n - 1);
+        for i in 0..d {
+            let amax = (lo..=hi).map(|j| traj.xdd[j * d + i].abs()).fold(0.0, f64::max);
+            let (x0, x1) = (traj.x[k * d + i], traj.x[(k + 1) * d + i]);
+            let (v0, v1) = (traj.xd[k * d + i], traj.xd[(k + 1) * d + i]);
+            bad |= exceeds((x1 - x0 - v0 * h).abs(), CONT_FACTOR * amax * h * h + CONT_ABS);
+            bad |= exceeds((v1 - v0).abs(), CONT_FACTOR * amax * h + CONT_ABS);
+        }
+        if bad && c.first_discontinuity_s.is_none() {
+            c.first_discontinuity_s = Some(traj.t[k]);
+        }
+        c.discontinuities += bad as u64;
+    }
+    c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn seg(seq: u64, start: f64, x: &[f64], v: f64) -> v1::Segment {
+        v1::Segment {
+            sequence: seq,
+            start_time: start,
+            dt: 0.01,
+            dim: 1,
+            positions: x.to_vec(),
+            velocities: vec![v; x.len()],
+            accelerations: vec![0.0; x.len()],
+            status: v1::SegmentStatus::Running as i32,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn supersession_and_continuity() {
+        let mut c = Controller::new("r", false);
+        c.push(&seg(0, 0.0, &[0.0, 0.01, 0.02], 1.0)).unwrap();
+        // Supersedes the last row of the first segment with a continuous continuation.
+        c.push(&seg(1, 0.02, &[0.02, 0.03], 1.0)).unwrap();
+        let e = c.finish();
+        assert_eq!(e.traj.len(), 4);
+        assert_eq!(e.late_setpoints, 0);
+        assert_eq!(check(&e.traj, 0.01).discontinuities, 0);
+
+        let mut c = Controller::new("r", false);
+        c.push(&seg(0, 0.0, &[0.0, 0.01, 0.02], 1.0)).unwrap();
+        c.push(&seg(1, 0.02, &[0.5, 0.51], 1.0)).unwrap();
+        let e = c.finish();
+        assert_eq!(check(&e.traj, 0.01).discontinuities, 1);
+    }
+
+    #[test]
+    fn peaks_of_speed_acceleration_and_jerk() {
+        // 2-D, 1 ms apart: the acceleration steps from (0, 0) to (3, 4) between the second and third rows.
+        let mut t = Trajectory::with_capacity(2, 4);
+        for (k, a) in [[0.0, 0.0], [0.0, 0.0], [3.0, 4.0], [3.0, 4.0]].iter().enumerate() {
+            let s = k as f64 * 1e-3;
+            t.push(s, &[0.0, 0.0], &[0.5 * s, 0.0], a);
+        }
+        let c = check(&t, 1e-3);
+        assert_eq!(c.peak_acceleration, 5.0);
+        assert!((c.peak_jerk - 5000.0).abs() < 1e-6, "{}", c.peak_jerk);
+        assert!((c.peak_speed - 1.5e-3).abs() < 1e-15);
+    }
+}

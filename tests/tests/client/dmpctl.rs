@@ -1,0 +1,113 @@
+//! `dmpctl`'s commands against the real server (gRPC only), through the same entry point as the binary.
+
+use std::path::Path;
+
+use clap::Parser;
+use dmp_tests::{TestServer, within};
+use dmpctl::DmpctlError;
+use dmpctl::cli::{Cli, run_async};
+
+/// Runs `dmpctl --server URL ARGS...` (under the tests' timeout).
+async fn run_at(url: &str, args: &[&str]) -> Result<String, DmpctlError> {
+    let mut all = vec!["dmpctl", "--server", url];
+    all.extend_from_slice(args);
+    let cli = Cli::try_parse_from(&all).unwrap_or_else(|e| panic!("{all:?}: {e}"));
+    within(&all.join(" "), run_async(cli)).await
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn server_commands_against_the_server() {
+    let server = TestServer::grpc_only().await;
+    let url = server.url();
+    let dir = tempfile::tempdir().unwrap();
+    let d = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let csv: String = std::iter::once("t,x1,x2".to_string())
+        .chain((0..=100).map(|k| {
+            let t = k as f64 / 100.0;
+            format!("{t},{},{}", t * t, 1.0 - t)
+        }))
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(d("demo.csv"), csv).unwrap();
+
+    let out =
+        run_at(&url, &["learn", "--robot", "r", "--name", "p", "--csv", &d("demo.csv"), "--n-basis", "15"])
+            .await
+            .unwrap();
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(
+        (v["version"].as_u64(), v["dim"].as_u64(), v["n_basis"].as_u64()),
+        (Some(1), Some(2), Some(15))
+    );
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/none.json");
+    run_at(&url, &["learn", "--robot", "r", "--name", "paper", "--scenario", scenario.to_str().unwrap()])
+        .await
+        .unwrap();
+    let listed = run_at(&url, &["list", "--robot", "r"]).await.unwrap();
+    assert!(listed.starts_with("p\tv1\tdim 2\tN 15") && listed.contains("\npaper\tv1"), "{listed}");
+
+    let shown: serde_json::Value =
+        serde_json::from_str(&run_at(&url, &["show", "--robot", "r", "--name", "p"]).await.unwrap()).unwrap();
+    let p: dmp::Primitive = serde_json::from_value(shown["primitive"].clone()).unwrap();
+    assert_eq!(p.n_basis, 15);
+
+    let said = run_at(
+        &url,
+        &["plan", "--robot", "r", "--name", "p", "--goal", "2,-1", "--duration", "1.5", "--out", &d("plan")],
+    )
+    .await
+    .unwrap();
+    assert!(said.contains("1501 points"), "{said}");
+    let plan = std::fs::read_to_string(dir.path().join("plan/trajectory.csv")).unwrap();
+    assert_eq!(plan.lines().next(), Some("t,x1,x2,xd1,xd2,a1,a2"));
+    assert_eq!(plan.lines().count(), 1502);
+    let last: Vec<f64> = plan.lines().last().unwrap().split(',').map(|c| c.parse().unwrap()).collect();
+    assert!((last[1] - 2.0).abs() < 0.05 && (last[2] + 1.0).abs() < 0.05, "{last:?}");
+
+    let said = run_at(
+        &url,
+        &[
+            "stream",
+            "--robot",
+            "r",
+            "--name",
+            "p",
+            "--goal",
+            "2,-1",
+            "--max-duration",
+            "1.5",
+            "--out",
+            &d("stream"),
+        ],
+    )
+    .await
+    .unwrap();
+    // 1501 points in segments of 10, the last one the point at 1.5 s; the goal is not reached to within 1 mm
+    // by then, so the run ends at its maximum duration.
+    assert!(
+        said.contains("151 segments, 1501 setpoints in force up to t = 1.5 s, last status STOPPED"),
+        "{said}"
+    );
+    let streamed = std::fs::read_to_string(dir.path().join("stream/trajectory.csv")).unwrap();
+    assert_eq!(streamed.lines().count(), plan.lines().count());
+
+    let run = run_at(&url, &["scenario", "run", scenario.to_str().unwrap(), "--out", &d("scenario")])
+        .await
+        .unwrap();
+    assert!(run.contains("through http://"), "{run}");
+    assert!(dir.path().join("scenario/metrics.json").exists());
+
+    assert_eq!(
+        run_at(&url, &["delete", "--robot", "r", "--name", "p"]).await.unwrap(),
+        "deleted 1 version of r/p"
+    );
+    let e = run_at(&url, &["show", "--robot", "r", "--name", "p"]).await.unwrap_err();
+    assert!(e.is_bad_input() && e.to_string().contains("NotFound"), "{e}");
+    let e = run_at(&url, &["plan", "--robot", "r", "--name", "nothing", "--out", &d("x")]).await.unwrap_err();
+    assert!(e.is_bad_input(), "{e}");
+    let e = run_at(&url, &["learn", "--robot", "r", "--name", "p", "--csv", &d("missing.csv")])
+        .await
+        .unwrap_err();
+    assert!(!e.is_bad_input() && e.to_string().contains("missing.csv"), "{e}");
+    server.stop().await;
+}
