@@ -193,8 +193,8 @@ mod tests {
         let (fine, e_fine) = run_dp(&p, &m, 0.005, 1.2);
         let (g_coarse, g_fine) = (dist(&coarse, &reference), dist(&fine, &reference));
         // Halving the step divides the global error by 2^5 = 32 and the local estimate by 2^5 as well (the
-        // estimate is the fourth-order solution's local error, O(h^5)). Measured: 29 and 31 (at 0.04 -> 0.02 s
-        // the narrow Gaussians of the forcing term keep both out of their asymptotic range: 15 and 14).
+        // estimate is the fourth-order solution's local error, O(h^5)); at 0.04 -> 0.02 s the narrow Gaussians of
+        // the forcing term keep both out of their asymptotic range, hence these steps.
         assert!(g_coarse / g_fine > 20.0, "global {g_coarse:e} -> {g_fine:e}");
         assert!(e_coarse / e_fine > 16.0 && e_coarse / e_fine < 64.0, "estimate {e_coarse:e} -> {e_fine:e}");
         assert!(g_fine < 1e-9, "{g_fine:e}");

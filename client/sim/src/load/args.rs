@@ -15,18 +15,17 @@ const DEFAULT_TAU: f64 = 2.0;
 const DEFAULT_PREFIX: &str = "load";
 /// Worker threads of the generator by default.
 pub const DEFAULT_THREADS: usize = 1;
-/// Most connections by default (one per cell up to this, and at least one per 125 robots). In one pair of 20 s
-/// runs of 1,000 robots on two cores, 8 connections instead of 16 took on time from 97.0 to 99.8 % and the server
-/// from 152 to 146 % of a core (BENCHMARKS.md).
+/// Most connections by default (one per cell up to this, and at least one per 125 robots): fewer connections kept
+/// more setpoints on time at 1,000 robots (BENCHMARKS.md).
 pub const MAX_DEFAULT_CONNECTIONS: usize = 8;
 /// Robots per connection the default aims at most (HTTP/2 servers often allow 100 to 250 concurrent streams).
 pub const STREAMS_PER_CONNECTION: usize = 125;
 /// The largest internal step the load asks the server for by default, milliseconds (its adaptive step; a fixed
 /// RK4 step is at most one segment).
 pub const DEFAULT_INTEGRATION_STEP_MS: f64 = 30.0;
-/// The local error tolerance of the server's adaptive step the load asks for by default. A load robot stays
-/// within 2.2e-4 of the engine's RK4 at 1 ms with it (at either refill cadence), for 2.3 times fewer evaluations
-/// of the field than a fixed 5 ms RK4 step (`accuracy.rs`; with 1e-5 it deviated by up to 9.6e-4).
+/// The local error tolerance of the server's adaptive step the load asks for by default: a load robot stays within
+/// 1e-3 of the engine's RK4 at 1 ms with it, for fewer evaluations of the field than a fixed 5 ms RK4 step
+/// (`accuracy.rs` checks both; the deviations measured are in BENCHMARKS.md).
 pub const DEFAULT_INTEGRATION_TOLERANCE: f64 = 3e-6;
 
 /// `dmpctl load`: the server is `--server` (default http://127.0.0.1:50051), its Zenoh endpoint `--zenoh-connect`
