@@ -68,3 +68,21 @@ impl AppState {
         })
     }
 }
+
+#[cfg(test)]
+impl AppState {
+    /// A server's state for unit tests: the default configuration, the store in `dir`, cell `c`, no Zenoh.
+    pub(crate) fn for_tests(dir: &std::path::Path, clock: Clock) -> Self {
+        let config = Config::default();
+        Self {
+            streams: Arc::new(Semaphore::new(config.limits.max_streams)),
+            store: Store::open(dir).expect("a store in a fresh directory"),
+            robots: RobotBus::new(None),
+            cells: Cells::new("c", 10, config.limits.max_obstacles).expect("cell c"),
+            config,
+            shutdown: CancellationToken::new(),
+            counters: Default::default(),
+            clock,
+        }
+    }
+}

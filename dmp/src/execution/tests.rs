@@ -10,6 +10,18 @@ fn reach(stepping: Stepping) -> Execution {
     Execution::new(p.clone(), Motion::of(&p), Scene::empty(), CellMateAvoidance::NONE, stepping, 200).unwrap()
 }
 
+/// Advances ten points at a time until the run is complete, at most `stretches` times; the last outcome.
+fn advance_until_final(e: &mut Execution, stretches: usize) -> Outcome {
+    let mut outcome = Outcome::Running;
+    for _ in 0..stretches {
+        outcome = e.advance(10).unwrap().outcome;
+        if outcome.is_final() {
+            break;
+        }
+    }
+    outcome
+}
+
 fn bits(v: &[f64]) -> Vec<u64> {
     v.iter().map(|x| x.to_bits()).collect()
 }
@@ -52,13 +64,7 @@ fn a_goal_change_keeps_position_and_velocity_continuous_and_is_reached() {
         assert!((after.x[i] - x0[i] - 1e-3 * v0[i]).abs() < 1e-5, "position jumps");
         assert!((after.xd[i] - v0[i]).abs() < 0.05, "velocity jumps: {} -> {}", v0[i], after.xd[i]);
     }
-    let mut outcome = Outcome::Running;
-    for _ in 0..400 {
-        outcome = e.advance(10).unwrap().outcome;
-        if outcome.is_final() {
-            break;
-        }
-    }
+    let outcome = advance_until_final(&mut e, 400);
     assert_eq!(outcome, Outcome::GoalReached);
     assert!(e.set_goal(vec![1.0]).is_err() && e.set_goal(vec![f64::NAN, 0.0]).is_err());
 }
@@ -71,13 +77,7 @@ fn a_stop_comes_to_rest_ends_the_run_and_is_not_resumed() {
     assert_eq!(e.advance(10).unwrap().outcome, Outcome::Holding);
     e.set_holding(false);
     assert!(e.is_holding(), "a stop is not resumed");
-    let mut outcome = Outcome::Holding;
-    for _ in 0..200 {
-        outcome = e.advance(10).unwrap().outcome;
-        if outcome.is_final() {
-            break;
-        }
-    }
+    let outcome = advance_until_final(&mut e, 200);
     assert_eq!(outcome, Outcome::Stopped);
     assert!(e.at_rest() && !e.arrived());
 }
@@ -106,12 +106,6 @@ fn a_pause_holds_without_stalling_and_a_resume_goes_on() {
     }
     assert!(e.at_rest());
     e.set_holding(false);
-    let mut outcome = Outcome::Running;
-    for _ in 0..400 {
-        outcome = e.advance(10).unwrap().outcome;
-        if outcome.is_final() {
-            break;
-        }
-    }
+    let outcome = advance_until_final(&mut e, 400);
     assert_eq!(outcome, Outcome::GoalReached);
 }

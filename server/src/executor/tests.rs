@@ -7,32 +7,13 @@ use std::time::Duration;
 use dmp::field::Agent;
 use dmp::{Avoidance, Motion, Primitive, Stepping};
 use dmp_proto::v1;
-use tokio::sync::{Semaphore, mpsc};
-use tokio_util::sync::CancellationToken;
+use tokio::sync::mpsc;
 
 use super::pacing::{FIRST_POINT_DELAY, ROLLBACK_MARGIN, history_len};
 use super::served_run::{RunAvoidance, ServedRun};
 use super::stream::{Control, StreamConfig, run_stream};
-use crate::cells::Cells;
 use crate::clock::Clock;
-use crate::config::Config;
-use crate::robots::RobotBus;
 use crate::state::AppState;
-use crate::store::Store;
-
-fn app(dir: &std::path::Path, clock: Clock) -> Arc<AppState> {
-    let config = Config::default();
-    Arc::new(AppState {
-        streams: Arc::new(Semaphore::new(config.limits.max_streams)),
-        store: Store::open(dir).unwrap(),
-        robots: RobotBus::new(None),
-        cells: Cells::new("c", 10, config.limits.max_obstacles).unwrap(),
-        config,
-        shutdown: CancellationToken::new(),
-        counters: Default::default(),
-        clock,
-    })
-}
 
 /// A straight 2-D reach from the origin to (1, 0) in `tau` = 1 s, streamed in real time in 10 ms segments.
 fn reach(cfg: &StreamConfig) -> ServedRun {
@@ -53,7 +34,7 @@ fn reach(cfg: &StreamConfig) -> ServedRun {
 async fn real_time_segments_arrive_before_they_are_due_and_a_goal_change_supersedes_from_now() {
     let dir = tempfile::tempdir().unwrap();
     let clock = Clock::following_tokio();
-    let app = app(dir.path(), clock);
+    let app = Arc::new(AppState::for_tests(dir.path(), clock));
     let cell = app.cells.get("c").unwrap();
     let cfg = StreamConfig {
         stepping: Stepping::rk4(1e-3),

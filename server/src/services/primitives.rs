@@ -207,29 +207,14 @@ impl PrimitiveService for PrimitiveServiceImpl {
 
 #[cfg(test)]
 mod tests {
-    use tokio::sync::Semaphore;
-    use tokio_util::sync::CancellationToken;
     use tonic::Code;
 
     use super::*;
-    use crate::cells::Cells;
     use crate::config::Config;
-    use crate::robots::RobotBus;
-    use crate::store::Store;
     use dmp_proto::primitive::primitive_to_proto;
 
     fn service(dir: &std::path::Path) -> PrimitiveServiceImpl {
-        let config = Config::default();
-        PrimitiveServiceImpl::new(Arc::new(AppState {
-            streams: Arc::new(Semaphore::new(config.limits.max_streams)),
-            store: Store::open(dir).unwrap(),
-            robots: RobotBus::new(None),
-            cells: Cells::new("c", 10, config.limits.max_obstacles).unwrap(),
-            config,
-            shutdown: CancellationToken::new(),
-            counters: Default::default(),
-            clock: Default::default(),
-        }))
+        PrimitiveServiceImpl::new(Arc::new(AppState::for_tests(dir, Default::default())))
     }
 
     /// A 2-D curve sampled at 100 non-uniform times.
