@@ -1,11 +1,18 @@
 //! Learning a primitive from one demonstration.
 
+#[cfg(feature = "learn")]
 use nalgebra::DMatrix;
 
+#[cfg(feature = "learn")]
 use crate::basis::GaussianBasis;
+#[cfg(feature = "learn")]
 use crate::canonical::phase_at;
+#[cfg(feature = "learn")]
 use crate::derivatives::gradient;
-use crate::error::{DmpError, InvalidInput, Result, ensure_finite, ensure_positive};
+#[cfg(feature = "learn")]
+use crate::error::{DmpError, ensure_positive};
+use crate::error::{InvalidInput, Result, ensure_finite};
+#[cfg(feature = "learn")]
 use crate::primitive::{FORMAT_VERSION, Primitive};
 
 /// One demonstration: increasing sample times (any start, not necessarily uniform) and a position per sample.
@@ -118,6 +125,7 @@ pub fn per_dimension(name: &str, v: &[f64], dim: usize) -> Result<Vec<f64>, Inva
 /// second-order finite differences, and `phi = 0` in `eq:dmp_acc_obst`, the target forcing term is
 /// `f_p(s_k) = (tau^2 xdd_p + D_p tau xd_p - K_p (g_p - x_p) + K_p (g_p - x0_p) s_k) / K_p`;
 /// the weights are the least-squares solution (SVD) of `sum_i w_{p,i} s_k psi_i(s_k) / sum_j psi_j(s_k) = f_p(s_k)`.
+#[cfg(feature = "learn")]
 pub fn learn(demo: &Demonstration, config: &LearnConfig) -> Result<Primitive> {
     let dim = demo.dim();
     let k = per_dimension("dmp.K", &config.k, dim)?;

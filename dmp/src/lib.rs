@@ -30,6 +30,7 @@ pub mod field;
 pub mod integrate;
 pub mod isopotential;
 pub mod learn;
+#[cfg(feature = "learn")]
 pub mod metrics;
 pub mod obstacle;
 pub mod primitive;
@@ -43,7 +44,9 @@ pub use execution::{Execution, Outcome, Stepping};
 pub use field::{Agent, Contact, RepulsiveField, Scene};
 pub use integrate::{Integrator, Motion, NoPerturbation, Perturbation, State};
 pub use isopotential::{Isopotential, NestedSuperquadric, Shape, Superquadric};
-pub use learn::{Demonstration, LearnConfig, learn};
+#[cfg(feature = "learn")]
+pub use learn::learn;
+pub use learn::{Demonstration, LearnConfig};
 pub use obstacle::Obstacle;
 pub use primitive::Primitive;
 pub use rollout::{Rollout, Trajectory, rollout};

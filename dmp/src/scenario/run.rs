@@ -1,14 +1,14 @@
 //! Turning a scenario into engine objects (validating every field on the way) and running it offline.
 
-use super::model::{FootprintSpec, ObstacleSpec, Scenario};
+use super::model::{FootprintSpec, Scenario};
+use super::to_engine::superquadric;
 use crate::avoidance::Avoidance;
 use crate::error::{DmpError, InvalidInput, Result, ensure_positive};
 use crate::field::{Agent, RepulsiveField, Scene};
 use crate::integrate::Motion;
-use crate::isopotential::{NestedSuperquadric, Shape, Superquadric};
+use crate::isopotential::Shape;
 use crate::learn::{Demonstration, LearnConfig, learn};
 use crate::metrics::{Metrics, metrics};
-use crate::obstacle::Obstacle;
 use crate::primitive::Primitive;
 use crate::rollout::{MAX_ROLLOUT_STEPS, Rollout, rollout};
 
@@ -137,39 +137,8 @@ pub fn run(p: &Prepared) -> Result<ScenarioOutcome> {
     Ok(ScenarioOutcome { free, adapted, metrics })
 }
 
-impl ObstacleSpec {
-    /// The engine's obstacle (per-axis exponents default to 1; `nested` selects the paper's 3-D form); errors name
-    /// the field within the obstacle.
-    pub fn to_obstacle(&self) -> Result<Obstacle> {
-        let o = self;
-        let shape = match o.nested {
-            Some(n) => {
-                if o.exponents.is_some() {
-                    return Err(
-                        InvalidInput::new("nested", "give either `exponents` or `nested`, not both").into()
-                    );
-                }
-                let a: [f64; 3] = o.semi_axes.as_slice().try_into().map_err(|_| {
-                    InvalidInput::new(
-                        "semi_axes",
-                        format!("the nested form is 3-D: needs 3 semi-axes, found {}", o.semi_axes.len()),
-                    )
-                })?;
-                Shape::Nested(NestedSuperquadric::new(a, n.n, n.m)?)
-            }
-            None => superquadric(&o.semi_axes, o.exponents.as_deref())?,
-        };
-        Obstacle::new(o.id.clone(), shape, o.center.clone(), o.rotation.clone(), o.velocity.clone())
-    }
-}
-
 fn footprint(f: &FootprintSpec) -> Result<Shape> {
     superquadric(&f.semi_axes, f.exponents.as_deref())
-}
-
-fn superquadric(semi_axes: &[f64], exponents: Option<&[f64]>) -> Result<Shape> {
-    let n = exponents.map(<[f64]>::to_vec).unwrap_or_else(|| vec![1.0; semi_axes.len()]);
-    Ok(Shape::Superquadric(Superquadric::new(semi_axes.to_vec(), n)?))
 }
 
 fn prefixed(prefix: &str, e: InvalidInput) -> DmpError {
