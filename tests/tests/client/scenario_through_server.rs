@@ -8,8 +8,10 @@ use dmp_tests::{TestServer, within};
 use dmpctl::offline::run_scenario;
 use dmpctl::scenario_through_server::{SCENARIO_ROBOT, run_scenario_through_server};
 
-/// Runs `file` offline and through the server (whose plans and group runs are the engine's rollouts); the
-/// metrics must be the same, `compute_seconds` aside.
+/// Runs `file` offline and through the server (plans and group runs step through the same `dmp::Execution` as the
+/// offline rollout): the metrics must be the same, `compute_seconds` aside, and the trajectories agree to the bit
+/// (`trajectory.csv` writes every position, velocity and acceleration as its shortest round-trip decimal, so equal
+/// text is equal bits).
 async fn same_metrics(client: &DmpClient, file: &str) -> Vec<String> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios").join(file);
     same_metrics_at(client, &path).await.1
