@@ -8,9 +8,6 @@ use serde_json::{Value, json};
 
 use crate::error::ClientError;
 
-/// The JSON obstacle, imported from here by the simulations.
-pub use dmp_proto::obstacle_json::JsonObstacle;
-
 /// The JSON of a stored record: identity, and the primitive in the engine's serde form (which round-trips).
 pub fn record_json(r: &v1::PrimitiveRecord) -> Result<Value, ClientError> {
     let p =
@@ -52,9 +49,12 @@ mod tests {
 
     #[test]
     fn wire_errors_are_bad_input() {
-        let e = JsonObstacle::parse(&json!({"id": "e", "center": [0], "semi_axes": [1], "bogus": 1}), "o")
-            .map_err(ClientError::from)
-            .unwrap_err();
+        let e = dmp_proto::obstacle_json::JsonObstacle::parse(
+            &json!({"id": "e", "center": [0], "semi_axes": [1], "bogus": 1}),
+            "o",
+        )
+        .map_err(ClientError::from)
+        .unwrap_err();
         assert!(e.is_bad_input() && e.to_string().starts_with("o.bogus"), "{e}");
     }
 }

@@ -52,6 +52,17 @@ pub(crate) fn ensure_finite(field: impl FnOnce() -> String, value: f64) -> Resul
     if value.is_finite() { Ok(()) } else { Err(InvalidInput::new(field(), "must be a finite number")) }
 }
 
+/// Returns an error naming `field` (and the entry) unless `v` has `dim` finite entries.
+pub(crate) fn check_vector(field: &str, v: &[f64], dim: usize) -> Result<(), InvalidInput> {
+    if v.len() != dim {
+        return Err(InvalidInput::new(field, format!("must have {dim} entries, found {}", v.len())));
+    }
+    for (i, x) in v.iter().enumerate() {
+        ensure_finite(|| format!("{field}[{i}]"), *x)?;
+    }
+    Ok(())
+}
+
 /// Returns an error naming `field` unless `value` is finite and strictly positive.
 pub(crate) fn ensure_positive(field: impl FnOnce() -> String, value: f64) -> Result<(), InvalidInput> {
     if value.is_finite() && value > 0.0 {

@@ -6,14 +6,6 @@ use dmp_proto::v1;
 use crate::config::Limits;
 use crate::error::ServerError;
 
-// For the modules being rewritten elsewhere (`services/motion.rs`, `executor/`), which import them from here:
-// the wire's own functions, not copies.
-pub use dmp_proto::avoidance::avoidance_from_proto;
-pub use dmp_proto::check::check_vector as vector;
-pub use dmp_proto::keys::check_name;
-pub use dmp_proto::obstacle::obstacle_to_engine;
-pub use dmp_proto::shape::superquadric_to_shape;
-
 /// The engine's primitive of a message, validated and within the limits.
 pub fn primitive_from_proto(p: &v1::Primitive, limits: &Limits) -> Result<dmp::Primitive, ServerError> {
     if p.dim as usize > limits.max_dim {

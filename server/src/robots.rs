@@ -16,9 +16,6 @@ use zenoh::sample::Locality;
 
 use crate::cell::Cell;
 
-/// Checks a robot state; imported from here by `services/motion.rs`.
-pub use dmp_proto::robot_state::check_robot_state;
-
 /// Publishes executing robots' states: into their cell's scene always (every segment), and on Zenoh when the
 /// server has a session (at most once per `period` per robot: other servers extrapolate with the velocity). Cheap to
 /// clone; a Zenoh error is logged, never returned (a robot's motion never waits on the network).

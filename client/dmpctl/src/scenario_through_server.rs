@@ -12,8 +12,8 @@
 //!   `scenario-<id>`), and the two runs are `ExecuteGroup` streams paced as fast as read, one member per robot,
 //!   `max_duration_s` = the scenario's duration; the members' setpoints are put back together in the scenario's
 //!   dimension order. Learning is per dimension, so each robot's primitive is the rows of the whole one, and the
-//!   server's group run is the engine's joint rollout: the metrics are the offline run's (`tests/tests/server.rs`
-//!   checks it on `youbots-three-dynamic.json`).
+//!   server's group run is the engine's joint rollout: the metrics are the offline run's
+//!   (`tests/tests/server/matches_the_engine.rs` checks it on `youbots-three-dynamic.json`).
 //!   Rows past the scenario's duration (streams end on segment boundaries) are cut; a shorter run is cut to the
 //!   shorter length, and a note says so.
 //!

@@ -4,7 +4,7 @@
 use super::Execution;
 use super::stepping::check_stability;
 use crate::dense::interpolate;
-use crate::error::{InvalidInput, Result, ensure_finite};
+use crate::error::{InvalidInput, Result, check_vector};
 use crate::integrate::State;
 
 impl Execution {
@@ -109,15 +109,4 @@ impl Execution {
         // The next knot is computed afresh, in these buffers.
         self.spare = Some(k1);
     }
-}
-
-/// Checks that `v` has `dim` finite entries; the error names `field` (and the entry).
-pub(crate) fn check_vector(field: &str, v: &[f64], dim: usize) -> Result<(), InvalidInput> {
-    if v.len() != dim {
-        return Err(InvalidInput::new(field, format!("must have {dim} entries, found {}", v.len())));
-    }
-    for (i, x) in v.iter().enumerate() {
-        ensure_finite(|| format!("{field}[{i}]"), *x)?;
-    }
-    Ok(())
 }

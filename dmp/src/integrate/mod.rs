@@ -5,7 +5,7 @@ pub mod dormand_prince;
 
 use crate::basis::{ForcingTerm, GaussianBasis};
 use crate::canonical::phase_after;
-use crate::error::{InvalidInput, Result, ensure_finite, ensure_positive};
+use crate::error::{InvalidInput, Result, check_vector, ensure_positive};
 use crate::primitive::Primitive;
 
 /// A repulsive term `phi(x, v, t)` added to `tau dv/dt` (paper, `eq:dmp_acc_obst`).
@@ -49,14 +49,8 @@ impl Motion {
 
     /// Checks the motion against a primitive of dimension `dim`.
     pub fn validate(&self, dim: usize) -> Result<(), InvalidInput> {
-        for (name, v) in [("start", &self.start), ("goal", &self.goal)] {
-            if v.len() != dim {
-                return Err(InvalidInput::new(name, format!("must have {dim} entries, found {}", v.len())));
-            }
-            for (i, x) in v.iter().enumerate() {
-                ensure_finite(|| format!("{name}[{i}]"), *x)?;
-            }
-        }
+        check_vector("start", &self.start, dim)?;
+        check_vector("goal", &self.goal, dim)?;
         ensure_positive(|| "tau".into(), self.tau)
     }
 }

@@ -42,7 +42,11 @@ pub fn member_segments(
             .iter()
             .map(|m| {
                 let member_columns = |v: &[f64]| -> Vec<f64> {
-                    (0..n).flat_map(|k| m.dims.iter().map(move |&i| v[k * d + i])).collect()
+                    let mut out = Vec::with_capacity(n * m.dims.len());
+                    for row in v.chunks_exact(d) {
+                        out.extend(m.dims.iter().map(|&i| row[i]));
+                    }
+                    out
                 };
                 segment(
                     &m.id,

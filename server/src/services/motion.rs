@@ -7,6 +7,12 @@ use std::time::Duration;
 use dmp::execution::{GroupMember, join_group};
 use dmp::field::Agent;
 use dmp::{Motion, Primitive, Stepping};
+use dmp_proto::avoidance::avoidance_from_proto;
+use dmp_proto::check::check_vector;
+use dmp_proto::keys::check_name;
+use dmp_proto::obstacle::obstacle_to_engine;
+use dmp_proto::robot_state::check_robot_state;
+use dmp_proto::shape::superquadric_to_shape;
 use dmp_proto::status::segment_status;
 use dmp_proto::v1;
 use dmp_proto::v1::motion_service_server::MotionService;
@@ -18,9 +24,7 @@ use tonic::{Request, Response, Status, Streaming};
 use tracing::info;
 
 use crate::cell::Cell;
-use crate::convert::{
-    avoidance_from_proto, check_name, obstacle_to_engine, primitive_from_proto, superquadric_to_shape, vector,
-};
+use crate::convert::primitive_from_proto;
 use crate::error::ServerError;
 use crate::executor::pacing::{history_len, refill_segments};
 use crate::executor::segments::Batch;
@@ -88,7 +92,7 @@ impl MotionServiceImpl {
             if v.is_empty() {
                 Ok(default.to_vec())
             } else {
-                vector(&format!("{prefix}.{field}"), v, d)?;
+                check_vector(&format!("{prefix}.{field}"), v, d)?;
                 Ok(v.to_vec())
             }
         };
@@ -319,7 +323,7 @@ impl MotionService for MotionServiceImpl {
                     Some(M::Stop(_)) => Control::Stop,
                     Some(M::State(mut s)) => {
                         s.robot_id = robot_id.clone();
-                        if let Err(e) = crate::robots::check_robot_state(&s) {
+                        if let Err(e) = check_robot_state(&s) {
                             tracing::warn!(robot = %robot_id, error = %e, "ignored an invalid robot state");
                             continue;
                         }

@@ -104,7 +104,7 @@ fn run(
     let stepping = Stepping { dt: DT, step_points, tolerance };
     let members = vec![(member, Some(layout::footprint(3)))];
     let mut run = ServedRun::new(primitive, motion, members, avoidance, stepping, 100).unwrap();
-    let runner = &mut run.execution;
+    let execution = &mut run.execution;
     let mate_footprint = ball(FOOTPRINT_RADIUS);
     let mates: Vec<Mate> = robots.iter().filter(|r| r.id != robot.id).map(Mate::new).collect();
     let mut x = Vec::new();
@@ -112,16 +112,16 @@ fn run(
     while x.len() / 3 < steps {
         let k = x.len() / 3;
         if k == (TAU / DT) as usize {
-            runner.set_goal(robot.goals[1].clone()).unwrap();
+            execution.set_goal(robot.goals[1].clone()).unwrap();
         }
         // A cell-mate's state is read once per refill of the stream (the server's cadence).
         let refill_points = (refill.as_secs_f64() / DT).round() as usize;
         if k % refill_points == 0 {
             let t = k as f64 * DT;
-            runner.set_cellmates(mates.iter().map(|m| m.seen_at(k, &mate_footprint))).unwrap();
-            runner.limit_knots_to(t + refill_points as f64 * DT);
+            execution.set_cellmates(mates.iter().map(|m| m.seen_at(k, &mate_footprint))).unwrap();
+            execution.limit_knots_to(t + refill_points as f64 * DT);
         }
-        x.extend(runner.advance(10).unwrap().x);
+        x.extend(execution.advance(10).unwrap().x);
     }
     let mut closest = f64::INFINITY;
     for (k, p) in x.chunks_exact(3).enumerate() {
@@ -136,7 +136,7 @@ fn run(
         .zip(free.chunks_exact(3))
         .map(|(a, b)| a.iter().zip(b).map(|(p, q)| (p - q).powi(2)).sum::<f64>().sqrt())
         .fold(0.0, f64::max);
-    (x, closest, detour, runner.cost())
+    (x, closest, detour, execution.cost())
 }
 
 #[test]

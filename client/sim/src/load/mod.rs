@@ -9,7 +9,7 @@
 //! | cells, paths that cross, fixed obstacles, the primitive | `layout.rs` |
 //! | obstacles, primitives and session starts on the server | `setup.rs` |
 //! | one robot's session and the accounting of its setpoints | `robot.rs` |
-//! | a segment as the robots read it (setpoint arrays undecoded) | `dmp_proto::segment_view` (re-exported by `segment_view.rs`) |
+//! | a segment as the robots read it (setpoint arrays undecoded) | `dmp_proto::segment_view` |
 //! | the Zenoh obstacle updater and the update-to-segment latency | `scene.rs` |
 //! | the server's CPU and memory over the run | `monitor.rs` |
 //! | histograms and percentiles | `stats.rs` |
@@ -39,7 +39,6 @@ pub mod per_second;
 pub mod report;
 pub mod robot;
 pub mod scene;
-pub mod segment_view;
 pub mod setup;
 pub mod stats;
 

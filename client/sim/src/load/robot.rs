@@ -26,9 +26,9 @@ use tokio_stream::StreamExt;
 use super::layout::RobotPlan;
 use super::per_second::PerSecond;
 use super::scene::CellProbe;
-use super::segment_view::SegmentView;
 use super::stats::{Histogram, SignedHistogram};
 use super::{unix_now, unix_now_ns};
+use dmp_proto::segment_view::SegmentView;
 
 /// Runs whose points were all due this long before the latest arrival are final.
 pub const FINALIZE_AFTER_S: f64 = 1.0;

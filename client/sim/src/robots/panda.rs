@@ -27,8 +27,8 @@
 //! must also stay within the Panda's Cartesian limits ([`MAX_SPEED`], [`MAX_ACCELERATION`], [`MAX_JERK`]), which
 //! the report's peaks are checked against.
 
-use dmp_client::convert::JsonObstacle;
 use dmp_client::grpc::DmpClient;
+use dmp_proto::obstacle_json::JsonObstacle;
 use dmp_proto::v1;
 
 use super::demonstration::min_jerk;

@@ -36,9 +36,9 @@
 use std::time::Duration;
 
 use dmp::scenario::ObstacleSpec;
-use dmp_client::convert::JsonObstacle;
 use dmp_client::grpc::DmpClient;
 use dmp_client::zenoh_pub::ObstaclePublisher;
+use dmp_proto::obstacle_json::JsonObstacle;
 use dmp_proto::v1;
 use tokio::sync::watch;
 

@@ -56,8 +56,8 @@
 //! arm>`): they show what avoidance prevented.
 
 use dmp::{Agent, Shape, Superquadric, Trajectory};
-use dmp_client::convert::JsonObstacle;
 use dmp_client::grpc::DmpClient;
+use dmp_proto::obstacle_json::JsonObstacle;
 use dmp_proto::v1;
 
 use super::clearance::{closest_approach, distance, side_by_side};

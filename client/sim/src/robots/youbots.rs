@@ -53,8 +53,8 @@
 
 use dmp::scenario::ObstacleSpec;
 use dmp::{Agent, Integrator, Motion, NoPerturbation, Primitive, Shape, State, Superquadric, Trajectory};
-use dmp_client::convert::JsonObstacle;
 use dmp_client::grpc::DmpClient;
+use dmp_proto::obstacle_json::JsonObstacle;
 use dmp_proto::v1;
 
 use super::clearance::{closest_approach, measure_fast, side_by_side};
