@@ -147,6 +147,7 @@ mod tests {
             status: v1::SegmentStatus::GoalReached as i32,
             scene_version: 4,
             start_unix_s: 1.7e9,
+            ..Default::default()
         }
     }
 

@@ -35,6 +35,8 @@ pub fn member_segments(
         status: status as i32,
         scene_version: run.scene_version,
         start_unix_s: start_unix.map(|s| s + p.start_time).unwrap_or(0.0),
+        warnings: Vec::new(),
+        scene_stale: false,
     };
     match e.members() {
         [m] if m.dims.len() == d => vec![segment(&m.id, d, p.x, p.xd, p.xdd)],

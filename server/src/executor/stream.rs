@@ -117,6 +117,8 @@ struct Producer<'a> {
     /// Real time: the run is complete once this point (run time) has been executed, for this reason; until then
     /// it can still be superseded.
     finished: Option<(f64, &'static str)>,
+    /// Warnings not yet sent: they go with the next segment (every member's, for a group).
+    warnings: Vec<v1::Warning>,
 }
 
 impl<'a> Producer<'a> {
@@ -142,6 +144,7 @@ impl<'a> Producer<'a> {
             start_unix: app.clock.now_unix_s() + delay.as_secs_f64(),
             sequence: 0,
             finished: None,
+            warnings: Vec::new(),
         }
     }
 
@@ -292,7 +295,13 @@ impl<'a> Producer<'a> {
             let last_point_time = e.time() - e.dt();
             let outcome = stretch.outcome;
             let first = first_of_wake.then(|| FirstPoint::of(&stretch, e.dim()));
-            let batch = member_segments(run, stretch, self.sequence, segment_status(outcome), start_unix);
+            let mut batch = member_segments(run, stretch, self.sequence, segment_status(outcome), start_unix);
+            if !self.warnings.is_empty() {
+                for segment in &mut batch {
+                    segment.warnings.clone_from(&self.warnings);
+                }
+                self.warnings.clear();
+            }
             let members = batch.len() as u64;
             // A segment that supersedes points already sent cannot wait for the connection's batched write.
             if changes_plan

@@ -252,9 +252,12 @@ impl MotionService for MotionServiceImpl {
                 accelerations: stretch.xdd,
                 scene_version,
                 start_unix_s: 0.0,
+                warnings: Vec::new(),
+                scene_stale: false,
             }),
             collisions,
             stalled,
+            warnings: Vec::new(),
         }))
     }
 
