@@ -141,6 +141,9 @@ pub struct Limits {
     pub max_steps: usize,
     /// Segments buffered per stream before the producer waits for the reader (backpressure).
     pub stream_buffer: usize,
+    /// Half-width of the workspace box, metres: every coordinate of a start, goal, obstacle centre or robot state
+    /// must be within `[-workspace_m, workspace_m]`.
+    pub workspace_m: f64,
 }
 
 impl Default for Limits {
@@ -155,6 +158,7 @@ impl Default for Limits {
             max_streams: 2000,
             max_steps: dmp::rollout::MAX_ROLLOUT_STEPS,
             stream_buffer: 4,
+            workspace_m: 1000.0,
         }
     }
 }
