@@ -21,6 +21,8 @@ pub struct Config {
     pub defaults: Defaults,
     /// Bounds on requests and resources.
     pub limits: Limits,
+    /// The compute threads and what they may be asked to do.
+    pub compute: ComputeConfig,
 }
 
 impl Default for Config {
@@ -32,6 +34,7 @@ impl Default for Config {
             zenoh: ZenohConfig::default(),
             defaults: Defaults::default(),
             limits: Limits::default(),
+            compute: ComputeConfig::default(),
         }
     }
 }
@@ -159,6 +162,43 @@ impl Default for Limits {
             max_steps: dmp::rollout::MAX_ROLLOUT_STEPS,
             stream_buffer: 4,
             workspace_m: 1000.0,
+        }
+    }
+}
+
+/// The compute threads (stepping, plans and learns never run on the async workers) and the budgets that requests
+/// are admitted against. Work is counted in work units (`compute::cost`): about the time of one Gaussian of the
+/// forcing term in one dimension.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ComputeConfig {
+    /// Threads stepping the real-time streams; 0 means one per core.
+    pub realtime_threads: usize,
+    /// Threads for plans, learns and as-fast-as-read streams; 0 means one per core.
+    pub batch_threads: usize,
+    /// Added to the batch threads' niceness (Linux): they take only the time the real-time threads leave.
+    pub batch_nice: i32,
+    /// Work units per second that real-time streams may take together, per real-time thread.
+    pub realtime_work_per_thread_s: f64,
+    /// Most work units of one computation: one wake-up of a stream (a segment and its refill), so that no stream
+    /// holds a compute thread for long.
+    pub max_job_work: f64,
+    /// Most work units of one request: a plan, a learn, or an as-fast-as-read stream in all.
+    pub max_request_work: f64,
+    /// Most work units of plans and learns queued or running at once.
+    pub batch_queue_work: f64,
+}
+
+impl Default for ComputeConfig {
+    fn default() -> Self {
+        Self {
+            realtime_threads: 0,
+            batch_threads: 0,
+            batch_nice: 10,
+            realtime_work_per_thread_s: 6e8,
+            max_job_work: 2e7,
+            max_request_work: 1e10,
+            batch_queue_work: 3e10,
         }
     }
 }

@@ -29,6 +29,9 @@ pub enum ServerError {
     /// The server is shutting down.
     #[error("the server is shutting down")]
     ShuttingDown,
+    /// The client cancelled, left or passed its deadline: the work stopped.
+    #[error("cancelled: {0}")]
+    Cancelled(String),
     /// A bug or an unexpected failure.
     #[error("internal: {0}")]
     Internal(String),
@@ -83,6 +86,7 @@ impl From<ServerError> for Status {
             ServerError::ResourceExhausted(_) => Status::resource_exhausted(msg),
             ServerError::FailedPrecondition(_) => Status::failed_precondition(msg),
             ServerError::ShuttingDown => Status::unavailable(msg),
+            ServerError::Cancelled(_) => Status::cancelled(msg),
             ServerError::Storage(_) | ServerError::Internal(_) => Status::internal(msg),
         }
     }

@@ -21,6 +21,7 @@ pub mod cell;
 pub mod cells;
 pub mod cli;
 pub mod clock;
+pub mod compute;
 pub mod config;
 pub mod convert;
 pub mod error;

@@ -19,6 +19,7 @@ use tracing::{info, warn};
 
 use crate::cells::Cells;
 use crate::clock::Clock;
+use crate::compute::Compute;
 use crate::config::Config;
 use crate::error::ServerError;
 use crate::robots::RobotBus;
@@ -100,7 +101,10 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
     };
     let bridge_malformed = bridge.as_ref().map(|b| b.malformed_counter());
 
+    let compute = Compute::start(&config.compute)
+        .map_err(|e| ServerError::Internal(format!("cannot start the compute threads: {e}")))?;
     let state = Arc::new(AppState {
+        compute,
         streams: Arc::new(Semaphore::new(config.limits.max_streams)),
         config,
         store,

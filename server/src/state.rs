@@ -7,6 +7,7 @@ use tokio_util::sync::CancellationToken;
 
 use crate::cells::Cells;
 use crate::clock::Clock;
+use crate::compute::Compute;
 use crate::config::Config;
 use crate::error::ServerError;
 use crate::robots::RobotBus;
@@ -32,6 +33,8 @@ pub struct AppState {
     pub counters: Counters,
     /// Wall time and pacing instants.
     pub clock: Clock,
+    /// The compute pools and their admission budgets.
+    pub compute: Compute,
 }
 
 /// What the server has done so far.
@@ -79,6 +82,7 @@ impl AppState {
             store: Store::open(dir).expect("a store in a fresh directory"),
             robots: RobotBus::new(None),
             cells: Cells::new("c", 10, config.limits.max_obstacles).expect("cell c"),
+            compute: Compute::start(&config.compute).expect("compute threads start"),
             config,
             shutdown: CancellationToken::new(),
             counters: Default::default(),

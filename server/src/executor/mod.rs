@@ -3,8 +3,10 @@
 //! live here; the stepping, the changes and the outcomes live in the engine.
 
 pub mod pacing;
+pub mod plan;
 pub mod segments;
 pub mod served_run;
+pub mod step;
 pub mod stream;
 
 #[cfg(test)]

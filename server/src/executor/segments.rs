@@ -1,12 +1,9 @@
-//! What a stretch of a run becomes on the wire: one segment per member, and each member's state published to its
-//! cell.
+//! What a stretch of a run becomes on the wire: one segment per member.
 
 use dmp::execution::Stretch;
 use dmp_proto::v1;
 
 use super::served_run::ServedRun;
-use crate::cell::Cell;
-use crate::state::AppState;
 
 /// What the loop sends: one segment per member, all covering the same times.
 pub type Batch = Vec<v1::Segment>;
@@ -59,45 +56,5 @@ pub fn member_segments(
                 )
             })
             .collect(),
-    }
-}
-
-/// The state at a stretch's first point (run time `t`).
-#[derive(Debug)]
-pub struct FirstPoint {
-    /// Run time.
-    pub t: f64,
-    /// Position (the DMP's dimension).
-    pub x: Vec<f64>,
-    /// Velocity.
-    pub xd: Vec<f64>,
-}
-
-impl FirstPoint {
-    /// The first point of `p`, a stretch of a `dim`-dimensional run.
-    pub fn of(p: &Stretch, dim: usize) -> Self {
-        Self { t: p.start_time, x: p.x[..dim].to_vec(), xd: p.xd[..dim].to_vec() }
-    }
-}
-
-/// Publishes each member's state at `p`, stamped with the wall time of its run time (`start_unix` is that of run
-/// time zero in real time; as fast as read, now).
-pub async fn publish_states(
-    app: &AppState,
-    cell: &Cell,
-    run: &ServedRun,
-    p: FirstPoint,
-    start_unix: Option<f64>,
-) {
-    let stamp = start_unix.map(|s| s + p.t).unwrap_or_else(|| app.clock.now_unix_s());
-    for (m, footprint) in run.execution.members().iter().zip(&run.footprints) {
-        let state = v1::RobotState {
-            robot_id: m.id.clone(),
-            stamp_unix_s: stamp,
-            position: m.dims.iter().map(|&i| p.x[i]).collect(),
-            velocity: m.dims.iter().map(|&i| p.xd[i]).collect(),
-            footprint: footprint.clone(),
-        };
-        app.robots.publish(cell, state, m.footprint.clone()).await;
     }
 }

@@ -10,6 +10,7 @@ use dmp::{Avoidance, Execution, Motion, Obstacle, Primitive, Stepping};
 use dmp_proto::v1;
 
 use crate::cell::{ObstacleSet, SeenRobot};
+use crate::compute::cost::{Avoided, Workload};
 use crate::error::ServerError;
 
 /// How a request asked its run to avoid things.
@@ -36,6 +37,21 @@ pub struct ServedRun {
     pub footprints: Vec<Option<v1::Superquadric>>,
     /// The version of the cell's scene the run avoids.
     pub scene_version: u64,
+    /// What the run's cost depends on besides the cell.
+    costing: Costing,
+}
+
+/// What a run's cost depends on besides the cell's obstacles and robots.
+#[derive(Debug, Clone)]
+struct Costing {
+    obstacles: (dmp::Method, usize),
+    robots: (dmp::Method, usize),
+    /// The run's own obstacles.
+    extra: usize,
+    /// Members of the group (each a moving obstacle for the others).
+    members: usize,
+    /// Gaussians of the forcing term (N + 1).
+    basis: usize,
 }
 
 impl ServedRun {
@@ -51,6 +67,13 @@ impl ServedRun {
     ) -> Result<Self, ServerError> {
         let (agents, footprints): (Vec<Agent>, Vec<_>) = members.into_iter().unzip();
         let group = agents.len() > 1;
+        let costing = Costing {
+            obstacles: (avoidance.obstacles.0.method, avoidance.obstacles.1),
+            robots: (avoidance.robots.0.method, avoidance.robots.1),
+            extra: avoidance.extra.len(),
+            members: agents.len(),
+            basis: primitive.weights.first().map_or(0, Vec::len),
+        };
         let scene = Scene {
             obstacles: avoidance.extra,
             avoidance: avoidance.obstacles.0,
@@ -60,7 +83,20 @@ impl ServedRun {
         };
         let cellmates = CellMateAvoidance { method: avoidance.robots.0, point_samples: avoidance.robots.1 };
         let execution = Execution::new(primitive, motion, scene, cellmates, stepping, history)?;
-        Ok(Self { execution, ignore_scene: avoidance.ignore_scene, footprints, scene_version: 0 })
+        Ok(Self { execution, ignore_scene: avoidance.ignore_scene, footprints, scene_version: 0, costing })
+    }
+
+    /// What the run costs to compute in a cell of `cell_obstacles` obstacles and `cell_robots` other robots.
+    pub fn workload(&self, cell_obstacles: usize, cell_robots: usize) -> Workload {
+        let c = &self.costing;
+        let avoided = Avoided {
+            obstacles: (&c.obstacles.0, c.obstacles.1),
+            obstacle_count: c.extra + if self.ignore_scene { 0 } else { cell_obstacles },
+            robots: (&c.robots.0, c.robots.1),
+            // Each member avoids, in its own dimensions, the others of its group and the cell's robots.
+            robot_count: c.members.saturating_sub(1) + cell_robots,
+        };
+        Workload::of(self.execution.dim(), c.basis, avoided, self.execution.stepping())
     }
 
     /// Sets the cell's obstacles (as they are at wall time `now_unix_s`, which is the run's current time) and its

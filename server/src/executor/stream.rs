@@ -2,22 +2,27 @@
 //! backpressure: a slow reader holds the producer, never grows memory). Real-time pacing keeps the segments sent
 //! between `lookahead` and `lookahead + refill` ahead of the wall clock, waking once per refill rather than once
 //! per segment; a scene change or a command is applied from the robot's current time by rolling back and sending a
-//! segment that supersedes the points already sent. The stepping itself is the engine's ([`dmp::Execution`]).
+//! segment that supersedes the points already sent. The stepping itself is the engine's ([`dmp::Execution`]), and
+//! it runs on a compute thread ([`crate::compute`]): real-time streams on the real-time pool, the others on the
+//! batch pool; this task only waits, sends and publishes.
 
 use std::sync::Arc;
 use std::time::Duration;
 
 use dmp::Stepping;
-use dmp_proto::status::{end_reason, segment_status};
+use dmp_proto::status::end_reason;
 use dmp_proto::v1;
 use tokio::sync::{mpsc, watch};
 use tokio::time::Instant;
 use tracing::{debug, info, warn};
 
 use super::pacing::{FIRST_POINT_DELAY, ROLLBACK_MARGIN, refill};
-use super::segments::{Batch, FirstPoint, member_segments, publish_states};
+use super::segments::Batch;
 use super::served_run::ServedRun;
+use super::step::{Step, Stepped, compute};
 use crate::cell::{Cell, ObstacleSet, SeenRobot};
+use crate::compute::admission::Reservation;
+use crate::compute::pool::Pool;
 use crate::error::ServerError;
 use crate::state::AppState;
 use crate::write_batching::Urgency;
@@ -60,7 +65,8 @@ pub enum Control {
 }
 
 /// Runs `run` until the goal, a stop, `max_duration`, the client leaving or shutdown. Items go to `tx` (mapped by
-/// the caller's stream); errors end the stream with a status.
+/// the caller's stream); errors end the stream with a status. `budget` is the run's compute reservation, held
+/// until it ends.
 pub async fn run_stream(
     app: Arc<AppState>,
     mut run: ServedRun,
@@ -68,17 +74,21 @@ pub async fn run_stream(
     cfg: StreamConfig,
     tx: mpsc::Sender<Result<Batch, tonic::Status>>,
     control: Option<mpsc::Receiver<Control>>,
+    budget: Option<Reservation>,
 ) {
     run.execution.set_end_time(cfg.max_duration);
     let ids: Vec<String> = run.execution.members().iter().map(|m| m.id.clone()).collect();
-    let mut producer = Producer::new(&app, &cell, &cfg, &tx, control);
-    let result = producer.produce(&mut run).await;
+    let mut producer = Producer::new(&app, &cell, &cfg, &tx, control, run);
+    let result = producer.produce().await;
+    let t = producer.time;
+    drop(producer);
+    drop(budget);
     for id in &ids {
         app.robots.retire(&cell, id).await;
     }
-    let t = run.execution.time();
     match result {
         Ok(reason) => info!(robots = ?ids, reason, t, "stream ended"),
+        Err(ServerError::Cancelled(reason)) => info!(robots = ?ids, reason, t, "stream ended"),
         Err(ServerError::ShuttingDown) => {
             info!(robots = ?ids, t, "stream ended by shutdown");
             // Never wait on a reader that stopped reading: the status goes only if there is room.
@@ -108,6 +118,12 @@ struct Producer<'a> {
     cfg: &'a StreamConfig,
     tx: &'a mpsc::Sender<Result<Batch, tonic::Status>>,
     control: Option<mpsc::Receiver<Control>>,
+    /// The run; on a compute thread while a wake-up computes (`None` only if that computation failed).
+    run: Option<ServedRun>,
+    /// Where the run is computed: the real-time pool or the batch pool.
+    pool: &'a Pool,
+    /// The run's current time (its next point).
+    time: f64,
     scene_rx: watch::Receiver<Arc<ObstacleSet>>,
     others: Vec<Arc<SeenRobot>>,
     /// Real time: the instant and the wall time (Unix seconds) of run time zero.
@@ -128,6 +144,7 @@ impl<'a> Producer<'a> {
         cfg: &'a StreamConfig,
         tx: &'a mpsc::Sender<Result<Batch, tonic::Status>>,
         control: Option<mpsc::Receiver<Control>>,
+        run: ServedRun,
     ) -> Self {
         // Real time: the first point is due FIRST_POINT_DELAY from now, so that the first segment (computed and
         // sent now) reaches the robot before it.
@@ -138,6 +155,9 @@ impl<'a> Producer<'a> {
             cfg,
             tx,
             control,
+            time: run.execution.time(),
+            run: Some(run),
+            pool: if cfg.realtime { &app.compute.realtime } else { &app.compute.batch },
             scene_rx: cell.subscribe(),
             others: Vec::new(),
             start: app.clock.now() + delay,
@@ -148,26 +168,18 @@ impl<'a> Producer<'a> {
         }
     }
 
-    /// The wall time (Unix seconds) of run time `t`: real time maps them one to one; as fast as read, "now" is
-    /// whenever the point is computed.
-    fn wall_of(&self, t: f64) -> f64 {
-        if self.cfg.realtime { self.start_unix + t } else { self.app.clock.now_unix_s() }
-    }
-
     /// The loop: wait, apply what changed, send what is due.
-    async fn produce(&mut self, run: &mut ServedRun) -> Result<&'static str, ServerError> {
-        let snapshot = self.scene_rx.borrow_and_update().clone();
-        self.read_cellmates(run);
-        run.apply_scene(&snapshot, &self.others, self.wall_of(run.execution.time()))?;
-        let mut wake = Wake::default();
+    async fn produce(&mut self) -> Result<&'static str, ServerError> {
+        let mut wake = Wake { scene_changed: true, commands: Vec::new() };
+        // The first wake-up applies the scene as it is now.
+        self.scene_rx.borrow_and_update();
+        let mut first = true;
         loop {
-            let changes_plan = self.apply(run, std::mem::take(&mut wake)).await?;
-            if (changes_plan || self.finished.is_none())
-                && let Some(reason) = self.send_due(run, changes_plan).await?
-            {
+            if let Some(reason) = self.wake_up(std::mem::take(&mut wake), first).await? {
                 return Ok(reason);
             }
-            match self.wait(run).await? {
+            first = false;
+            match self.wait().await? {
                 Ok(w) => wake = w,
                 Err(reason) => return Ok(reason),
             }
@@ -176,12 +188,12 @@ impl<'a> Producer<'a> {
 
     /// Real time: sleeps until the next segment is due (or the run's last point executed) while reacting to
     /// changes; as fast as read: takes what is pending. `Err(reason)` when the stream is over.
-    async fn wait(&mut self, run: &ServedRun) -> Result<Result<Wake, &'static str>, ServerError> {
+    async fn wait(&mut self) -> Result<Result<Wake, &'static str>, ServerError> {
         let mut wake = Wake::default();
         if self.cfg.realtime {
             let due = match self.finished {
                 Some((t_end, _)) => self.start + Duration::from_secs_f64(t_end),
-                None => (self.start + Duration::from_secs_f64(run.execution.time()))
+                None => (self.start + Duration::from_secs_f64(self.time))
                     .checked_sub(self.cfg.lookahead)
                     .unwrap_or_else(|| self.app.clock.now()),
             };
@@ -216,133 +228,160 @@ impl<'a> Producer<'a> {
         Ok(Ok(wake))
     }
 
-    /// Applies a wake-up's changes from the robot's current time (rolling back what was computed ahead of it), and
-    /// reads the cell-mates. Measured states are published and change nothing in the plan. True when the plan
-    /// changed.
-    async fn apply(&mut self, run: &mut ServedRun, wake: Wake) -> Result<bool, ServerError> {
-        let mut changes_plan = wake.scene_changed;
-        for c in &wake.commands {
+    /// Applies a wake-up's changes from the robot's current time (rolling back what was computed ahead of it) and
+    /// sends what is due: one segment as fast as read; in real time, up to a refill beyond the lookahead (a
+    /// superseding segment goes out on its own first). Measured states are published and change nothing in the
+    /// plan. `Some(reason)` when the stream is over.
+    async fn wake_up(&mut self, wake: Wake, first: bool) -> Result<Option<&'static str>, ServerError> {
+        let mut changes_plan = wake.scene_changed && !first;
+        let mut commands = Vec::with_capacity(wake.commands.len());
+        for c in wake.commands {
             match c {
-                Control::State(s) => {
-                    let members = run.execution.members();
-                    let footprint =
-                        members.iter().find(|m| m.id == s.robot_id).and_then(|m| m.footprint.clone());
-                    self.app.robots.publish(self.cell, s.clone(), footprint).await;
+                Control::State(s) => self.publish_measured(s).await,
+                c => {
+                    changes_plan = true;
+                    commands.push(c);
                 }
-                _ => changes_plan = true,
             }
         }
-        if changes_plan && self.cfg.realtime {
-            let now_t = (self.start.elapsed() + ROLLBACK_MARGIN).as_secs_f64() + run.execution.dt();
-            run.execution.rollback_to(now_t);
+        let realtime = self.cfg.realtime;
+        let rollback_to = (changes_plan && realtime).then(|| {
+            (self.start.elapsed() + ROLLBACK_MARGIN).as_secs_f64() + self.cfg.stepping.dt
+        });
+        if rollback_to.is_some() {
             self.finished = None;
         }
         if !changes_plan && self.finished.is_some() {
-            return Ok(false);
+            return Ok(None);
         }
-        self.read_cellmates(run);
-        let now = self.wall_of(run.execution.time());
-        if wake.scene_changed {
-            let snapshot = self.scene_rx.borrow_and_update().clone();
-            run.apply_scene(&snapshot, &self.others, now)?;
-            debug!(version = snapshot.version, t = run.execution.time(), "scene applied");
-        } else {
-            run.set_cellmates(&self.others, now)?;
+        let scene = wake.scene_changed.then(|| self.scene_rx.borrow_and_update().clone());
+        if let Some(s) = &scene {
+            debug!(version = s.version, "scene applied");
         }
-        let e = &mut run.execution;
-        for c in wake.commands {
-            match c {
-                Control::SetGoal(g) => e.set_goal(g)?,
-                Control::SetTau(tau) => e.set_tau(tau)?,
-                Control::Pause => e.set_holding(true),
-                Control::Resume => e.set_holding(false),
-                Control::Stop => e.stop(),
-                Control::State(_) => {}
-            }
+        let horizon = realtime.then(|| {
+            (self.start.elapsed() + self.cfg.lookahead + refill(self.app.open_streams())).as_secs_f64()
+        });
+        // A segment that supersedes points already sent goes out on its own, before the rest of the refill.
+        let supersedes = changes_plan && realtime;
+        let mut step = Step {
+            rollback_to,
+            scene,
+            others: self.cellmates(rollback_to.unwrap_or(self.time)),
+            start_unix: realtime.then_some(self.start_unix),
+            now_unix_s: self.app.clock.now_unix_s(),
+            commands,
+            horizon,
+            max_segments: if supersedes || !realtime { 1 } else { usize::MAX },
+            segment_points: self.cfg.segment_points,
+            sequence: self.sequence,
+        };
+        let stepped = self.on_pool(step).await?;
+        if let Some(reason) = self.send(stepped, supersedes).await? {
+            return Ok(Some(reason));
         }
-        Ok(changes_plan)
+        if supersedes && self.finished.is_none() && horizon.is_some_and(|h| self.time < h) {
+            // A change wakes every stream of the cell at once: the others send their superseding segment before
+            // this one computes the rest of its refill.
+            tokio::task::yield_now().await;
+            step = Step {
+                rollback_to: None,
+                scene: None,
+                others: self.cellmates(self.time),
+                start_unix: Some(self.start_unix),
+                now_unix_s: self.app.clock.now_unix_s(),
+                commands: Vec::new(),
+                horizon,
+                max_segments: usize::MAX,
+                segment_points: self.cfg.segment_points,
+                sequence: self.sequence,
+            };
+            let stepped = self.on_pool(step).await?;
+            return self.send(stepped, false).await;
+        }
+        Ok(None)
     }
 
-    /// The cell's other robots as they are now.
-    fn read_cellmates(&mut self, run: &ServedRun) {
-        let first = &run.execution.members()[0].id;
-        let now = self.wall_of(run.execution.time());
-        self.cell.other_robots_into(first, now, REMOTE_MAX_AGE_S, &mut self.others);
+    /// Runs one wake-up's computation on the stream's pool.
+    async fn on_pool(&mut self, step: Step) -> Result<Stepped, ServerError> {
+        let mut run = self.run.take().ok_or_else(|| ServerError::Internal("the run was lost".into()))?;
+        let (run, stepped) = tokio::select! {
+            r = self.pool.run(move |job| {
+                let stepped = compute(&mut run, step, job);
+                (run, stepped)
+            }) => r.map_err(|e| ServerError::Internal(e.to_string()))?,
+            _ = self.app.shutdown.cancelled() => return Err(ServerError::ShuttingDown),
+            // Dropping the computation cancels it: nobody reads what it would compute.
+            _ = self.tx.closed() => return Err(ServerError::Cancelled("client left".into())),
+        };
+        self.time = run.execution.time();
+        self.run = Some(run);
+        stepped
     }
 
-    /// Computes and sends segments: one as fast as read; in real time, up to a refill beyond the lookahead (each
-    /// segment goes out as soon as it is computed). The last one ends with the point at exactly `max_duration`.
-    /// Within a refill the cell-mates move along their velocities. `Some(reason)` when the stream is over.
-    async fn send_due(
-        &mut self,
-        run: &mut ServedRun,
-        changes_plan: bool,
-    ) -> Result<Option<&'static str>, ServerError> {
-        let (cfg, app) = (self.cfg, self.app);
-        let horizon = (self.start.elapsed() + cfg.lookahead + refill(app.open_streams())).as_secs_f64();
-        let seg = cfg.segment_points as f64 * cfg.stepping.dt;
-        if cfg.realtime {
-            // This wake-up ends with the first segment that reaches the horizon: the next change applies there at
-            // the earliest.
-            let segments = ((horizon - run.execution.time()) / seg).ceil().max(1.0);
-            run.execution.limit_knots_to(run.execution.time() + segments * seg);
-        }
-        let start_unix = cfg.realtime.then_some(self.start_unix);
-        let mut first_of_wake = true;
-        loop {
-            let e = &mut run.execution;
-            let stretch = e.advance(cfg.segment_points.min(e.points_to_end()))?;
-            let last_point_time = e.time() - e.dt();
-            let outcome = stretch.outcome;
-            let first = first_of_wake.then(|| FirstPoint::of(&stretch, e.dim()));
-            let mut batch = member_segments(run, stretch, self.sequence, segment_status(outcome), start_unix);
+    /// Sends the segments computed, then publishes the members' states at the first one. `Some(reason)` when the
+    /// stream is over.
+    async fn send(&mut self, stepped: Stepped, urgent: bool) -> Result<Option<&'static str>, ServerError> {
+        let Stepped { segments, states, warnings } = stepped;
+        self.warnings.extend(warnings);
+        let app = self.app;
+        for (k, mut computed) in segments.into_iter().enumerate() {
             if !self.warnings.is_empty() {
-                for segment in &mut batch {
+                for segment in &mut computed.batch {
                     segment.warnings.clone_from(&self.warnings);
                 }
                 self.warnings.clear();
             }
-            let members = batch.len() as u64;
+            let members = computed.batch.len() as u64;
             // A segment that supersedes points already sent cannot wait for the connection's batched write.
-            if changes_plan
-                && first_of_wake
-                && cfg.realtime
-                && let Some(urgency) = &cfg.urgency
+            if urgent
+                && k == 0
+                && let Some(urgency) = &self.cfg.urgency
             {
                 urgency.write_now();
             }
             // The robot first: publishing the states may wait on Zenoh (a robot's first state declares its
             // publisher).
             tokio::select! {
-                sent = self.tx.send(Ok(batch)) => if sent.is_err() { return Ok(Some("client left")) },
+                sent = self.tx.send(Ok(computed.batch)) => if sent.is_err() { return Ok(Some("client left")) },
                 _ = app.shutdown.cancelled() => return Err(ServerError::ShuttingDown),
             }
-            // One state per wake-up: the cell-mates read them at their own wake-ups (once per refill) and
-            // extrapolate them with the velocity.
-            if let Some(first) = first {
-                publish_states(app, self.cell, run, first, start_unix).await;
-                first_of_wake = false;
-                // A change wakes every stream of the cell at once: let the others send their superseding segment
-                // before this one computes the rest of its refill.
-                if changes_plan && cfg.realtime {
-                    tokio::task::yield_now().await;
+            if k == 0 {
+                // One state per wake-up: the cell-mates read them at their own wake-ups (once per refill) and
+                // extrapolate them with the velocity.
+                for (state, footprint) in &states {
+                    app.robots.publish(self.cell, state.clone(), footprint.clone()).await;
                 }
             }
             app.counters.segments_sent.fetch_add(members, std::sync::atomic::Ordering::Relaxed);
             self.sequence += 1;
-            if let Some(reason) = end_reason(outcome) {
-                if !cfg.realtime {
+            if let Some(reason) = end_reason(computed.outcome) {
+                if !self.cfg.realtime {
                     return Ok(Some(reason));
                 }
                 // Keep the stream open until the robot has executed the last point: a change may still supersede
                 // it.
-                self.finished = Some((last_point_time, reason));
-                return Ok(None);
-            }
-            if !cfg.realtime || run.execution.time() >= horizon {
-                return Ok(None);
+                self.finished = Some((computed.last_point_time, reason));
             }
         }
+        Ok(None)
+    }
+
+    /// Publishes a state the robot measured (it changes nothing in the plan).
+    async fn publish_measured(&self, s: v1::RobotState) {
+        let footprint = self.run.as_ref().and_then(|run| {
+            run.execution.members().iter().find(|m| m.id == s.robot_id).and_then(|m| m.footprint.clone())
+        });
+        self.app.robots.publish(self.cell, s, footprint).await;
+    }
+
+    /// The cell's other robots as they are at run time `t`.
+    fn cellmates(&mut self, t: f64) -> Vec<Arc<SeenRobot>> {
+        let Some(first) = self.run.as_ref().and_then(|r| r.execution.members().first()) else {
+            return Vec::new();
+        };
+        let now = if self.cfg.realtime { self.start_unix + t } else { self.app.clock.now_unix_s() };
+        self.cell.other_robots_into(&first.id, now, REMOTE_MAX_AGE_S, &mut self.others);
+        self.others.clone()
     }
 }
 

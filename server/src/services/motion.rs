@@ -26,7 +26,9 @@ use tracing::info;
 use crate::cell::Cell;
 use crate::convert::primitive_from_proto;
 use crate::error::ServerError;
-use crate::executor::pacing::{history_len, refill_segments};
+use crate::compute::admission::Reservation;
+use crate::executor::pacing::{MAX_REFILL, history_len, refill_segments};
+use crate::executor::plan::advance_cancellable;
 use crate::executor::segments::Batch;
 use crate::executor::served_run::{RunAvoidance, ServedRun};
 use crate::executor::stream::{Control, StreamConfig, run_stream};
@@ -173,6 +175,30 @@ impl MotionServiceImpl {
         }
         Ok(())
     }
+    /// Costs a stream in its cell as it is now and admits it: a real-time stream reserves its rate of the real-time
+    /// budget while it runs; an as-fast-as-read one must fit the limit of one request.
+    fn admit_stream(
+        &self,
+        run: &ServedRun,
+        cell: &Cell,
+        cfg: &StreamConfig,
+    ) -> Result<Option<Reservation>, ServerError> {
+        let w = run.workload(cell.snapshot().obstacles.len(), cell.robot_count());
+        let admission = &self.state.compute.admission;
+        let dt = cfg.stepping.dt;
+        let segment = cfg.segment_points as f64;
+        if cfg.realtime {
+            // The longest wake-up: the scene rebuilt, then a lookahead and a refill of segments.
+            let per_job =
+                w.per_scene + w.of_points(segment + ((cfg.lookahead + MAX_REFILL).as_secs_f64() / dt).ceil());
+            Ok(Some(admission.realtime(w.per_second(dt), per_job, "motion")?))
+        } else {
+            admission.check_job(w.per_scene + w.of_points(segment), "segment_s")?;
+            admission.check_request(w.of_points(cfg.max_duration / dt), "max_duration_s")?;
+            Ok(None)
+        }
+    }
+
     /// Spawns the producer of a stream and returns the receiving end.
     fn spawn(
         &self,
@@ -182,13 +208,14 @@ impl MotionServiceImpl {
         control: Option<mpsc::Receiver<Control>>,
     ) -> Result<mpsc::Receiver<Result<Batch, Status>>, ServerError> {
         let permit = self.state.stream_permit()?;
+        let budget = self.admit_stream(&run, &cell, &cfg)?;
         // Real time: room for every segment computed in one wake-up (see `stream::MAX_REFILL`).
         let buffer = self.state.config.limits.stream_buffer.max(1)
             + if cfg.realtime { refill_segments(&cfg) } else { 0 };
         let (tx, rx) = mpsc::channel(buffer);
         let app = self.state.clone();
         tokio::spawn(async move {
-            run_stream(app, run, cell, cfg, tx, control).await;
+            run_stream(app, run, cell, cfg, tx, control, budget).await;
             drop(permit);
         });
         Ok(rx)
@@ -229,13 +256,25 @@ impl MotionService for MotionServiceImpl {
         let mut run = self.single_robot_run(r, Stepping::rk4(dt), 0)?;
         let now = self.state.clock.now_unix_s();
         let snapshot = cell.snapshot();
-        run.apply_scene(&snapshot, &cell.other_robots(&robot_id, now, 0.5), now)?;
-        let (mut execution, scene_version) = (run.execution, run.scene_version);
-        let (stretch, execution) =
-            tokio::task::spawn_blocking(move || (execution.advance(steps + 1), execution))
-                .await
-                .map_err(|e| Status::internal(e.to_string()))?;
-        let stretch = stretch.map_err(ServerError::from)?;
+        let others = cell.other_robots(&robot_id, now, 0.5);
+        let w = run.workload(snapshot.obstacles.len(), others.len());
+        let _budget =
+            self.state.compute.admission.batch(w.per_scene + w.of_points((steps + 1) as f64), "duration")?;
+        // On the batch pool: dropping this future (the client cancelled, left or passed its deadline) stops it.
+        let (stretch, run) = self
+            .state
+            .compute
+            .batch
+            .run(move |job| {
+                let stretch = run
+                    .apply_scene(&snapshot, &others, now)
+                    .and_then(|()| advance_cancellable(&mut run.execution, steps + 1, job));
+                (stretch, run)
+            })
+            .await
+            .map_err(|e| ServerError::Internal(e.to_string()))?;
+        let stretch = stretch?;
+        let (execution, scene_version) = (run.execution, run.scene_version);
         let collisions: Vec<String> = execution.touched().iter().cloned().collect();
         let stalled = !stretch.stalls.is_empty();
         info!(robot = %robot_id, steps, collisions = collisions.len(), stalled, "planned");

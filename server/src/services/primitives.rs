@@ -108,16 +108,29 @@ impl PrimitiveServiceImpl {
         }
         let demo = demonstration_from_proto(demo, limits).map_err(learn_field)?;
         let (samples, dim) = (demo.times().len(), demo.dim());
+        // The least squares of samples x (N + 1) Gaussians, and the forcing targets in every dimension.
+        let (s, b) = (samples as f64, (config.n_basis + 1) as f64);
+        let _budget = self.state.compute.admission.batch(s * b * b + s * b * dim as f64, "demonstration")?;
         let store = self.state.store.clone();
         let (robot_id, name) = (req.robot_id, req.name);
-        let record = blocking(move || {
-            let primitive = dmp::learn(&demo, &config).map_err(|e| match e {
-                dmp::DmpError::Learning(reason) => ServerError::invalid("demonstration", reason),
-                other => learn_field(other.into()),
-            })?;
-            store.put(&robot_id, &name, &primitive, now_unix_ms())
-        })
-        .await?;
+        // On the batch pool: dropping this future (the client cancelled, left or passed its deadline) skips it, or
+        // keeps what it learned from being stored.
+        let record = self
+            .state
+            .compute
+            .batch
+            .run(move |job| {
+                let primitive = dmp::learn(&demo, &config).map_err(|e| match e {
+                    dmp::DmpError::Learning(reason) => ServerError::invalid("demonstration", reason),
+                    other => learn_field(other.into()),
+                })?;
+                if job.cancelled() {
+                    return Err(ServerError::Cancelled("the client left before the primitive was stored".into()));
+                }
+                store.put(&robot_id, &name, &primitive, now_unix_ms())
+            })
+            .await
+            .map_err(|e| ServerError::Internal(e.to_string()))??;
         info!(robot = %record.robot_id, name = %record.name, version = record.version, samples, dim, "learned");
         Ok(v1::LearnResponse { record: Some(record) })
     }
