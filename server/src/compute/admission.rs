@@ -156,7 +156,10 @@ mod tests {
         let a = admission();
         let r1 = a.realtime(150.0, 10.0, "motion").unwrap();
         let err = a.realtime(60.0, 10.0, "motion").unwrap_err();
-        assert!(matches!(&err, ServerError::ResourceExhausted(m) if m.contains("has 5.00e1 of 2.00e2 left")), "{err}");
+        assert!(
+            matches!(&err, ServerError::ResourceExhausted(m) if m.contains("has 5.00e1 of 2.00e2 left")),
+            "{err}"
+        );
         let r2 = a.realtime(50.0, 10.0, "motion").unwrap();
         assert_eq!(a.realtime_in_use(), 200);
         drop(r1);

@@ -110,7 +110,8 @@ mod tests {
     fn a_request_costs_obstacles_times_samples_times_dimensions_times_steps() {
         let point = Method::StaticPoint(StaticPoint { eta: 1.0, p0: 1.0 });
         let none = Method::None;
-        let avoided = |n| Avoided { obstacles: (&point, 100), obstacle_count: n, robots: (&none, 0), robot_count: 0 };
+        let avoided =
+            |n| Avoided { obstacles: (&point, 100), obstacle_count: n, robots: (&none, 0), robot_count: 0 };
         let rk4 = Stepping::rk4(0.001);
         let w0 = Workload::of(3, 51, avoided(0), &rk4);
         let w10 = Workload::of(3, 51, avoided(10), &rk4);
@@ -122,7 +123,8 @@ mod tests {
         assert_eq!(w10.of_points(2000.0), 2.0 * w10.of_points(1000.0));
         assert_eq!(w10.per_second(0.001), w10.of_points(1000.0));
         // A coarse step costs its steps, not its points.
-        let coarse = Workload::of(3, 51, avoided(10), &Stepping { dt: 0.001, step_points: 10, tolerance: None });
+        let coarse =
+            Workload::of(3, 51, avoided(10), &Stepping { dt: 0.001, step_points: 10, tolerance: None });
         assert!(coarse.of_points(1000.0) < w10.of_points(1000.0) / 5.0);
     }
 

@@ -47,6 +47,8 @@ pub struct PoolCounters {
     pub skipped: AtomicU64,
     /// Jobs that panicked.
     pub panicked: AtomicU64,
+    /// Jobs running now.
+    pub running: AtomicU64,
 }
 
 /// A fixed set of named threads taking jobs from one queue (a clone is a handle on the same pool).
@@ -109,6 +111,7 @@ impl Pool {
                 counters.skipped.fetch_add(1, Ordering::Relaxed);
                 return;
             }
+            counters.running.fetch_add(1, Ordering::AcqRel);
             // `done_tx` is only watched for the caller going away: it is dropped with `rx`'s future.
             let result = {
                 let ctx = JobContext { caller: &done_tx };
@@ -119,6 +122,7 @@ impl Pool {
                 warn!(pool = name, panic = %panic_message(payload.as_ref()), "a job panicked");
             }
             counters.completed.fetch_add(1, Ordering::Relaxed);
+            counters.running.fetch_sub(1, Ordering::AcqRel);
             let _ = tx.send(result);
             drop(done_tx);
         });
@@ -203,7 +207,8 @@ mod tests {
         });
         tokio::time::timeout(Duration::from_secs(10), started_rx).await.unwrap().unwrap();
         // Queued behind the running job (the timeout polls it once, which queues it), then abandoned: never runs.
-        let queued = tokio::time::timeout(Duration::from_millis(1), pool.run(|_| panic!("must be skipped"))).await;
+        let queued =
+            tokio::time::timeout(Duration::from_millis(1), pool.run(|_| panic!("must be skipped"))).await;
         assert!(queued.is_err(), "the queued job cannot have run");
         caller.abort();
         // The running job sees the cancellation; the queued one is skipped.

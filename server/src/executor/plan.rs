@@ -12,7 +12,11 @@ const CHUNK_POINTS: usize = 2000;
 
 /// The next `n` points of `e`, as one stretch: the same points, contacts, stalls and outcome as one
 /// `e.advance(n)`, computed `CHUNK_POINTS` at a time. Fails with `Cancelled` once the job is.
-pub fn advance_cancellable(e: &mut Execution, n: usize, job: &JobContext<'_>) -> Result<Stretch, ServerError> {
+pub fn advance_cancellable(
+    e: &mut Execution,
+    n: usize,
+    job: &JobContext<'_>,
+) -> Result<Stretch, ServerError> {
     let mut all = Stretch { start_time: e.time(), ..Stretch::default() };
     let mut done = 0;
     let mut last = Outcome::Running;
@@ -83,7 +87,8 @@ mod tests {
     use crate::compute::pool::Pool;
 
     fn execution() -> Execution {
-        let p = Primitive::straight_line(20, 4.0, vec![100.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 1.0]).unwrap();
+        let p = Primitive::straight_line(20, 4.0, vec![100.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 1.0])
+            .unwrap();
         let motion = Motion::of(&p);
         let mates = CellMateAvoidance { method: Avoidance::NONE, point_samples: 0 };
         Execution::new(p, motion, Scene::empty(), mates, Stepping::rk4(1e-3), 0).unwrap()

@@ -245,9 +245,8 @@ impl<'a> Producer<'a> {
             }
         }
         let realtime = self.cfg.realtime;
-        let rollback_to = (changes_plan && realtime).then(|| {
-            (self.start.elapsed() + ROLLBACK_MARGIN).as_secs_f64() + self.cfg.stepping.dt
-        });
+        let rollback_to = (changes_plan && realtime)
+            .then(|| (self.start.elapsed() + ROLLBACK_MARGIN).as_secs_f64() + self.cfg.stepping.dt);
         if rollback_to.is_some() {
             self.finished = None;
         }

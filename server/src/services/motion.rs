@@ -24,9 +24,9 @@ use tonic::{Request, Response, Status, Streaming};
 use tracing::info;
 
 use crate::cell::Cell;
+use crate::compute::admission::Reservation;
 use crate::convert::primitive_from_proto;
 use crate::error::ServerError;
-use crate::compute::admission::Reservation;
 use crate::executor::pacing::{MAX_REFILL, history_len, refill_segments};
 use crate::executor::plan::advance_cancellable;
 use crate::executor::segments::Batch;

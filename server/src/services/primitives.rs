@@ -125,7 +125,9 @@ impl PrimitiveServiceImpl {
                     other => learn_field(other.into()),
                 })?;
                 if job.cancelled() {
-                    return Err(ServerError::Cancelled("the client left before the primitive was stored".into()));
+                    return Err(ServerError::Cancelled(
+                        "the client left before the primitive was stored".into(),
+                    ));
                 }
                 store.put(&robot_id, &name, &primitive, now_unix_ms())
             })
