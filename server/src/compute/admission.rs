@@ -130,6 +130,16 @@ impl Admission {
         self.realtime_used.load(Ordering::Acquire)
     }
 
+    /// Work units per second that real-time streams may reserve together.
+    pub fn realtime_budget(&self) -> f64 {
+        self.realtime_per_s
+    }
+
+    /// Work units of plans and learns that may be queued or running at once.
+    pub fn batch_budget(&self) -> f64 {
+        self.batch_queue
+    }
+
     /// Work units of plans and learns queued or running now.
     pub fn batch_in_use(&self) -> u64 {
         self.batch_used.load(Ordering::Acquire)

@@ -22,6 +22,23 @@ pub struct Compute {
 }
 
 impl Compute {
+    /// The compute fields of the server's stats.
+    pub fn stats(&self) -> dmp_proto::v1::ServerStats {
+        use std::sync::atomic::Ordering::Relaxed;
+        let (rt, batch) = (self.realtime.counters(), self.batch.counters());
+        dmp_proto::v1::ServerStats {
+            realtime_work_reserved: self.admission.realtime_in_use() as f64,
+            realtime_work_budget: self.admission.realtime_budget(),
+            batch_work_reserved: self.admission.batch_in_use() as f64,
+            batch_work_budget: self.admission.batch_budget(),
+            realtime_jobs_running: rt.running.load(Relaxed) as u32,
+            batch_jobs_running: batch.running.load(Relaxed) as u32,
+            jobs_abandoned: rt.skipped.load(Relaxed) + batch.skipped.load(Relaxed),
+            jobs_failed: rt.panicked.load(Relaxed) + batch.panicked.load(Relaxed),
+            ..Default::default()
+        }
+    }
+
     /// Starts the pools of `config` (0 threads means one per core).
     pub fn start(config: &ComputeConfig) -> std::io::Result<Self> {
         let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);

@@ -1,0 +1,150 @@
+//! Costly work is admitted by its cost and stops when its client goes: plans past their deadline, learns whose
+//! client left, requests beyond the compute budgets.
+
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+
+use dmp_proto::v1;
+use dmp_proto::v1::motion_service_client::MotionServiceClient;
+use dmp_proto::v1::primitive_service_client::PrimitiveServiceClient;
+use dmp_tests::{TestServer, within};
+use tokio_stream::StreamExt;
+
+use crate::{line, spec, until};
+
+/// `n` spheres 50 m away.
+fn far_obstacles(n: usize) -> Vec<v1::Obstacle> {
+    (0..n).map(|i| crate::ellipse(&format!("far-{i}"), vec![50.0 + i as f64, 50.0], vec![0.1, 0.1])).collect()
+}
+
+async fn channel(server: &TestServer) -> tonic::transport::Channel {
+    let endpoint = tonic::transport::Channel::from_shared(server.url()).unwrap();
+    within("connect", endpoint.connect()).await.unwrap()
+}
+
+fn idle(server: &TestServer) -> bool {
+    let c = &server.handle().state().compute;
+    c.batch.counters().running.load(Ordering::Acquire) == 0 && c.admission.batch_in_use() == 0
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn a_plan_past_its_deadline_stops_computing() {
+    let server = TestServer::grpc_only().await;
+    let client = server.client().await;
+    within("put", client.put_primitive("r", "line", &line(vec![0.0, 0.0], vec![1.0, 0.0], 1.0)))
+        .await
+        .unwrap();
+    let mut motion = spec("r", "line");
+    motion.extra_obstacles = far_obstacles(1000);
+    // Admitted (within `max_request_work`), and many seconds of work.
+    let mut request = tonic::Request::new(v1::PlanRequest { motion: Some(motion), duration: 30.0, dt: 1e-3 });
+    request.set_timeout(Duration::from_millis(300));
+    let mut motion_client = MotionServiceClient::new(channel(&server).await);
+    let t0 = std::time::Instant::now();
+    let err = within("plan", motion_client.plan(request)).await.unwrap_err();
+    assert!(matches!(err.code(), tonic::Code::DeadlineExceeded | tonic::Code::Cancelled), "{err:?}");
+    // It stops at its next chunk, not at its end.
+    until("the plan stopped", || idle(&server)).await;
+    let stopped_after = t0.elapsed();
+    let stats = within("stats", client.stats()).await.unwrap();
+    assert_eq!(stats.batch_jobs_running, 0);
+    assert!(stopped_after < Duration::from_secs(10), "stopped after {stopped_after:?}");
+    // The server goes on serving plans.
+    let plan = within(
+        "plan",
+        client.plan(v1::PlanRequest { motion: Some(spec("r", "line")), ..Default::default() }),
+    )
+    .await
+    .unwrap();
+    assert!(!plan.trajectory.unwrap().positions.is_empty());
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn a_learn_whose_client_left_is_not_stored() {
+    let server = TestServer::start_with(|c| {
+        c.zenoh.disabled = true;
+        c.compute.batch_threads = 1;
+    })
+    .await;
+    let client = server.client().await;
+    let samples = 5_000;
+    let t: Vec<f64> = (0..samples).map(|i| i as f64 * 1e-3).collect();
+    let demonstration =
+        v1::Demonstration { positions: t.iter().flat_map(|t| [t.sin(), t.cos()]).collect(), t, dim: 2 };
+    let learn = |name: &str| {
+        let mut r = tonic::Request::new(v1::LearnRequest {
+            robot_id: "r".into(),
+            name: name.into(),
+            demonstration: Some(demonstration.clone()),
+            parameters: Some(v1::LearnParameters { n_basis: 150, ..Default::default() }),
+        });
+        r.set_timeout(Duration::from_millis(500));
+        r
+    };
+    let mut primitives = PrimitiveServiceClient::new(channel(&server).await);
+    let mut other = primitives.clone();
+    // The first runs (and cannot store what it learns), the second waits in the queue behind it (and is skipped).
+    let (first, second) = tokio::join!(primitives.learn(learn("first")), other.learn(learn("second")));
+    for r in [first, second] {
+        let err = r.unwrap_err();
+        assert!(matches!(err.code(), tonic::Code::DeadlineExceeded | tonic::Code::Cancelled), "{err:?}");
+    }
+    let t0 = std::time::Instant::now();
+    until("the learns stopped", || idle(&server)).await;
+    println!("the learn stopped {:?} after its deadline", t0.elapsed());
+    let listed = within("list", client.list("r")).await.unwrap();
+    assert!(listed.is_empty(), "stored after the client left: {listed:?}");
+    let stats = within("stats", client.stats()).await.unwrap();
+    assert!(stats.jobs_abandoned >= 1, "{stats:?}");
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn requests_beyond_the_budgets_are_refused_with_their_cost_and_others_go_on() {
+    let server = TestServer::start_with(|c| {
+        c.zenoh.disabled = true;
+        c.compute.realtime_threads = 1;
+        c.compute.realtime_work_per_thread_s = 5e7;
+        c.compute.max_request_work = 5e8;
+    })
+    .await;
+    let client = server.client().await;
+    within("put", client.put_primitive("r", "line", &line(vec![0.0, 0.0], vec![1.0, 0.0], 1.0)))
+        .await
+        .unwrap();
+    let realtime = |robot: &str, obstacles: usize| {
+        let mut motion = spec(robot, "line");
+        motion.extra_obstacles = far_obstacles(obstacles);
+        v1::ExecuteRequest { motion: Some(motion), pacing: v1::Pacing::Realtime as i32, ..Default::default() }
+    };
+    // A robot streams within the budget.
+    let mut running = within("execute", client.execute(realtime("r", 0))).await.unwrap();
+    within("first segment", running.next()).await.unwrap().unwrap();
+    // A real-time run beyond what is left of the budget.
+    let Err(e) = within("execute", client.execute(realtime("r", 300))).await else { panic!("admitted") };
+    assert_eq!(e.code(), Some(tonic::Code::ResourceExhausted), "{e}");
+    assert!(e.to_string().contains("work units per second"), "{e}");
+    assert!(e.to_string().contains("realtime_work_per_thread_s"), "{e}");
+    // One segment too costly for one computation.
+    let mut long = realtime("r", 20);
+    long.segment_s = 10.0;
+    let Err(e) = within("execute", client.execute(long)).await else { panic!("admitted") };
+    assert!(e.to_string().contains("max_job_work"), "{e}");
+    // A plan beyond the limit of one request.
+    let mut motion = spec("r", "line");
+    motion.extra_obstacles = far_obstacles(100);
+    let plan = v1::PlanRequest { motion: Some(motion), duration: 30.0, ..Default::default() };
+    let e = within("plan", client.plan(plan)).await.unwrap_err();
+    assert_eq!(e.code(), Some(tonic::Code::ResourceExhausted), "{e}");
+    assert!(e.to_string().contains("max_request_work"), "{e}");
+    // The robot's stream went on and reaches its goal.
+    let mut last = None;
+    while let Some(s) = within("segment", running.next()).await {
+        last = Some(s.unwrap());
+    }
+    assert_eq!(last.unwrap().status, v1::SegmentStatus::GoalReached as i32);
+    // Its reservation came back.
+    until("budget returned", || server.handle().state().compute.admission.realtime_in_use() == 0).await;
+    server.stop().await;
+}
