@@ -117,7 +117,7 @@ mod tests {
             (|m| m.tau = 1e-300, "tau", "between 1e-3 and 1e4"),
             (|m| m.k[1] = 1e300, "k[1]", "between 0.001 and 1e8"),
             (|m| m.d[0] = 1e6, "d[0]", "between 0 and 1e5"),
-            (|m| m.weights[9] = -1e200, "weights[9]", "between -1e12 and 1e12"),
+            (|m| m.weights[9] = -1e200, "weights[9]", "between -10000 and 10000"),
         ];
         for (break_it, field, range) in cases {
             let mut m = primitive_to_proto(&learned());

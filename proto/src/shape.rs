@@ -1,8 +1,8 @@
 //! Shapes on the wire: superquadric messages, and ROS solid primitives as the smallest superquadrics that contain
 //! them. A robot's footprint is a superquadric message too.
 
-use dmp::scenario::FootprintSpec;
 use dmp::ranges::{self, check_each};
+use dmp::scenario::FootprintSpec;
 use dmp::{Shape, Superquadric};
 
 use crate::WireError;

@@ -113,22 +113,23 @@ impl Execution {
     /// when there was nothing to drop: the step is not finite without any obstacle.
     pub(super) fn drop_culprits(&mut self, d: &Diagnosis) -> bool {
         let (all_obstacles, all_robots);
-        let (obstacles, robots, reason): (&[usize], &[usize], String) =
-            if d.obstacles.is_empty() && d.robots.is_empty() {
-                all_obstacles = (0..self.field.scene().obstacles.len()).collect::<Vec<_>>();
-                all_robots = (0..self.cellmates.scene().obstacles.len()).collect::<Vec<_>>();
-                let reason = "the robot's step was not finite with it, and no single obstacle's term was: every \
+        let (obstacles, robots, reason): (&[usize], &[usize], String) = if d.obstacles.is_empty()
+            && d.robots.is_empty()
+        {
+            all_obstacles = (0..self.field.scene().obstacles.len()).collect::<Vec<_>>();
+            all_robots = (0..self.cellmates.scene().obstacles.len()).collect::<Vec<_>>();
+            let reason = "the robot's step was not finite with it, and no single obstacle's term was: every \
                               obstacle is dropped for the rest of this run"
-                    .to_string();
-                (&all_obstacles, &all_robots, reason)
-            } else {
-                let reason = format!(
-                    "its repulsive term is not finite at the robot's state at t = {:.3} s: dropped for the rest of \
+                .to_string();
+            (&all_obstacles, &all_robots, reason)
+        } else {
+            let reason = format!(
+                "its repulsive term is not finite at the robot's state at t = {:.3} s: dropped for the rest of \
                      this run",
-                    d.t
-                );
-                (&d.obstacles, &d.robots, reason)
-            };
+                d.t
+            );
+            (&d.obstacles, &d.robots, reason)
+        };
         if obstacles.is_empty() && robots.is_empty() {
             return false;
         }
@@ -138,7 +139,9 @@ impl Execution {
             let mut kept = Vec::with_capacity(scene.obstacles.len());
             for (i, o) in scene.obstacles.drain(..).enumerate() {
                 if obstacles.contains(&i) {
-                    self.ignored.pending.push(IgnoredObstacle { id: o.id().to_string(), reason: reason.clone() });
+                    self.ignored
+                        .pending
+                        .push(IgnoredObstacle { id: o.id().to_string(), reason: reason.clone() });
                     self.ignored.obstacles.insert(o.id().to_string(), o.shape().clone());
                 } else {
                     kept.push(o);
@@ -154,7 +157,9 @@ impl Execution {
             let mut kept = Vec::new();
             for (i, o) in self.cellmates.scene().obstacles.iter().enumerate() {
                 if robots.contains(&i) {
-                    self.ignored.pending.push(IgnoredObstacle { id: o.id().to_string(), reason: reason.clone() });
+                    self.ignored
+                        .pending
+                        .push(IgnoredObstacle { id: o.id().to_string(), reason: reason.clone() });
                     self.ignored.robots.insert(o.id().to_string(), o.shape().clone());
                 } else {
                     kept.push(o.clone());
@@ -198,8 +203,14 @@ mod tests {
 
     fn disc(id: &str, a: f64, center: Vec<f64>) -> Obstacle {
         let d = center.len();
-        Obstacle::new(id, Shape::Superquadric(Superquadric::ellipsoid(vec![a; d]).unwrap()), center, None, None)
-            .unwrap()
+        Obstacle::new(
+            id,
+            Shape::Superquadric(Superquadric::ellipsoid(vec![a; d]).unwrap()),
+            center,
+            None,
+            None,
+        )
+        .unwrap()
     }
 
     /// Semi-axes of 1e-300 far away: `C` overflows, and the static volumetric term is `0 * inf`.
@@ -278,7 +289,11 @@ mod tests {
         let s = e.advance(10).unwrap();
         assert_eq!(s.ignored.len(), 1);
         assert_eq!(s.ignored[0].id, "ball");
-        assert!(s.ignored[0].reason.contains("3 dimensions, but the robot moves in 2"), "{}", s.ignored[0].reason);
+        assert!(
+            s.ignored[0].reason.contains("3 dimensions, but the robot moves in 2"),
+            "{}",
+            s.ignored[0].reason
+        );
         e.set_obstacles([(&ball, 0.0)]).unwrap();
         assert!(e.advance(10).unwrap().ignored.is_empty(), "reported once while it stays");
         e.set_obstacles(std::iter::empty()).unwrap();
@@ -291,7 +306,8 @@ mod tests {
         let p = reach_primitive();
         let mates = CellMateAvoidance { method: avoidance(), point_samples: 0 };
         let mut e =
-            Execution::new(p.clone(), Motion::of(&p), Scene::empty(), mates, Stepping::rk4(1e-3), 200).unwrap();
+            Execution::new(p.clone(), Motion::of(&p), Scene::empty(), mates, Stepping::rk4(1e-3), 200)
+                .unwrap();
         let tiny = Shape::Superquadric(Superquadric::ellipsoid(vec![1e-300; 2]).unwrap());
         let mate = super::super::CellMate {
             id: "ghost",
@@ -313,9 +329,15 @@ mod tests {
     fn a_step_that_is_not_finite_without_obstacles_is_still_an_error() {
         let mut p = reach_primitive();
         p.weights[0].fill(1e308);
-        let mut e =
-            Execution::new(p.clone(), Motion::of(&p), Scene::empty(), CellMateAvoidance::NONE, Stepping::rk4(1e-3), 10)
-                .unwrap();
+        let mut e = Execution::new(
+            p.clone(),
+            Motion::of(&p),
+            Scene::empty(),
+            CellMateAvoidance::NONE,
+            Stepping::rk4(1e-3),
+            10,
+        )
+        .unwrap();
         let diverged = (0..100).find_map(|_| e.advance(10).err());
         assert!(matches!(diverged, Some(crate::DmpError::Diverged { .. })), "{diverged:?}");
     }

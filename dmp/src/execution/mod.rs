@@ -37,8 +37,8 @@ use crate::stall::{Stall, StallConfig, StallDetector};
 
 pub use self::group::{GroupMember, join_group};
 use self::history::History;
-pub use self::ignored::IgnoredObstacle;
 use self::ignored::Ignored;
+pub use self::ignored::IgnoredObstacle;
 pub use self::stepping::{IntegrationCost, MAX_STIFF_STEP, Stepping, check_stability};
 
 /// Distance to the goal and speed under which a robot has arrived.

@@ -14,6 +14,7 @@ use tokio::sync::{mpsc, watch};
 use tokio::time::Instant;
 use tracing::{debug, info, warn};
 
+use super::ignored::push_obstacle_warnings;
 use super::pacing::{FIRST_POINT_DELAY, ROLLBACK_MARGIN, refill};
 use super::segments::{Batch, FirstPoint, member_segments, publish_states};
 use super::served_run::ServedRun;
@@ -291,7 +292,8 @@ impl<'a> Producer<'a> {
         let mut first_of_wake = true;
         loop {
             let e = &mut run.execution;
-            let stretch = e.advance(cfg.segment_points.min(e.points_to_end()))?;
+            let mut stretch = e.advance(cfg.segment_points.min(e.points_to_end()))?;
+            push_obstacle_warnings(&mut stretch.ignored, &mut self.warnings);
             let last_point_time = e.time() - e.dt();
             let outcome = stretch.outcome;
             let first = first_of_wake.then(|| FirstPoint::of(&stretch, e.dim()));

@@ -8,9 +8,8 @@ use dmp::execution::{GroupMember, join_group};
 use dmp::field::Agent;
 use dmp::{Motion, Primitive, Stepping};
 use dmp_proto::avoidance::avoidance_from_proto;
-use dmp_proto::check::check_vector;
+use dmp_proto::check::{check_in_workspace, check_tau, check_vector};
 use dmp_proto::keys::check_name;
-use dmp_proto::obstacle::obstacle_to_engine;
 use dmp_proto::robot_state::check_robot_state;
 use dmp_proto::shape::superquadric_to_shape;
 use dmp_proto::status::segment_status;
@@ -24,8 +23,9 @@ use tonic::{Request, Response, Status, Streaming};
 use tracing::info;
 
 use crate::cell::Cell;
-use crate::convert::primitive_from_proto;
+use crate::convert::{obstacle_from_proto, stored_primitive};
 use crate::error::ServerError;
+use crate::executor::ignored::push_obstacle_warnings;
 use crate::executor::pacing::{history_len, refill_segments};
 use crate::executor::segments::Batch;
 use crate::executor::served_run::{RunAvoidance, ServedRun};
@@ -81,12 +81,9 @@ impl MotionServiceImpl {
         let proto = record
             .primitive
             .ok_or_else(|| ServerError::Internal("stored record without primitive".into()))?;
-        let primitive = primitive_from_proto(&proto, &self.state.config.limits).map_err(|e| {
-            ServerError::Internal(format!(
-                "the stored primitive {}/{} is not valid: {e}",
-                spec.robot_id, spec.primitive
-            ))
-        })?;
+        let what = format!("{}/{}", spec.robot_id, spec.primitive);
+        let limits = &self.state.config.limits;
+        let primitive = stored_primitive(&proto, limits, &what).map_err(|e| e.within(prefix))?;
         let d = primitive.dim;
         let given_or_default = |field: &str, v: &[f64], default: &[f64]| -> Result<Vec<f64>, ServerError> {
             if v.is_empty() {
@@ -98,13 +95,10 @@ impl MotionServiceImpl {
         };
         let start = given_or_default("start", &spec.start, &primitive.start)?;
         let goal = given_or_default("goal", &spec.goal, &primitive.goal)?;
+        check_in_workspace(&format!("{prefix}.start"), &start, limits.workspace_m)?;
+        check_in_workspace(&format!("{prefix}.goal"), &goal, limits.workspace_m)?;
         let tau = if spec.tau == 0.0 { primitive.tau } else { spec.tau };
-        if !(tau.is_finite() && tau > 0.0) {
-            return Err(ServerError::invalid(
-                format!("{prefix}.tau"),
-                "must be a finite number greater than zero",
-            ));
-        }
+        check_tau(&format!("{prefix}.tau"), tau)?;
         let defaults = &self.state.config.defaults;
         let obstacles = avoidance_from_proto(spec.avoidance.as_ref(), defaults.avoidance)
             .map_err(|e| e.within(&format!("{prefix}.avoidance")))?;
@@ -119,7 +113,8 @@ impl MotionServiceImpl {
         let mut extra = Vec::with_capacity(spec.extra_obstacles.len());
         for (i, o) in spec.extra_obstacles.iter().enumerate() {
             extra.push(
-                obstacle_to_engine(o).map_err(|e| e.within(&format!("{prefix}.extra_obstacles[{i}]")))?,
+                obstacle_from_proto(o, limits.workspace_m)
+                    .map_err(|e| e.within(&format!("{prefix}.extra_obstacles[{i}]")))?,
             );
         }
         // Checked now, not when the first obstacle or robot appears (which would end a running stream).
@@ -235,7 +230,9 @@ impl MotionService for MotionServiceImpl {
             tokio::task::spawn_blocking(move || (execution.advance(steps + 1), execution))
                 .await
                 .map_err(|e| Status::internal(e.to_string()))?;
-        let stretch = stretch.map_err(ServerError::from)?;
+        let mut stretch = stretch.map_err(ServerError::from)?;
+        let mut warnings = Vec::new();
+        push_obstacle_warnings(&mut stretch.ignored, &mut warnings);
         let collisions: Vec<String> = execution.touched().iter().cloned().collect();
         let stalled = !stretch.stalls.is_empty();
         info!(robot = %robot_id, steps, collisions = collisions.len(), stalled, "planned");
@@ -257,7 +254,7 @@ impl MotionService for MotionServiceImpl {
             }),
             collisions,
             stalled,
-            warnings: Vec::new(),
+            warnings,
         }))
     }
 
