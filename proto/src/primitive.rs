@@ -112,7 +112,8 @@ mod tests {
 
     #[test]
     fn numbers_out_of_their_ranges_are_refused_with_the_range() {
-        let cases: [(fn(&mut v1::Primitive), &str, &str); 5] = [
+        type Break = fn(&mut v1::Primitive);
+        let cases: [(Break, &str, &str); 5] = [
             (|m| m.alpha = 1e-300, "alpha", "between 0.01 and 100"),
             (|m| m.tau = 1e-300, "tau", "between 1e-3 and 1e4"),
             (|m| m.k[1] = 1e300, "k[1]", "between 0.001 and 1e8"),

@@ -47,7 +47,7 @@ impl Execution {
     }
 
     /// One step from `knot0` into the scratch state, with the accelerations at both ends (`knot0.xdd`, `k1.xdd`).
-    fn step(&mut self, k1: &mut Knot, mut diagnosis: Option<&mut Diagnosis>) {
+    fn step(&mut self, k1: &mut Knot, diagnosis: Option<&mut Diagnosis>) {
         let h = self.stepping.internal_step();
         self.start_from_knot0();
         let s = &mut self.scratch;
@@ -57,7 +57,6 @@ impl Execution {
             hold_step(&self.primitive, self.motion.tau, s, h, &mut self.knot0.xdd);
             hold_acc(&self.primitive, self.motion.tau, &s.xd, &mut k1.xdd);
         } else {
-            let diagnosis = diagnosis.as_deref_mut();
             let mut both = FieldSum { field: &mut self.field, mates: &mut self.cellmates, diagnosis };
             let known = self.acc0_current;
             self.integrator.step_from(&self.motion, &mut both, s, h, &mut self.knot0.xdd, known);
