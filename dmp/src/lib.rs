@@ -16,6 +16,7 @@
 //! | the five repulsive terms | [`avoidance`] |
 //! | a whole scene, robots as moving obstacles | [`field`] |
 //! | rollouts, stalls | [`mod@rollout`], [`stall`] |
+//! | the ranges that keep every term finite | [`ranges`] |
 
 pub mod avoidance;
 pub mod basis;
@@ -34,6 +35,7 @@ pub mod learn;
 pub mod metrics;
 pub mod obstacle;
 pub mod primitive;
+pub mod ranges;
 pub mod rollout;
 pub mod scenario;
 pub mod stall;

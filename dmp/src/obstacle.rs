@@ -4,7 +4,7 @@ use crate::error::{InvalidInput, Result};
 use crate::isopotential::{Isopotential, Shape};
 
 /// Tolerance of the orthonormality check on a rotation.
-const ORTHONORMAL_TOL: f64 = 1e-6;
+const ORTHONORMAL_TOL: f64 = crate::ranges::ROTATION_TOLERANCE;
 
 /// An obstacle: `C_world(x, t) = C(R^T (x - c(t)))` with `c(t) = center + velocity * t`.
 #[derive(Debug, Clone, PartialEq)]

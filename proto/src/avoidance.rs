@@ -9,8 +9,8 @@ use crate::v1;
 /// Default number of boundary samples of the point methods (a message's `point_samples = 0`).
 pub const DEFAULT_POINT_SAMPLES: usize = 50;
 
-/// Largest number of boundary samples of the point methods.
-pub const MAX_POINT_SAMPLES: usize = 10_000;
+/// Largest number of boundary samples of the point methods ([`dmp::ranges::POINT_SAMPLES`]).
+pub const MAX_POINT_SAMPLES: usize = *dmp::ranges::POINT_SAMPLES.end();
 
 /// The engine's avoidance of a message; an unset message or method takes `default`. Returns the boundary sample
 /// count of the point methods too.
@@ -33,7 +33,10 @@ pub fn avoidance_from_proto(
     };
     let samples = if a.point_samples == 0 { DEFAULT_POINT_SAMPLES } else { a.point_samples as usize };
     if samples > MAX_POINT_SAMPLES {
-        return Err(WireError::new("point_samples", format!("must be at most {MAX_POINT_SAMPLES}")));
+        return Err(WireError::new(
+            "point_samples",
+            format!("must be between 1 and {MAX_POINT_SAMPLES} (0: the default, {DEFAULT_POINT_SAMPLES})"),
+        ));
     }
     let relative_velocity =
         if a.method.is_none() { default.relative_velocity } else { !a.ignore_obstacle_velocity };

@@ -48,3 +48,6 @@ pub mod tags;
 pub mod zenoh_session;
 
 pub use error::WireError;
+
+#[cfg(test)]
+mod accepted_inputs;

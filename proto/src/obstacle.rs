@@ -1,8 +1,10 @@
 //! An obstacle message as the engine's obstacle. The JSON form of an obstacle is [`crate::obstacle_json`].
 
+use dmp::ranges::{self, check_each, check_range};
 use dmp::{NestedSuperquadric, Shape};
 
 use crate::WireError;
+use crate::check::check_finite;
 use crate::shape::{solid_to_shape, superquadric_to_shape};
 use crate::v1;
 
@@ -10,6 +12,7 @@ use crate::v1;
 pub const MAX_OBSTACLE_DIM: usize = 64;
 
 /// The engine's obstacle of a message, inflated by its margin: its centre is the one at the time of the update.
+/// Every number is checked against its range in [`dmp::ranges`] (the centre against the workspace is the server's).
 pub fn obstacle_to_engine(o: &v1::Obstacle) -> Result<dmp::Obstacle, WireError> {
     use v1::obstacle::Shape as S;
     let shape = match &o.shape {
@@ -22,15 +25,16 @@ pub fn obstacle_to_engine(o: &v1::Obstacle) -> Result<dmp::Obstacle, WireError> 
                     format!("must have 3 entries, found {}", n.semi_axes.len()),
                 )
             })?;
-            Shape::Nested(
-                NestedSuperquadric::new(a, n.n, n.m).map_err(|e| WireError::from(e).within("nested"))?,
-            )
+            let shape =
+                NestedSuperquadric::new(a, n.n, n.m).map_err(|e| WireError::from(e).within("nested"))?;
+            check_each("nested.semi_axes", &a, &ranges::SEMI_AXIS_M, " m")?;
+            check_range("nested.n", n.n, &ranges::EXPONENT, "")?;
+            check_range("nested.m", n.m, &ranges::EXPONENT, "")?;
+            Shape::Nested(shape)
         }
         Some(S::Solid(s)) => solid_to_shape(s).map_err(|e| e.within("solid"))?,
     };
-    if !(o.margin.is_finite() && o.margin >= 0.0) {
-        return Err(WireError::new("margin", "must be a finite number >= 0"));
-    }
+    check_range("margin", o.margin, &ranges::MARGIN_M, " m")?;
     if !(o.ttl_s.is_finite() && o.ttl_s >= 0.0) {
         return Err(WireError::new("ttl_s", "must be a finite number >= 0"));
     }
@@ -50,6 +54,9 @@ pub fn obstacle_to_engine(o: &v1::Obstacle) -> Result<dmp::Obstacle, WireError> 
         }
         Some(o.rotation.chunks(d).map(<[f64]>::to_vec).collect())
     };
+    check_finite("velocity", &o.velocity)?;
+    let speed = o.velocity.iter().map(|v| v * v).sum::<f64>().sqrt();
+    check_range("velocity", speed, &ranges::SPEED_MPS, " m/s (its magnitude)")?;
     let velocity = (!o.velocity.is_empty()).then(|| o.velocity.clone());
     Ok(dmp::Obstacle::new(o.id.clone(), shape, o.center.clone(), rotation, velocity)?)
 }

@@ -1,6 +1,9 @@
 //! The one mapping between the engine's primitive and its message, shared by the server and the client.
 
+use dmp::ranges::{self, check_count, check_each, check_range};
+
 use crate::WireError;
+use crate::check::check_tau;
 use crate::v1;
 
 /// The message of a primitive: weights row-major, `dim` rows of `n_basis + 1` entries.
@@ -47,7 +50,26 @@ pub fn primitive_from_proto(p: &v1::Primitive) -> Result<dmp::Primitive, WireErr
         weights: p.weights.chunks(n + 1).map(<[f64]>::to_vec).collect(),
     };
     prim.validate()?;
+    check_primitive_ranges(&prim)?;
     Ok(prim)
+}
+
+/// Checks a valid primitive's numbers against [`dmp::ranges`] and [`TAU_RANGE`](crate::check::TAU_RANGE) (the
+/// start and goal against the workspace are the server's): `alpha`, `N`, `K`, `D`, the weights and `tau`. Stored
+/// primitives written before these ranges are checked again with it when they are used.
+pub fn check_primitive_ranges(p: &dmp::Primitive) -> Result<(), WireError> {
+    check_range("alpha", p.alpha, &ranges::ALPHA, "")?;
+    check_count("n_basis", p.n_basis, &ranges::N_BASIS)?;
+    check_each("k", &p.k, &ranges::STIFFNESS, "")?;
+    check_each("d", &p.d, &ranges::DAMPING, "")?;
+    for (row, w) in p.weights.iter().enumerate() {
+        if let Some(i) = w.iter().position(|w| !(w.is_finite() && ranges::WEIGHT.contains(w))) {
+            // Named as the message's flat, row-major index.
+            let field = format!("weights[{}]", row * (p.n_basis + 1) + i);
+            check_range(&field, w[i], &ranges::WEIGHT, "")?;
+        }
+    }
+    check_tau("tau", p.tau)
 }
 
 #[cfg(test)]
@@ -86,5 +108,24 @@ mod tests {
         let mut m = primitive_to_proto(&learned());
         m.dim = 0;
         assert!(primitive_from_proto(&m).unwrap_err().to_string().contains("dim"));
+    }
+
+    #[test]
+    fn numbers_out_of_their_ranges_are_refused_with_the_range() {
+        type Break = fn(&mut v1::Primitive);
+        let cases: [(Break, &str, &str); 5] = [
+            (|m| m.alpha = 1e-300, "alpha", "between 0.01 and 100"),
+            (|m| m.tau = 1e-300, "tau", "between 1e-3 and 1e4"),
+            (|m| m.k[1] = 1e300, "k[1]", "between 0.001 and 1e8"),
+            (|m| m.d[0] = 1e6, "d[0]", "between 0 and 1e5"),
+            (|m| m.weights[9] = -1e200, "weights[9]", "between -10000 and 10000"),
+        ];
+        for (break_it, field, range) in cases {
+            let mut m = primitive_to_proto(&learned());
+            break_it(&mut m);
+            let e = primitive_from_proto(&m).unwrap_err();
+            assert_eq!(e.field, field);
+            assert!(e.rule.contains(range), "{e}");
+        }
     }
 }

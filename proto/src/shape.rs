@@ -1,6 +1,7 @@
 //! Shapes on the wire: superquadric messages, and ROS solid primitives as the smallest superquadrics that contain
 //! them. A robot's footprint is a superquadric message too.
 
+use dmp::ranges::{self, check_each};
 use dmp::scenario::FootprintSpec;
 use dmp::{Shape, Superquadric};
 
@@ -12,9 +13,13 @@ use crate::v1;
 pub const BOX_EXPONENT: f64 = 4.0;
 
 /// The engine's shape of a per-axis superquadric message (no exponents: 1 on every axis, an ellipsoid).
+/// Semi-axes and exponents are checked against [`dmp::ranges::SEMI_AXIS_M`] and [`dmp::ranges::EXPONENT`].
 pub fn superquadric_to_shape(s: &v1::Superquadric) -> Result<Shape, WireError> {
     let n = if s.exponents.is_empty() { vec![1.0; s.semi_axes.len()] } else { s.exponents.clone() };
-    Ok(Shape::Superquadric(Superquadric::new(s.semi_axes.clone(), n)?))
+    let shape = Superquadric::new(s.semi_axes.clone(), n)?;
+    check_each("semi_axes", &s.semi_axes, &ranges::SEMI_AXIS_M, " m")?;
+    check_each("exponents", &s.exponents, &ranges::EXPONENT, "")?;
+    Ok(Shape::Superquadric(shape))
 }
 
 /// The message of a scenario's footprint.
@@ -36,10 +41,7 @@ pub fn solid_to_shape(s: &v1::SolidPrimitive) -> Result<Shape, WireError> {
                 format!("must have {n} entries, found {}", s.dimensions.len()),
             ));
         }
-        if let Some(i) = s.dimensions.iter().position(|d| *d <= 0.0) {
-            return Err(WireError::new(format!("dimensions[{i}]"), "must be greater than zero"));
-        }
-        Ok(())
+        Ok(check_each("dimensions", &s.dimensions, &ranges::SOLID_DIMENSION_M, " m")?)
     };
     let shape = match Type::try_from(s.r#type).unwrap_or(Type::Unspecified) {
         Type::Unspecified => return Err(WireError::new("type", "must be BOX, SPHERE or CYLINDER")),

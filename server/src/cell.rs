@@ -4,7 +4,6 @@
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 
-use dmp_proto::obstacle::obstacle_to_engine;
 use dmp_proto::v1;
 use tokio::sync::watch;
 
@@ -62,13 +61,20 @@ pub struct Cell {
     /// every stream. The lock is never held across an await.
     robots: Arc<Mutex<BTreeMap<String, Arc<SeenRobot>>>>,
     max_obstacles: usize,
+    /// Half-width of the workspace box every obstacle's centre must lie in, metres.
+    workspace_m: f64,
 }
 
 impl Cell {
-    /// The empty scene of `cell`, holding at most `max_obstacles`.
+    /// The empty scene of `cell`, holding at most `max_obstacles`, in the default workspace.
     pub fn new(cell: impl Into<Arc<str>>, max_obstacles: usize) -> Self {
+        Self::new_in_workspace(cell, max_obstacles, crate::config::Limits::default().workspace_m)
+    }
+
+    /// [`Cell::new`] whose obstacles' centres must lie within `[-workspace_m, workspace_m]` on every axis.
+    pub fn new_in_workspace(cell: impl Into<Arc<str>>, max_obstacles: usize, workspace_m: f64) -> Self {
         let (tx, _) = watch::channel(Arc::new(ObstacleSet::default()));
-        Self { cell: cell.into(), tx: Arc::new(tx), robots: Arc::default(), max_obstacles }
+        Self { cell: cell.into(), tx: Arc::new(tx), robots: Arc::default(), max_obstacles, workspace_m }
     }
 
     /// The cell's name.
@@ -96,7 +102,8 @@ impl Cell {
         if obstacle.id.is_empty() {
             return Err(ServerError::invalid("obstacle.id", "must not be empty"));
         }
-        let engine = obstacle_to_engine(&obstacle).map_err(|e| e.within("obstacle"))?;
+        let engine = crate::convert::obstacle_from_proto(&obstacle, self.workspace_m)
+            .map_err(|e| e.within("obstacle"))?;
         let expires_unix_s = (obstacle.ttl_s > 0.0).then_some(now_unix_s + obstacle.ttl_s);
         let entry = ReceivedObstacle { proto: obstacle, engine, received_unix_s: now_unix_s, expires_unix_s };
         let mut result = Ok(0);

@@ -17,6 +17,8 @@ pub struct Cells {
     default: Arc<str>,
     max_cells: usize,
     max_obstacles: usize,
+    /// Half-width of the workspace box every obstacle's centre must lie in, metres.
+    workspace_m: f64,
     /// The lock is held only to look up or insert, never across an await.
     map: Arc<Mutex<HashMap<Arc<str>, Cell>>>,
 }
@@ -25,9 +27,25 @@ impl Cells {
     /// The cells of a server whose default cell is `default` (created now); each scene holds at most
     /// `max_obstacles`, and there are at most `max_cells`.
     pub fn new(default: &str, max_cells: usize, max_obstacles: usize) -> Result<Self, ServerError> {
+        Self::new_in_workspace(
+            default,
+            max_cells,
+            max_obstacles,
+            crate::config::Limits::default().workspace_m,
+        )
+    }
+
+    /// [`Cells::new`] whose obstacles' centres must lie within `[-workspace_m, workspace_m]` on every axis.
+    pub fn new_in_workspace(
+        default: &str,
+        max_cells: usize,
+        max_obstacles: usize,
+        workspace_m: f64,
+    ) -> Result<Self, ServerError> {
         check_name("cell", default)?;
+        let max_cells = max_cells.max(1);
         let cells =
-            Self { default: default.into(), max_cells: max_cells.max(1), max_obstacles, map: Arc::default() };
+            Self { default: default.into(), max_cells, max_obstacles, workspace_m, map: Arc::default() };
         cells.get("")?;
         Ok(cells)
     }
@@ -53,7 +71,7 @@ impl Cells {
             )));
         }
         let name: Arc<str> = name.into();
-        let scene = Cell::new(name.clone(), self.max_obstacles);
+        let scene = Cell::new_in_workspace(name.clone(), self.max_obstacles, self.workspace_m);
         map.insert(name, scene.clone());
         Ok(scene)
     }

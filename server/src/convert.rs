@@ -1,6 +1,8 @@
 //! The server's bounds on what the wire carries. The conversions themselves are the wire's, in `dmp_proto` (its
 //! `WireError` becomes a [`ServerError`] once, in `error.rs`); this module adds the limits of the configuration.
 
+use dmp::ranges::{self, check_each, check_range};
+use dmp_proto::check::check_in_workspace;
 use dmp_proto::v1;
 
 use crate::config::Limits;
@@ -14,7 +16,34 @@ pub fn primitive_from_proto(p: &v1::Primitive, limits: &Limits) -> Result<dmp::P
     if p.n_basis as usize > limits.max_basis {
         return Err(ServerError::invalid("n_basis", format!("must be at most {}", limits.max_basis)));
     }
-    Ok(dmp_proto::primitive::primitive_from_proto(p)?)
+    let primitive = dmp_proto::primitive::primitive_from_proto(p)?;
+    check_in_workspace("start", &primitive.start, limits.workspace_m)?;
+    check_in_workspace("goal", &primitive.goal, limits.workspace_m)?;
+    Ok(primitive)
+}
+
+/// A stored primitive, checked again when it is used: one stored before the ranges of [`dmp::ranges`] were
+/// enforced, and now outside them, is refused with the field and the range rather than run.
+pub fn stored_primitive(
+    p: &v1::Primitive,
+    limits: &Limits,
+    what: &str,
+) -> Result<dmp::Primitive, ServerError> {
+    primitive_from_proto(p, limits).map_err(|e| {
+        ServerError::FailedPrecondition(format!(
+            "the stored primitive {what} does not fit what this server accepts ({e}); store it again with values \
+             inside the ranges"
+        ))
+    })
+}
+
+/// The engine's obstacle of a message ([`dmp_proto::obstacle::obstacle_to_engine`], every number in its range), with
+/// its centre within the workspace box `[-workspace_m, workspace_m]`: the one check of an obstacle's place, for the
+/// cells' scenes (gRPC and Zenoh) and a motion's own obstacles.
+pub fn obstacle_from_proto(o: &v1::Obstacle, workspace_m: f64) -> Result<dmp::Obstacle, ServerError> {
+    let engine = dmp_proto::obstacle::obstacle_to_engine(o)?;
+    check_in_workspace("center", &o.center, workspace_m)?;
+    Ok(engine)
 }
 
 /// The engine's demonstration of a message, within the limits.
@@ -52,7 +81,14 @@ pub fn learn_config_from_proto(
             format!("must be at most {}", limits.max_basis),
         ));
     }
-    Ok(dmp_proto::learning::learn_config_from_proto(p))
+    let c = dmp_proto::learning::learn_config_from_proto(p);
+    let within = |e: dmp::InvalidInput| ServerError::from(e).within("parameters");
+    check_range("alpha", c.alpha, &ranges::ALPHA, "").map_err(within)?;
+    check_each("k", &c.k, &ranges::STIFFNESS, "").map_err(within)?;
+    if let Some(d) = &c.d {
+        check_each("d", d, &ranges::DAMPING, "").map_err(within)?;
+    }
+    Ok(c)
 }
 
 #[cfg(test)]

@@ -85,7 +85,9 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
     let store = tokio::task::spawn_blocking(move || Store::open(&dir))
         .await
         .map_err(|e| ServerError::Internal(e.to_string()))??;
-    let cells = Cells::new(&config.cell, config.limits.max_cells, config.limits.max_obstacles)?;
+    let limits = &config.limits;
+    let cells =
+        Cells::new_in_workspace(&config.cell, limits.max_cells, limits.max_obstacles, limits.workspace_m)?;
     let shutdown = CancellationToken::new();
 
     let (session, bridge, robots, zenoh_locators) = if config.zenoh.disabled {

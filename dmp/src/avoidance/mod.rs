@@ -11,7 +11,7 @@ pub mod steering_angle;
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{InvalidInput, ensure_positive};
+use crate::error::InvalidInput;
 
 /// Parameters of the static point potential.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -105,32 +105,23 @@ impl Method {
     /// Checks the parameters; `prefix` names the enclosing field (e.g. `avoidance`) and `dim` is the dimension the
     /// method acts in.
     pub fn validate(&self, prefix: &str, dim: usize) -> Result<(), InvalidInput> {
-        let f = |name: &str| format!("{prefix}.{name}");
-        let beta_at_least_one = |beta: f64| {
-            if beta.is_finite() && beta >= 1.0 {
-                Ok(())
-            } else {
-                Err(InvalidInput::new(
-                    f("beta"),
-                    "must be a finite number >= 1 (below 1 the dynamic potential's gradient is infinite where it switches on)",
-                ))
-            }
+        use crate::ranges::{
+            ANGULAR_EXPONENT, C_EXPONENT, GAIN, INFLUENCE_M, STEERING_DECAY, VOLUME_DECAY, check_range,
         };
+        let f = |name: &str| format!("{prefix}.{name}");
         match *self {
             Method::None => Ok(()),
             Method::StaticPoint(StaticPoint { eta, p0 }) => {
-                ensure_positive(|| f("eta"), eta)?;
-                ensure_positive(|| f("p0"), p0)
+                check_range(&f("eta"), eta, &GAIN, "")?;
+                check_range(&f("p0"), p0, &INFLUENCE_M, " m")
             }
             Method::DynamicPoint(DynamicPoint { lambda, beta }) => {
-                ensure_positive(|| f("lambda"), lambda)?;
-                beta_at_least_one(beta)
+                check_range(&f("lambda"), lambda, &GAIN, "")?;
+                check_range(&f("beta"), beta, &ANGULAR_EXPONENT, "")
             }
             Method::SteeringAngle(SteeringAngle { gamma, beta }) => {
-                ensure_positive(|| f("gamma"), gamma)?;
-                if !(beta.is_finite() && beta >= 0.0) {
-                    return Err(InvalidInput::new(f("beta"), "must be a finite number >= 0"));
-                }
+                check_range(&f("gamma"), gamma, &GAIN, "")?;
+                check_range(&f("beta"), beta, &STEERING_DECAY, "")?;
                 if dim != 2 && dim != 3 {
                     return Err(InvalidInput::new(
                         f("method"),
@@ -142,13 +133,13 @@ impl Method {
                 Ok(())
             }
             Method::StaticVolumetric(StaticVolumetric { a, eta }) => {
-                ensure_positive(|| f("A"), a)?;
-                ensure_positive(|| f("eta"), eta)
+                check_range(&f("A"), a, &GAIN, "")?;
+                check_range(&f("eta"), eta, &VOLUME_DECAY, "")
             }
             Method::DynamicVolumetric(DynamicVolumetric { lambda, beta, eta }) => {
-                ensure_positive(|| f("lambda"), lambda)?;
-                beta_at_least_one(beta)?;
-                ensure_positive(|| f("eta"), eta)
+                check_range(&f("lambda"), lambda, &GAIN, "")?;
+                check_range(&f("beta"), beta, &ANGULAR_EXPONENT, "")?;
+                check_range(&f("eta"), eta, &C_EXPONENT, "")
             }
         }
     }

@@ -98,6 +98,7 @@ impl Execution {
                 }
             }
         }
+        p.ignored = self.ignored.take_pending();
         let worst = if !p.contacts.is_empty() || !p.cellmate_contacts.is_empty() {
             Outcome::Collision
         } else if !p.stalls.is_empty() {

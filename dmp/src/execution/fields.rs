@@ -11,14 +11,21 @@ use crate::obstacle::Obstacle;
 impl Execution {
     /// Replaces the cell's obstacles by `seen`: each obstacle with its age, how long before the run's current time
     /// its centre was where it says (it moves on along its velocity). Obstacles of another dimension than the
-    /// members' are left out; the run's own obstacles stay, after these.
+    /// members' are left out and reported in the next stretch ([`super::Stretch::ignored`]), as are those dropped
+    /// earlier in the run (until a new version with another shape replaces them); the run's own obstacles stay,
+    /// after these.
     pub fn set_obstacles<'a>(&mut self, seen: impl IntoIterator<Item = (&'a Obstacle, f64)>) -> Result<()> {
         self.rebase();
         let t = self.out_t;
         let sub = self.field.agent_dim();
         let mut obstacles = Vec::new();
+        let mut other_dim = Vec::new();
         for (o, age) in seen {
             if o.dim() != sub {
+                other_dim.push(o);
+                continue;
+            }
+            if self.ignored.is_dropped(o) {
                 continue;
             }
             // Centre now, moved back along its velocity to the run's time zero.
@@ -27,14 +34,15 @@ impl Execution {
             let c0: Vec<f64> = now.iter().zip(o.velocity()).map(|(c, v)| c - v * t).collect();
             obstacles.push(o.with_center(c0));
         }
-        obstacles.extend(self.scene.obstacles.iter().cloned());
+        self.ignored.set_other_dim(other_dim, sub);
+        obstacles.extend(self.scene.obstacles.iter().filter(|o| !self.ignored.is_dropped(o)).cloned());
         let scene = Scene { obstacles, ..self.scene.clone() };
         self.field = RepulsiveField::new(scene, self.primitive.dim)?;
         Ok(())
     }
 
-    /// Updates the cell's other robots (moving obstacles with their footprints). Members of the run and robots of
-    /// another dimension than the members' are left out.
+    /// Updates the cell's other robots (moving obstacles with their footprints). Members of the run, robots of
+    /// another dimension than the members' and robots dropped earlier in the run are left out.
     pub fn set_cellmates<'a, I>(&mut self, mates: I) -> Result<()>
     where
         I: IntoIterator<Item = CellMate<'a>>,
@@ -42,8 +50,11 @@ impl Execution {
     {
         // Taken out for the call, so that the filter does not borrow the run.
         let members = std::mem::take(&mut self.member_ids);
+        let ignored = std::mem::take(&mut self.ignored);
+        let mates = mates.into_iter().filter(|m| !ignored.is_dropped_robot(m.id, m.footprint));
         let result = self.set_cellmates_except(&members, mates);
         self.member_ids = members;
+        self.ignored = ignored;
         result
     }
 

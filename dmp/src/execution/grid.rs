@@ -3,47 +3,38 @@
 
 use super::Execution;
 use super::hold::{hold_acc, hold_step};
+use super::ignored::{Diagnosis, FieldSum, step_is_finite};
 use crate::dense::Knot;
-use crate::field::RepulsiveField;
-use crate::integrate::{Perturbation, dormand_prince};
-
-/// The run's field and its cell-mates' field, summed.
-struct FieldSum<'a>(&'a mut RepulsiveField, &'a mut RepulsiveField);
-
-impl Perturbation for FieldSum<'_> {
-    fn add(&mut self, t: f64, x: &[f64], v: &[f64], tau: f64, out: &mut [f64]) {
-        self.0.add(t, x, v, tau, out);
-        self.1.add(t, x, v, tau, out);
-    }
-}
+use crate::integrate::dormand_prince;
 
 impl Execution {
     /// Computes the knot after `knot0` (one RK4 step of `step_points` output steps, an adaptive step, or the
     /// exact holding deceleration), and the accelerations at both knots under the current field and motion.
+    ///
+    /// A step that is not finite is redone while each obstacle's term is checked at the states it evaluates; the
+    /// obstacles (or cell-mates) whose term is not finite are dropped for the rest of the run and reported, and the
+    /// step is computed again without them. A step that is not finite without any obstacle is left as it is (the
+    /// points are then refused as diverged).
     pub(super) fn next_knot(&mut self) {
-        let h = self.stepping.internal_step();
         let mut k1 = self
             .knot1
             .take()
             .or_else(|| self.spare.take())
             .unwrap_or_else(|| Knot::zeros(self.primitive.dim));
-        self.start_from_knot0();
-        let s = &mut self.scratch;
-        if let (Some(tol), false) = (self.stepping.tolerance, self.holding) {
-            self.adaptive_step(tol, &mut k1);
-        } else if self.holding {
-            hold_step(&self.primitive, self.motion.tau, s, h, &mut self.knot0.xdd);
-            hold_acc(&self.primitive, self.motion.tau, &s.xd, &mut k1.xdd);
-        } else {
-            let mut both = FieldSum(&mut self.field, &mut self.cellmates);
-            let known = self.acc0_current;
-            self.integrator.step_from(&self.motion, &mut both, s, h, &mut self.knot0.xdd, known);
-            self.cost.steps += 1;
-            self.cost.evaluations += 3 + u64::from(!known) + u64::from(self.stepping.step_points > 1);
-            if self.stepping.step_points > 1 {
-                s.t = (s.t / self.stepping.dt).round() * self.stepping.dt;
-                self.integrator.acceleration(&self.motion, &mut both, s.t, s.s, &s.x, &s.xd, &mut k1.xdd);
+        // The adaptive step's proposal, for a step computed again.
+        let proposal = self.next_points;
+        self.step(&mut k1, None);
+        while !self.holding && !step_is_finite(&self.knot0, &self.scratch, &k1.xdd) {
+            let start_finite = self.knot0.x.iter().chain(&self.knot0.xd).all(|v| v.is_finite());
+            let mut diagnosis = Diagnosis::default();
+            self.acc0_current = false;
+            self.next_points = proposal;
+            self.step(&mut k1, Some(&mut diagnosis));
+            if !start_finite || !self.drop_culprits(&diagnosis) {
+                break;
             }
+            self.next_points = proposal;
+            self.step(&mut k1, None);
         }
         // Times are whole multiples of dt, not a drifting sum.
         let s = &mut self.scratch;
@@ -53,6 +44,29 @@ impl Execution {
         k1.x.clone_from(&s.x);
         k1.xd.clone_from(&s.xd);
         self.knot1 = Some(k1);
+    }
+
+    /// One step from `knot0` into the scratch state, with the accelerations at both ends (`knot0.xdd`, `k1.xdd`).
+    fn step(&mut self, k1: &mut Knot, diagnosis: Option<&mut Diagnosis>) {
+        let h = self.stepping.internal_step();
+        self.start_from_knot0();
+        let s = &mut self.scratch;
+        if let (Some(tol), false) = (self.stepping.tolerance, self.holding) {
+            self.adaptive_step(tol, k1, diagnosis);
+        } else if self.holding {
+            hold_step(&self.primitive, self.motion.tau, s, h, &mut self.knot0.xdd);
+            hold_acc(&self.primitive, self.motion.tau, &s.xd, &mut k1.xdd);
+        } else {
+            let mut both = FieldSum { field: &mut self.field, mates: &mut self.cellmates, diagnosis };
+            let known = self.acc0_current;
+            self.integrator.step_from(&self.motion, &mut both, s, h, &mut self.knot0.xdd, known);
+            self.cost.steps += 1;
+            self.cost.evaluations += 3 + u64::from(!known) + u64::from(self.stepping.step_points > 1);
+            if self.stepping.step_points > 1 {
+                s.t = (s.t / self.stepping.dt).round() * self.stepping.dt;
+                self.integrator.acceleration(&self.motion, &mut both, s.t, s.s, &s.x, &s.xd, &mut k1.xdd);
+            }
+        }
     }
 
     /// The scratch state at `knot0`, where a step starts.
@@ -67,7 +81,7 @@ impl Execution {
     /// One adaptive step from `knot0` into the scratch state, with the accelerations at both ends (`knot0.xdd`,
     /// `k1.xdd`): the step tried is the controller's last proposal (cut at the knot limit), shrunk and retried
     /// from `knot0` while its error is above the tolerance and it is longer than one output step.
-    fn adaptive_step(&mut self, tol: f64, k1: &mut Knot) {
+    fn adaptive_step(&mut self, tol: f64, k1: &mut Knot, mut diagnosis: Option<&mut Diagnosis>) {
         let max = self.stepping.step_points;
         let mut points = self.next_points.clamp(1, max);
         let to_limit = ((self.knot_limit - self.knot0.t) / self.stepping.dt).round();
@@ -79,7 +93,8 @@ impl Execution {
         let mut retried = false;
         loop {
             let h = points as f64 * self.stepping.dt;
-            let mut both = FieldSum(&mut self.field, &mut self.cellmates);
+            let diagnosis = diagnosis.as_deref_mut();
+            let mut both = FieldSum { field: &mut self.field, mates: &mut self.cellmates, diagnosis };
             let err = self.integrator.step_dormand_prince(
                 &self.motion,
                 &mut both,

@@ -24,6 +24,7 @@ mod grid;
 mod group;
 mod history;
 mod hold;
+mod ignored;
 mod stepping;
 
 use crate::avoidance::Avoidance;
@@ -36,6 +37,8 @@ use crate::stall::{Stall, StallConfig, StallDetector};
 
 pub use self::group::{GroupMember, join_group};
 use self::history::History;
+use self::ignored::Ignored;
+pub use self::ignored::IgnoredObstacle;
 pub use self::stepping::{IntegrationCost, MAX_STIFF_STEP, Stepping, check_stability};
 
 /// Distance to the goal and speed under which a robot has arrived.
@@ -121,6 +124,8 @@ pub struct Stretch {
     pub cellmate_contacts: Vec<(usize, Contact)>,
     /// Stalls detected, with the index of the member.
     pub stalls: Vec<(usize, Stall)>,
+    /// Obstacles (and cell-mates) the run stopped avoiding since the last stretch, and why: each is reported once.
+    pub ignored: Vec<IgnoredObstacle>,
 }
 
 /// One run of a primitive on one phase: the state machine that the offline rollout and the server's streams step.
@@ -177,6 +182,8 @@ pub struct Execution {
     c0: Vec<f64>,
     /// Every obstacle or robot touched so far.
     touched: std::collections::BTreeSet<String>,
+    /// Obstacles left out of the run, and the reports not yet handed out.
+    ignored: Ignored,
     cost: IntegrationCost,
 }
 
@@ -237,6 +244,7 @@ impl Execution {
             member_ids,
             c0: Vec::new(),
             touched: Default::default(),
+            ignored: Ignored::default(),
             cost: IntegrationCost::default(),
             primitive,
             stepping,

@@ -256,6 +256,42 @@ impl RepulsiveField {
     }
 }
 
+impl RepulsiveField {
+    /// Pushes onto `out` (once each) the indices of the obstacles whose own term is not finite at `(t, x, v)` for
+    /// some robot: each obstacle evaluated alone, as [`Perturbation::add`] would sum it. The diagnosis of a step
+    /// that is not finite; nothing in the hot path calls it.
+    pub fn nonfinite_obstacles(&mut self, t: f64, x: &[f64], v: &[f64], tau: f64, out: &mut Vec<usize>) {
+        let av = self.scene.avoidance;
+        if av.method == Method::None {
+            return;
+        }
+        for a in &self.agents {
+            let s = &mut self.s;
+            gather(x, &a.dims, &mut s.x);
+            gather(v, &a.dims, &mut s.v);
+            for (oi, o) in self.scene.obstacles.iter().enumerate() {
+                o.center_at(t, &mut s.center);
+                for i in 0..self.sub_dim {
+                    s.u[i] = if av.relative_velocity { s.v[i] - tau * o.velocity()[i] } else { s.v[i] };
+                }
+                s.phi.fill(0.0);
+                apply(
+                    &av.method,
+                    self.kernels[0].as_ref(),
+                    o.shape(),
+                    o.rotation(),
+                    &self.obstacle_samples[oi],
+                    s,
+                );
+                let finite = s.center.iter().chain(&s.phi).all(|v| v.is_finite());
+                if !finite && !out.contains(&oi) {
+                    out.push(oi);
+                }
+            }
+        }
+    }
+}
+
 impl Perturbation for RepulsiveField {
     fn add(&mut self, t: f64, x: &[f64], v: &[f64], tau: f64, out: &mut [f64]) {
         for ai in 0..self.agents.len() {

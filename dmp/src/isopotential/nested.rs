@@ -90,7 +90,14 @@ impl Isopotential for NestedSuperquadric {
             for j in 0..2 {
                 grad[j] = 2.0 * m / a[j] * p_mn1 * q2n1[j];
                 for k in 0..2 {
-                    let mut h = 4.0 * m * (m - n) / (a[j] * a[k]) * p_mn2 * q2n1[j] * q2n1[k];
+                    // `P^(m/n - 2)` alone overflows near the symmetry axis when `m < n`; the product with
+                    // `q_j^(2n-1) q_k^(2n-1) <= P^(2 - 1/n)` does not, so it is then formed in another order.
+                    let cross = if p_mn2.is_finite() {
+                        p_mn2 * q2n1[j] * q2n1[k]
+                    } else {
+                        p_mn1 * q2n1[j] / p * q2n1[k]
+                    };
+                    let mut h = 4.0 * m * (m - n) / (a[j] * a[k]) * cross;
                     if j == k {
                         h += 2.0 * m * (2.0 * n - 1.0) / (a[j] * a[j]) * p_mn1 * q2n2[j];
                     }

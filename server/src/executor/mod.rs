@@ -2,6 +2,7 @@
 //! gRPC stream ([`stream`], [`pacing`]) as segments ([`segments`]). The clock, the channels, supersession and pacing
 //! live here; the stepping, the changes and the outcomes live in the engine.
 
+pub mod ignored;
 pub mod pacing;
 pub mod plan;
 pub mod segments;

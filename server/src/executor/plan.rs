@@ -32,6 +32,7 @@ pub fn advance_cancellable(
         all.contacts.extend(p.contacts.into_iter().map(|(i, c)| (i + done, c)));
         all.cellmate_contacts.extend(p.cellmate_contacts.into_iter().map(|(i, c)| (i + done, c)));
         all.stalls.extend(p.stalls);
+        all.ignored.extend(p.ignored);
         last = p.outcome;
         done += k;
         if n == 0 {

@@ -8,6 +8,7 @@ use dmp::execution::Outcome;
 use dmp_proto::status::{end_reason, segment_status};
 use dmp_proto::v1;
 
+use super::ignored::push_obstacle_warnings;
 use super::segments::{Batch, member_segments};
 use super::served_run::ServedRun;
 use super::stream::Control;
@@ -60,7 +61,7 @@ pub struct Stepped {
     pub segments: Vec<Computed>,
     /// The members' states at the first point computed, to publish to the cell (with each member's footprint).
     pub states: Vec<(v1::RobotState, Option<dmp::Shape>)>,
-    /// Warnings for the robot: commands that could not be applied.
+    /// Warnings for the robot: commands that could not be applied, obstacles it could not use.
     pub warnings: Vec<v1::Warning>,
 }
 
@@ -115,7 +116,8 @@ pub fn compute(run: &mut ServedRun, step: Step, job: &JobContext<'_>) -> Result<
     let mut sequence = step.sequence;
     loop {
         let e = &mut run.execution;
-        let stretch = e.advance(step.segment_points.min(e.points_to_end()))?;
+        let mut stretch = e.advance(step.segment_points.min(e.points_to_end()))?;
+        push_obstacle_warnings(&mut stretch.ignored, &mut out.warnings);
         let last_point_time = e.time() - e.dt();
         let outcome = stretch.outcome;
         if out.segments.is_empty() {

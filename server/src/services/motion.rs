@@ -8,9 +8,8 @@ use dmp::execution::{GroupMember, join_group};
 use dmp::field::Agent;
 use dmp::{Motion, Primitive, Stepping};
 use dmp_proto::avoidance::avoidance_from_proto;
-use dmp_proto::check::check_vector;
+use dmp_proto::check::{check_in_workspace, check_tau, check_vector};
 use dmp_proto::keys::check_name;
-use dmp_proto::obstacle::obstacle_to_engine;
 use dmp_proto::robot_state::check_robot_state;
 use dmp_proto::shape::superquadric_to_shape;
 use dmp_proto::status::segment_status;
@@ -25,8 +24,9 @@ use tracing::info;
 
 use crate::cell::Cell;
 use crate::compute::admission::Reservation;
-use crate::convert::primitive_from_proto;
+use crate::convert::{obstacle_from_proto, stored_primitive};
 use crate::error::ServerError;
+use crate::executor::ignored::push_obstacle_warnings;
 use crate::executor::pacing::{MAX_REFILL, history_len, refill_segments};
 use crate::executor::plan::advance_cancellable;
 use crate::executor::segments::Batch;
@@ -83,12 +83,9 @@ impl MotionServiceImpl {
         let proto = record
             .primitive
             .ok_or_else(|| ServerError::Internal("stored record without primitive".into()))?;
-        let primitive = primitive_from_proto(&proto, &self.state.config.limits).map_err(|e| {
-            ServerError::Internal(format!(
-                "the stored primitive {}/{} is not valid: {e}",
-                spec.robot_id, spec.primitive
-            ))
-        })?;
+        let what = format!("{}/{}", spec.robot_id, spec.primitive);
+        let limits = &self.state.config.limits;
+        let primitive = stored_primitive(&proto, limits, &what).map_err(|e| e.within(prefix))?;
         let d = primitive.dim;
         let given_or_default = |field: &str, v: &[f64], default: &[f64]| -> Result<Vec<f64>, ServerError> {
             if v.is_empty() {
@@ -100,13 +97,10 @@ impl MotionServiceImpl {
         };
         let start = given_or_default("start", &spec.start, &primitive.start)?;
         let goal = given_or_default("goal", &spec.goal, &primitive.goal)?;
+        check_in_workspace(&format!("{prefix}.start"), &start, limits.workspace_m)?;
+        check_in_workspace(&format!("{prefix}.goal"), &goal, limits.workspace_m)?;
         let tau = if spec.tau == 0.0 { primitive.tau } else { spec.tau };
-        if !(tau.is_finite() && tau > 0.0) {
-            return Err(ServerError::invalid(
-                format!("{prefix}.tau"),
-                "must be a finite number greater than zero",
-            ));
-        }
+        check_tau(&format!("{prefix}.tau"), tau)?;
         let defaults = &self.state.config.defaults;
         let obstacles = avoidance_from_proto(spec.avoidance.as_ref(), defaults.avoidance)
             .map_err(|e| e.within(&format!("{prefix}.avoidance")))?;
@@ -121,7 +115,8 @@ impl MotionServiceImpl {
         let mut extra = Vec::with_capacity(spec.extra_obstacles.len());
         for (i, o) in spec.extra_obstacles.iter().enumerate() {
             extra.push(
-                obstacle_to_engine(o).map_err(|e| e.within(&format!("{prefix}.extra_obstacles[{i}]")))?,
+                obstacle_from_proto(o, limits.workspace_m)
+                    .map_err(|e| e.within(&format!("{prefix}.extra_obstacles[{i}]")))?,
             );
         }
         // Checked now, not when the first obstacle or robot appears (which would end a running stream).
@@ -273,7 +268,9 @@ impl MotionService for MotionServiceImpl {
             })
             .await
             .map_err(|e| ServerError::Internal(e.to_string()))?;
-        let stretch = stretch?;
+        let mut stretch = stretch?;
+        let mut warnings = Vec::new();
+        push_obstacle_warnings(&mut stretch.ignored, &mut warnings);
         let (execution, scene_version) = (run.execution, run.scene_version);
         let collisions: Vec<String> = execution.touched().iter().cloned().collect();
         let stalled = !stretch.stalls.is_empty();
@@ -296,7 +293,7 @@ impl MotionService for MotionServiceImpl {
             }),
             collisions,
             stalled,
-            warnings: Vec::new(),
+            warnings,
         }))
     }
 

@@ -3,6 +3,7 @@
 
 mod bad_input;
 mod hostile_compute;
+mod hostile_values;
 mod load;
 mod matches_the_engine;
 mod primitives;
