@@ -6,6 +6,7 @@ pub mod pacing;
 pub mod segments;
 pub mod served_run;
 pub mod stream;
+pub mod stream_memory;
 
 #[cfg(test)]
 mod tests;
