@@ -186,10 +186,10 @@ mod tests {
         let o = |id: &str| dmp_proto::v1::Obstacle {
             id: id.into(),
             shape: Some(dmp_proto::v1::obstacle::Shape::Superquadric(dmp_proto::v1::Superquadric {
-                semi_axes: vec![1.0; 32],
-                exponents: vec![1.0; 32],
+                semi_axes: vec![1.0; 16],
+                exponents: vec![1.0; 16],
             })),
-            center: vec![0.0; 32],
+            center: vec![0.0; 16],
             ..Default::default()
         };
         let bytes = crate::cell::obstacle_bytes(&o("a1"));

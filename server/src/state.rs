@@ -1,6 +1,5 @@
 //! What every service shares.
 
-
 use tokio_util::sync::CancellationToken;
 
 use crate::cells::Cells;
@@ -77,7 +76,8 @@ impl AppState {
             streams: StreamPermits::new(&config.limits),
             store: Store::open(dir).expect("a store in a fresh directory"),
             robots: RobotBus::new(None),
-            cells: Cells::new("c", 10, &config.limits, memory.clone()).expect("cell c"),
+            cells: Cells::with_limits("c", &crate::config::Limits { max_cells: 10, ..config.limits.clone() }, memory.clone())
+                .expect("cell c"),
             memory,
             config,
             shutdown: CancellationToken::new(),
