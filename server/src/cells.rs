@@ -166,10 +166,10 @@ mod tests {
     fn a_watched_cell_or_one_with_robots_is_kept() {
         let cells = Cells::new("home", 3, 10).unwrap();
         let rx = cells.get("watched").unwrap().subscribe();
-        cells.get("robots").unwrap().update_robot(
-            dmp_proto::v1::RobotState { robot_id: "r".into(), ..Default::default() },
-            None,
-        );
+        cells
+            .get("robots")
+            .unwrap()
+            .update_robot(dmp_proto::v1::RobotState { robot_id: "r".into(), ..Default::default() }, None);
         assert_eq!(cells.reclaim(), 0);
         drop(rx);
         assert_eq!(cells.reclaim(), 1);

@@ -127,7 +127,10 @@ mod tests {
         let e = budget.reserve("another stream", 50).unwrap_err();
         let msg = e.to_string();
         assert!(matches!(e, ServerError::ResourceExhausted(_)));
-        assert!(msg.contains("another stream needs about 50 bytes") && msg.contains("max_server_bytes = 100"), "{msg}");
+        assert!(
+            msg.contains("another stream needs about 50 bytes") && msg.contains("max_server_bytes = 100"),
+            "{msg}"
+        );
         assert!(msg.contains("40 left"), "{msg}");
         assert_eq!(budget.used(), 60, "a refusal reserves nothing");
         let mut b = budget.reserve("b", 40).unwrap();

@@ -76,8 +76,12 @@ impl AppState {
             streams: StreamPermits::new(&config.limits),
             store: Store::open(dir).expect("a store in a fresh directory"),
             robots: RobotBus::new(None),
-            cells: Cells::with_limits("c", &crate::config::Limits { max_cells: 10, ..config.limits.clone() }, memory.clone())
-                .expect("cell c"),
+            cells: Cells::with_limits(
+                "c",
+                &crate::config::Limits { max_cells: 10, ..config.limits.clone() },
+                memory.clone(),
+            )
+            .expect("cell c"),
             memory,
             config,
             shutdown: CancellationToken::new(),

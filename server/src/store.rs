@@ -227,8 +227,9 @@ impl Store {
             Some(name) => Bound::Excluded((robot_id, name, u64::MAX)),
             None => Bound::Included((robot_id, "", 0)),
         };
-        let range =
-            prims.range::<(&str, &str, u64)>((start, Bound::Unbounded)).map_err(|e| storage("read primitives", e))?;
+        let range = prims
+            .range::<(&str, &str, u64)>((start, Bound::Unbounded))
+            .map_err(|e| storage("read primitives", e))?;
         // Keys are sorted by (robot, name, version): the last entry of each name is its latest version.
         let mut out: Vec<v1::PrimitiveRecord> = Vec::new();
         let mut pending: Option<(String, Vec<u8>)> = None;

@@ -16,6 +16,9 @@ use crate::connection::ConnectionActivity;
 use crate::error::ServerError;
 use crate::write_batching::BatchedConnectInfo;
 
+/// Streams open per client address.
+type ClientCounts = Arc<Mutex<HashMap<IpAddr, usize>>>;
+
 /// The pool a stream takes its permit from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StreamKind {
@@ -52,7 +55,7 @@ impl Peer {
 pub struct StreamPermits {
     executions: Arc<Semaphore>,
     watches: Arc<Semaphore>,
-    per_client: Arc<Mutex<HashMap<IpAddr, usize>>>,
+    per_client: ClientCounts,
     max_executions: usize,
     max_watches: usize,
     max_per_connection: usize,
@@ -132,7 +135,7 @@ impl StreamPermits {
 #[derive(Debug)]
 pub struct StreamPermit {
     _pool: OwnedSemaphorePermit,
-    client: Option<(Arc<Mutex<HashMap<IpAddr, usize>>>, IpAddr)>,
+    client: Option<(ClientCounts, IpAddr)>,
     connection: Option<Arc<ConnectionActivity>>,
 }
 

@@ -38,10 +38,12 @@ pub struct StreamBytes {
 impl StreamBytes {
     /// The estimate of a stream of `dim` dimensions paced by `cfg`, whose channel holds `buffered` segments.
     pub fn estimate(cfg: &StreamConfig, dim: usize, buffered: usize) -> Self {
-        let segment = cfg.segment_points.saturating_mul(dim).saturating_mul(SEGMENT_BYTES_PER_VALUE) + SEGMENT_OVERHEAD;
+        let segment =
+            cfg.segment_points.saturating_mul(dim).saturating_mul(SEGMENT_BYTES_PER_VALUE) + SEGMENT_OVERHEAD;
         // The history keeps whole records: up to one segment more than asked, and a spare one recycled.
         let history_points = history_len(cfg).saturating_add(2 * cfg.segment_points);
-        let history = history_points.saturating_mul(dim).saturating_mul(HISTORY_BYTES_PER_VALUE) + 8 * history_points;
+        let history =
+            history_points.saturating_mul(dim).saturating_mul(HISTORY_BYTES_PER_VALUE) + 8 * history_points;
         let total = segment
             .saturating_mul(buffered + SEGMENTS_IN_FLIGHT)
             .saturating_add(history)
@@ -52,7 +54,12 @@ impl StreamBytes {
     /// Checks the estimate against the limits and reserves it from `budget`: the stream's reservation, or
     /// ResourceExhausted naming the limit, the stream's bytes and the limit's value.
     pub fn admit(self, limits: &Limits, budget: &MemoryBudget) -> Result<Reservation, ServerError> {
-        check_within("one segment of this stream", self.segment, "max_segment_bytes", limits.max_segment_bytes)?;
+        check_within(
+            "one segment of this stream",
+            self.segment,
+            "max_segment_bytes",
+            limits.max_segment_bytes,
+        )?;
         check_within("this stream", self.total, "max_stream_bytes", limits.max_stream_bytes)?;
         budget.reserve("this stream", self.total)
     }
@@ -89,7 +96,10 @@ mod tests {
         let big = StreamBytes::estimate(&cfg(10_000), 64, 4);
         assert!(big.segment > 15_000_000);
         let msg = big.admit(&limits, &budget).unwrap_err().to_string();
-        assert!(msg.contains("max_segment_bytes = 4194304") && msg.contains(&big.segment.to_string()), "{msg}");
+        assert!(
+            msg.contains("max_segment_bytes = 4194304") && msg.contains(&big.segment.to_string()),
+            "{msg}"
+        );
         assert_eq!(budget.used(), 0);
         // Segments within their limit, but too many of them.
         let many = StreamBytes::estimate(&cfg(2_000), 64, 100);

@@ -162,7 +162,8 @@ impl PrimitiveServiceImpl {
         .clamp(1, limits.max_list_page_size.max(1));
         let store = self.state.store.clone();
         let robot_id = req.robot_id.clone();
-        let (records, next) = blocking(move || store.list_page(&robot_id, after.as_deref(), page_size)).await?;
+        let (records, next) =
+            blocking(move || store.list_page(&robot_id, after.as_deref(), page_size)).await?;
         debug!(robot = %req.robot_id, count = records.len(), more = next.is_some(), "listed");
         Ok(v1::ListPrimitivesResponse { records, next_page_token: next.unwrap_or_default() })
     }
@@ -265,7 +266,10 @@ mod tests {
         assert_eq!(PrimitiveService::get(&svc, Request::new(get(1))).await.unwrap().into_inner(), first);
         refused(PrimitiveService::get(&svc, Request::new(get(7))).await, Code::NotFound, "version 7");
 
-        let list = svc.list(Request::new(v1::ListPrimitivesRequest { robot_id: "r1".into(), ..Default::default() })).await.unwrap();
+        let list = svc
+            .list(Request::new(v1::ListPrimitivesRequest { robot_id: "r1".into(), ..Default::default() }))
+            .await
+            .unwrap();
         let names: Vec<_> = list.get_ref().records.iter().map(|r| (r.name.as_str(), r.version)).collect();
         assert_eq!(names, [("reach", 1), ("wave", 2)]);
 
@@ -366,7 +370,11 @@ mod tests {
         refused(svc.put(put(bad)).await, Code::InvalidArgument, "primitive: primitive format version 99");
 
         refused(
-            svc.list(Request::new(v1::ListPrimitivesRequest { robot_id: String::new(), ..Default::default() })).await,
+            svc.list(Request::new(v1::ListPrimitivesRequest {
+                robot_id: String::new(),
+                ..Default::default()
+            }))
+            .await,
             Code::InvalidArgument,
             "robot_id",
         );

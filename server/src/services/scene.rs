@@ -3,9 +3,9 @@
 
 use std::sync::Arc;
 
+use dmp_proto::keys::check_name;
 use dmp_proto::v1;
 use dmp_proto::v1::scene_service_server::SceneService;
-use dmp_proto::keys::check_name;
 use tokio::sync::mpsc;
 use tokio_stream::wrappers::ReceiverStream;
 use tokio_util::sync::CancellationToken;

@@ -17,7 +17,9 @@ use crate::{ellipse, line, spec, until};
 
 /// A 2-D line, stored for `robot`, with a long time scale: its streams run until their client leaves.
 async fn slow_line(client: &DmpClient, robot: &str) {
-    within("put", client.put_primitive(robot, "line", &line(vec![0.0; 2], vec![1.0, 0.0], 50.0))).await.unwrap();
+    within("put", client.put_primitive(robot, "line", &line(vec![0.0; 2], vec![1.0, 0.0], 50.0)))
+        .await
+        .unwrap();
 }
 
 fn long_execute(robot: &str) -> v1::ExecuteRequest {
@@ -88,7 +90,8 @@ async fn streams_are_bounded_in_memory_and_a_cancelled_unread_one_gives_it_back(
     let mut stream = within("execute again", client.execute(long_execute("r"))).await.unwrap();
     within("segment", stream.next()).await.unwrap().unwrap();
     drop((stream, unread_b));
-    until("every stream's memory is back", || memory.used() == 0 && server.handle().open_streams() == 0).await;
+    until("every stream's memory is back", || memory.used() == 0 && server.handle().open_streams() == 0)
+        .await;
     server.stop().await;
 }
 
@@ -147,22 +150,36 @@ async fn ids_of_more_than_128_characters_are_refused_everywhere() {
         assert_eq!(r.0, Some(Code::InvalidArgument), "{}", r.1);
         assert!(r.1.contains(field) && r.1.contains("1 to 128 characters"), "{field}: {}", r.1);
     };
-    invalid(code(within("obstacle", client.put_obstacle(ellipse(&long, vec![0.0; 2], vec![0.1; 2]))).await), "obstacle.id");
+    invalid(
+        code(within("obstacle", client.put_obstacle(ellipse(&long, vec![0.0; 2], vec![0.1; 2]))).await),
+        "obstacle.id",
+    );
     invalid(code(within("delete", client.delete_obstacle(&long)).await), "id");
     invalid(code(within("cell", client.clone().with_cell(&long).list_obstacles()).await), "cell");
     invalid(
-        code(within("primitive", client.put_primitive(&long, "p", &line(vec![0.0; 2], vec![1.0, 0.0], 1.0))).await),
+        code(
+            within("primitive", client.put_primitive(&long, "p", &line(vec![0.0; 2], vec![1.0, 0.0], 1.0)))
+                .await,
+        ),
         "robot_id",
     );
     invalid(
-        code(within("name", client.put_primitive("r", &long, &line(vec![0.0; 2], vec![1.0, 0.0], 1.0))).await),
+        code(
+            within("name", client.put_primitive("r", &long, &line(vec![0.0; 2], vec![1.0, 0.0], 1.0))).await,
+        ),
         "name",
     );
     slow_line(&client, "r").await;
     let mut motion = spec("r", "line");
     motion.extra_obstacles = vec![ellipse(&long, vec![5.0; 2], vec![0.1; 2])];
     invalid(
-        code(within("extra obstacle", client.plan(v1::PlanRequest { motion: Some(motion), ..Default::default() })).await),
+        code(
+            within(
+                "extra obstacle",
+                client.plan(v1::PlanRequest { motion: Some(motion), ..Default::default() }),
+            )
+            .await,
+        ),
         "motion.extra_obstacles[0].id",
     );
     invalid(code(within("list", client.list(&long)).await), "robot_id");
@@ -173,8 +190,10 @@ async fn ids_of_more_than_128_characters_are_refused_everywhere() {
     within("subscriber", perception.wait_for_subscriber(T)).await.unwrap();
     let json = format!(r#"{{"center": [5, 5], "semi_axes": [0.1, 0.1], "id": "{long}"}}"#);
     let session = perception.session();
-    within("zenoh long id", async { session.put(format!("dmp/default/obstacles/{long}"), json).await.unwrap() })
-        .await;
+    within("zenoh long id", async {
+        session.put(format!("dmp/default/obstacles/{long}"), json).await.unwrap()
+    })
+    .await;
     within("zenoh long robot", async {
         session.put(format!("dmp/default/robots/{long}/state"), vec![0u8; 4]).await.unwrap()
     })
@@ -221,13 +240,10 @@ async fn old_versions_are_pruned_and_lists_come_in_pages() {
     assert!(big.next_page_token.is_empty(), "the last page");
     // The client library follows the pages.
     let all = within("list", client.list("r")).await.unwrap();
-    assert_eq!(all.iter().map(|r| (r.name.as_str(), r.version)).collect::<Vec<_>>(), [
-        ("a", 5),
-        ("b", 1),
-        ("c", 1),
-        ("d", 1),
-        ("e", 1)
-    ]);
+    assert_eq!(
+        all.iter().map(|r| (r.name.as_str(), r.version)).collect::<Vec<_>>(),
+        [("a", 5), ("b", 1), ("c", 1), ("d", 1), ("e", 1)]
+    );
     let (c, msg) = code(within("bad token", client.list_page("r", 0, "a/b")).await);
     assert_eq!(c, Some(Code::InvalidArgument), "{msg}");
     assert!(msg.contains("page_token"), "{msg}");
@@ -255,7 +271,8 @@ async fn watches_never_starve_executions_and_streams_are_bounded_per_connection_
     assert_eq!(c, Some(Code::ResourceExhausted), "{msg}");
     assert!(msg.contains("limits.max_watches = 3"), "{msg}");
     // The watches at their limit take nothing from the robots: an execution runs to its end.
-    let quick = v1::ExecuteRequest { motion: Some(spec("r", "line")), max_duration_s: 0.05, ..Default::default() };
+    let quick =
+        v1::ExecuteRequest { motion: Some(spec("r", "line")), max_duration_s: 0.05, ..Default::default() };
     let mut stream = within("execute while watched", robot.execute(quick)).await.unwrap();
     let mut segments = 0;
     while let Some(s) = within("segment", stream.next()).await {
@@ -267,7 +284,8 @@ async fn watches_never_starve_executions_and_streams_are_bounded_per_connection_
     until("the execution's permit is back", || executions() == 0).await;
 
     // Per connection: the watcher's connection holds 3 watches; one execution more and it is full.
-    let on_watcher = within("execute on the watcher's connection", watcher.execute(long_execute("r"))).await.unwrap();
+    let on_watcher =
+        within("execute on the watcher's connection", watcher.execute(long_execute("r"))).await.unwrap();
     let (c, msg) = code(within("a 5th on one connection", watcher.execute(long_execute("r"))).await);
     assert_eq!(c, Some(Code::ResourceExhausted), "{msg}");
     assert!(msg.contains("max_streams_per_connection = 4"), "{msg}");
@@ -299,7 +317,8 @@ async fn empty_cells_are_reclaimed_and_deletes_never_create_one() {
     within("subscriber", perception.wait_for_subscriber(T)).await.unwrap();
     let session = perception.session();
     for i in 0..20 {
-        within("zenoh delete", async { session.delete(format!("dmp/junk{i}/obstacles/o")).await.unwrap() }).await;
+        within("zenoh delete", async { session.delete(format!("dmp/junk{i}/obstacles/o")).await.unwrap() })
+            .await;
     }
     // Samples of one session arrive in order: once the marker is in, the deletes were handled.
     within("marker", perception.put_proto(&ellipse("marker", vec![5.0, 5.0], vec![0.1, 0.1]))).await.unwrap();
@@ -347,7 +366,8 @@ async fn idle_connections_are_closed_and_busy_ones_kept() {
     })
     .await;
     // A connection that says nothing is closed.
-    let mut idle = within("connect", tokio::net::TcpStream::connect(server.handle().grpc_addr)).await.unwrap();
+    let mut idle =
+        within("connect", tokio::net::TcpStream::connect(server.handle().grpc_addr)).await.unwrap();
     let started = std::time::Instant::now();
     let mut buf = [0u8; 1024];
     loop {
