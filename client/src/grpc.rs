@@ -221,10 +221,32 @@ impl DmpClient {
         Ok(self.primitives.clone().get(request).await?.into_inner())
     }
 
-    /// The latest version of each of a robot's primitives, sorted by name.
+    /// The latest version of each of a robot's primitives, sorted by name: every page, in turn.
     pub async fn list(&self, robot: &str) -> Result<Vec<v1::PrimitiveRecord>, ClientError> {
-        let request = v1::ListPrimitivesRequest { robot_id: robot.into() };
-        Ok(self.primitives.clone().list(request).await?.into_inner().records)
+        let mut records = Vec::new();
+        let mut token = String::new();
+        loop {
+            let page = self.list_page(robot, 0, &token).await?;
+            records.extend(page.records);
+            // A token that does not move on would loop forever: the server's pages are sorted by name.
+            if page.next_page_token.is_empty() || page.next_page_token <= token {
+                return Ok(records);
+            }
+            token = page.next_page_token;
+        }
+    }
+
+    /// One page of a robot's primitives: at most `page_size` (0: the server's default) after `page_token` (empty:
+    /// the first page). The page's `next_page_token` is empty on the last page.
+    pub async fn list_page(
+        &self,
+        robot: &str,
+        page_size: u32,
+        page_token: &str,
+    ) -> Result<v1::ListPrimitivesResponse, ClientError> {
+        let request =
+            v1::ListPrimitivesRequest { robot_id: robot.into(), page_size, page_token: page_token.into() };
+        Ok(self.primitives.clone().list(request).await?.into_inner())
     }
 
     /// Deletes every version of `(robot, name)`; returns how many there were.

@@ -4,10 +4,13 @@
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 
+use dmp_proto::keys::check_name;
 use dmp_proto::v1;
+use prost::Message;
 use tokio::sync::watch;
 
 use crate::error::ServerError;
+use crate::memory::{MemoryBudget, Reservation};
 
 /// An obstacle as the cell holds it.
 #[derive(Debug, Clone)]
@@ -20,6 +23,14 @@ pub struct ReceivedObstacle {
     pub received_unix_s: f64,
     /// When it expires, Unix seconds.
     pub expires_unix_s: Option<f64>,
+    /// Its estimated memory ([`obstacle_bytes`]).
+    pub bytes: usize,
+}
+
+/// The estimated memory of an obstacle in a scene: the message and the engine's copy of it (each about its encoded
+/// size: a 64-D rotation is 32 KiB in both), its id in the map, and a fixed part.
+pub fn obstacle_bytes(o: &v1::Obstacle) -> usize {
+    2 * o.encoded_len() + 2 * o.id.len() + 512
 }
 
 impl ReceivedObstacle {
@@ -41,6 +52,8 @@ pub struct ObstacleSet {
     pub version: u64,
     /// By id.
     pub obstacles: BTreeMap<String, ReceivedObstacle>,
+    /// The obstacles' estimated memory, bytes.
+    pub bytes: usize,
 }
 
 /// A robot seen by the cell (its last published state).
@@ -61,20 +74,59 @@ pub struct Cell {
     /// every stream. The lock is never held across an await.
     robots: Arc<Mutex<BTreeMap<String, Arc<SeenRobot>>>>,
     max_obstacles: usize,
+    /// Most bytes of obstacles.
+    max_bytes: usize,
+    /// The obstacles' share of the server's memory budget. Locked only inside the watch's update.
+    memory: Arc<Mutex<Reservation>>,
     /// Half-width of the workspace box every obstacle's centre must lie in, metres.
     workspace_m: f64,
 }
 
 impl Cell {
-    /// The empty scene of `cell`, holding at most `max_obstacles`, in the default workspace.
+    /// The empty scene of `cell`, holding at most `max_obstacles`, with no memory bounds, in the default workspace.
     pub fn new(cell: impl Into<Arc<str>>, max_obstacles: usize) -> Self {
-        Self::new_in_workspace(cell, max_obstacles, crate::config::Limits::default().workspace_m)
+        let workspace_m = crate::config::Limits::default().workspace_m;
+        Self::with_budget(cell, max_obstacles, usize::MAX, &MemoryBudget::new(usize::MAX), workspace_m)
     }
 
-    /// [`Cell::new`] whose obstacles' centres must lie within `[-workspace_m, workspace_m]` on every axis.
-    pub fn new_in_workspace(cell: impl Into<Arc<str>>, max_obstacles: usize, workspace_m: f64) -> Self {
+    /// The empty scene of `cell`, holding at most `max_obstacles` and `max_bytes` of them, which it reserves from
+    /// `memory`, whose obstacles' centres must lie within `[-workspace_m, workspace_m]` on every axis.
+    pub fn with_budget(
+        cell: impl Into<Arc<str>>,
+        max_obstacles: usize,
+        max_bytes: usize,
+        memory: &MemoryBudget,
+        workspace_m: f64,
+    ) -> Self {
         let (tx, _) = watch::channel(Arc::new(ObstacleSet::default()));
-        Self { cell: cell.into(), tx: Arc::new(tx), robots: Arc::default(), max_obstacles, workspace_m }
+        Self {
+            cell: cell.into(),
+            tx: Arc::new(tx),
+            robots: Arc::default(),
+            max_obstacles,
+            max_bytes,
+            memory: Arc::new(Mutex::new(memory.empty())),
+            workspace_m,
+        }
+    }
+    /// Whether nothing holds or uses the cell but the map of cells: no obstacle, no robot, no stream and no
+    /// subscriber (every stream and watch holds a clone or a receiver).
+    pub(crate) fn is_unused(&self) -> bool {
+        Arc::strong_count(&self.tx) == 1
+            && self.tx.receiver_count() == 0
+            && self.tx.borrow().obstacles.is_empty()
+            && self.robot_count() == 0
+    }
+
+    /// Moves the scene's memory account by `delta` (checked against the cell's and the server's budgets).
+    fn account(&self, old: usize, new: usize, id: &str) -> Result<(), ServerError> {
+        let mut memory = self.memory.lock().unwrap_or_else(|p| p.into_inner());
+        if new > old {
+            memory.grow(&format!("obstacle `{id}`"), new - old)
+        } else {
+            memory.shrink(old - new);
+            Ok(())
+        }
     }
 
     /// The cell's name.
@@ -99,26 +151,43 @@ impl Cell {
 
     /// Adds or replaces an obstacle received at `now_unix_s`; returns the new version.
     pub fn put(&self, obstacle: v1::Obstacle, now_unix_s: f64) -> Result<u64, ServerError> {
-        if obstacle.id.is_empty() {
-            return Err(ServerError::invalid("obstacle.id", "must not be empty"));
-        }
+        check_name("obstacle.id", &obstacle.id)?;
         let engine = crate::convert::obstacle_from_proto(&obstacle, self.workspace_m)
             .map_err(|e| e.within("obstacle"))?;
         let expires_unix_s = (obstacle.ttl_s > 0.0).then_some(now_unix_s + obstacle.ttl_s);
-        let entry = ReceivedObstacle { proto: obstacle, engine, received_unix_s: now_unix_s, expires_unix_s };
+        let bytes = obstacle_bytes(&obstacle);
+        let entry =
+            ReceivedObstacle { proto: obstacle, engine, received_unix_s: now_unix_s, expires_unix_s, bytes };
         let mut result = Ok(0);
-        self.tx.send_modify(|snap| {
-            if !snap.obstacles.contains_key(&entry.proto.id) && snap.obstacles.len() >= self.max_obstacles {
+        self.tx.send_if_modified(|snap| {
+            let old = snap.obstacles.get(&entry.proto.id).map(|o| o.bytes);
+            if old.is_none() && snap.obstacles.len() >= self.max_obstacles {
                 result = Err(ServerError::ResourceExhausted(format!(
-                    "the scene already holds {} obstacles (the limit)",
-                    self.max_obstacles
+                    "the scene of cell `{}` already holds {} obstacles (limits.max_obstacles)",
+                    self.cell, self.max_obstacles
                 )));
-                return;
+                return false;
+            }
+            let old = old.unwrap_or(0);
+            let total = snap.bytes - old + entry.bytes;
+            if total > self.max_bytes {
+                result = Err(ServerError::ResourceExhausted(format!(
+                    "obstacle `{}` needs about {} bytes, and the scene of cell `{}` would hold {total}, more than \
+                     limits.max_scene_bytes = {}",
+                    entry.proto.id, entry.bytes, self.cell, self.max_bytes
+                )));
+                return false;
+            }
+            if let Err(e) = self.account(old, entry.bytes, &entry.proto.id) {
+                result = Err(e);
+                return false;
             }
             let s = Arc::make_mut(snap);
+            s.bytes = total;
             s.obstacles.insert(entry.proto.id.clone(), entry);
             s.version += 1;
             result = Ok(s.version);
+            true
         });
         result
     }
@@ -127,9 +196,11 @@ impl Cell {
     pub fn delete(&self, id: &str) -> (u64, bool) {
         let mut out = (0, false);
         self.tx.send_if_modified(|snap| {
-            if snap.obstacles.contains_key(id) {
+            if let Some(bytes) = snap.obstacles.get(id).map(|o| o.bytes) {
                 let s = Arc::make_mut(snap);
                 s.obstacles.remove(id);
+                s.bytes -= bytes;
+                let _ = self.account(bytes, 0, id);
                 s.version += 1;
                 out = (s.version, true);
                 true
@@ -156,7 +227,10 @@ impl Cell {
             }
             let s = Arc::make_mut(snap);
             for id in &expired {
-                s.obstacles.remove(id);
+                if let Some(o) = s.obstacles.remove(id) {
+                    s.bytes -= o.bytes;
+                    let _ = self.account(o.bytes, 0, id);
+                }
             }
             s.version += 1;
             n = expired.len();

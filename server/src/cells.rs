@@ -1,7 +1,8 @@
 //! The cells one server serves. A cell is a scene of its own (obstacles, and the states of the robots working in
 //! it): a robot avoids its cell's obstacles and its cell-mates, nothing of the other cells. Zenoh keys carry the
 //! cell (`dmp/<cell>/...`); a gRPC request names its cell, and an empty name means the server's default cell.
-//! Cells are created on first use, up to `limits.max_cells`.
+//! Cells are created on first use, up to `limits.max_cells`, and reclaimed when nothing uses them any more (no
+//! obstacle, no robot, no stream, no watch): a delete never creates one.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -9,7 +10,9 @@ use std::sync::{Arc, Mutex};
 use dmp_proto::keys::check_name;
 
 use crate::cell::Cell;
+use crate::config::Limits;
 use crate::error::ServerError;
+use crate::memory::MemoryBudget;
 
 /// Every cell's scene, by name. Cheap to clone.
 #[derive(Debug, Clone)]
@@ -17,6 +20,8 @@ pub struct Cells {
     default: Arc<str>,
     max_cells: usize,
     max_obstacles: usize,
+    max_scene_bytes: usize,
+    memory: MemoryBudget,
     /// Half-width of the workspace box every obstacle's centre must lie in, metres.
     workspace_m: f64,
     /// The lock is held only to look up or insert, never across an await.
@@ -27,25 +32,23 @@ impl Cells {
     /// The cells of a server whose default cell is `default` (created now); each scene holds at most
     /// `max_obstacles`, and there are at most `max_cells`.
     pub fn new(default: &str, max_cells: usize, max_obstacles: usize) -> Result<Self, ServerError> {
-        Self::new_in_workspace(
-            default,
-            max_cells,
-            max_obstacles,
-            crate::config::Limits::default().workspace_m,
-        )
+        let limits = Limits { max_cells, max_obstacles, max_scene_bytes: usize::MAX, ..Limits::default() };
+        Self::with_limits(default, &limits, MemoryBudget::new(usize::MAX))
     }
 
-    /// [`Cells::new`] whose obstacles' centres must lie within `[-workspace_m, workspace_m]` on every axis.
-    pub fn new_in_workspace(
-        default: &str,
-        max_cells: usize,
-        max_obstacles: usize,
-        workspace_m: f64,
-    ) -> Result<Self, ServerError> {
+    /// The cells of a server whose default cell is `default` (created now), bounded by `limits` (cells, obstacles
+    /// and bytes per scene); the scenes reserve their memory from `memory`.
+    pub fn with_limits(default: &str, limits: &Limits, memory: MemoryBudget) -> Result<Self, ServerError> {
         check_name("cell", default)?;
-        let max_cells = max_cells.max(1);
-        let cells =
-            Self { default: default.into(), max_cells, max_obstacles, workspace_m, map: Arc::default() };
+        let cells = Self {
+            default: default.into(),
+            max_cells: limits.max_cells.max(1),
+            max_obstacles: limits.max_obstacles,
+            max_scene_bytes: limits.max_scene_bytes,
+            memory,
+            workspace_m: limits.workspace_m,
+            map: Arc::default(),
+        };
         cells.get("")?;
         Ok(cells)
     }
@@ -65,15 +68,41 @@ impl Cells {
         }
         check_name("cell", name)?;
         if map.len() >= self.max_cells {
+            self.reclaim_in(&mut map);
+        }
+        if map.len() >= self.max_cells {
             return Err(ServerError::ResourceExhausted(format!(
-                "the server already serves {} cells (the limit); `{name}` is not one of them",
+                "the server already serves {} cells (limits.max_cells), each in use; `{name}` is not one of them",
                 self.max_cells
             )));
         }
         let name: Arc<str> = name.into();
-        let scene = Cell::new_in_workspace(name.clone(), self.max_obstacles, self.workspace_m);
+        let scene =
+            Cell::with_budget(name.clone(), self.max_obstacles, self.max_scene_bytes, &self.memory, self.workspace_m);
         map.insert(name, scene.clone());
         Ok(scene)
+    }
+
+    /// The scene of `cell` (empty: the default cell) if it exists; never creates one (a delete or a read of a cell
+    /// that does not exist has nothing to do). Fails on a name that cannot be a Zenoh key chunk.
+    pub fn find(&self, cell: &str) -> Result<Option<Cell>, ServerError> {
+        let name = if cell.is_empty() { &*self.default } else { cell };
+        check_name("cell", name)?;
+        Ok(self.map.lock().unwrap_or_else(|p| p.into_inner()).get(name).cloned())
+    }
+
+    /// Removes the cells nothing uses (no obstacle, robot, stream or watch), except the default cell; returns how
+    /// many.
+    pub fn reclaim(&self) -> usize {
+        let mut map = self.map.lock().unwrap_or_else(|p| p.into_inner());
+        self.reclaim_in(&mut map)
+    }
+
+    fn reclaim_in(&self, map: &mut HashMap<Arc<str>, Cell>) -> usize {
+        let before = map.len();
+        // Under the map's lock: no one can clone a cell out of the map meanwhile, so an unused cell stays unused.
+        map.retain(|name, cell| **name == *self.default || !cell.is_unused());
+        before - map.len()
     }
 
     /// Every cell's scene, in no particular order.
@@ -119,8 +148,74 @@ mod tests {
         // The same scene again, and the default cell does not see it.
         assert_eq!(cells.get("a").unwrap().snapshot().obstacles.len(), 1);
         assert!(cells.get("").unwrap().snapshot().obstacles.is_empty());
-        assert!(matches!(cells.get("b"), Err(ServerError::ResourceExhausted(_))));
         assert!(matches!(cells.get("x/y"), Err(ServerError::InvalidArgument { .. })));
         assert_eq!(cells.all().len(), 2);
+        // `a` holds an obstacle: no room for `b`.
+        assert!(matches!(cells.get("b"), Err(ServerError::ResourceExhausted(_))));
+        // Emptied, `a` goes away and `b` takes its place; the default cell stays.
+        a.delete("o");
+        drop(a);
+        let b = cells.get("b").unwrap();
+        assert_eq!(cells.len(), 2);
+        assert!(cells.find("a").unwrap().is_none(), "reclaimed");
+        // A cell in use (here: held, as a stream holds its cell) is not reclaimed.
+        assert_eq!(cells.reclaim(), 0);
+        drop(b);
+        assert_eq!(cells.reclaim(), 1);
+        assert_eq!(cells.len(), 1);
+        assert!(cells.find("home").unwrap().is_some() && cells.find("").unwrap().is_some());
+    }
+
+    #[test]
+    fn a_watched_cell_or_one_with_robots_is_kept() {
+        let cells = Cells::new("home", 3, 10).unwrap();
+        let rx = cells.get("watched").unwrap().subscribe();
+        cells
+            .get("robots")
+            .unwrap()
+            .update_robot(dmp_proto::v1::RobotState { robot_id: "r".into(), ..Default::default() }, None);
+        assert_eq!(cells.reclaim(), 0);
+        drop(rx);
+        assert_eq!(cells.reclaim(), 1);
+        cells.find("robots").unwrap().unwrap().remove_robot("r");
+        assert_eq!(cells.reclaim(), 1);
+        assert_eq!(cells.len(), 1);
+    }
+
+    #[test]
+    fn scenes_are_bounded_in_bytes_per_cell_and_across_cells() {
+        let limits = Limits { max_scene_bytes: 3_000, max_server_bytes: 5_000, ..Limits::default() };
+        let memory = MemoryBudget::new(limits.max_server_bytes);
+        let cells = Cells::with_limits("home", &limits, memory.clone()).unwrap();
+        let o = |id: &str| dmp_proto::v1::Obstacle {
+            id: id.into(),
+            shape: Some(dmp_proto::v1::obstacle::Shape::Superquadric(dmp_proto::v1::Superquadric {
+                semi_axes: vec![1.0; 16],
+                exponents: vec![1.0; 16],
+            })),
+            center: vec![0.0; 16],
+            ..Default::default()
+        };
+        let bytes = crate::cell::obstacle_bytes(&o("a1"));
+        assert!(bytes > 1_000 && bytes < 1_500, "{bytes}");
+        let a = cells.get("a").unwrap();
+        a.put(o("a1"), 0.0).unwrap();
+        a.put(o("a2"), 0.0).unwrap();
+        let e = a.put(o("a3"), 0.0).unwrap_err().to_string();
+        assert!(e.contains("max_scene_bytes = 3000") && e.contains("cell `a`"), "{e}");
+        a.put(o("a2"), 0.0).expect("a replacement takes the place of the old one");
+        assert_eq!(memory.used(), 2 * bytes);
+        let b = cells.get("b").unwrap();
+        b.put(o("b1"), 0.0).unwrap();
+        let e = b.put(o("b2"), 0.0).unwrap_err().to_string();
+        assert!(e.contains("max_server_bytes = 5000"), "{e}");
+        assert_eq!(b.snapshot().obstacles.len(), 1, "a refusal changes nothing");
+        a.delete("a1");
+        b.put(o("b2"), 0.0).expect("room again");
+        assert_eq!(memory.used(), 3 * bytes);
+        b.expire(0.0);
+        assert_eq!(memory.used(), 3 * bytes, "no ttl: nothing expires");
+        drop((a, b));
+        assert_eq!(memory.used(), 3 * bytes, "cells with obstacles stay");
     }
 }

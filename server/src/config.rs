@@ -138,7 +138,7 @@ pub struct Limits {
     pub max_obstacles: usize,
     /// Most cells.
     pub max_cells: usize,
-    /// Most concurrent streams (Execute, Session, ExecuteGroup, WatchScene).
+    /// Most concurrent executions (Execute, Session, ExecuteGroup); watches have `max_watches`.
     pub max_streams: usize,
     /// Longest plan or run, in steps.
     pub max_steps: usize,
@@ -147,6 +147,36 @@ pub struct Limits {
     /// Half-width of the workspace box, metres: every coordinate of a start, goal, obstacle centre or robot state
     /// must be within `[-workspace_m, workspace_m]`.
     pub workspace_m: f64,
+    /// Largest segment a stream may send, bytes (its positions, velocities and accelerations: points x dimension
+    /// x 24).
+    pub max_segment_bytes: usize,
+    /// Most memory one stream may hold, bytes: its buffered segments, its history for rollbacks and its run.
+    pub max_stream_bytes: usize,
+    /// Most memory one cell's obstacles may hold, bytes.
+    pub max_scene_bytes: usize,
+    /// Most memory all streams and scenes together may hold, bytes.
+    pub max_server_bytes: usize,
+    /// Versions kept per primitive (robot id and name): a Learn or Put beyond removes the oldest.
+    pub max_versions: usize,
+    /// Records per List page when the request asks for none.
+    pub list_page_size: usize,
+    /// Most records per List page.
+    pub max_list_page_size: usize,
+    /// Most concurrent WatchScene streams, a pool apart from the executions' `max_streams`.
+    pub max_watches: usize,
+    /// Most concurrent streams (executions and watches) on one connection.
+    pub max_streams_per_connection: usize,
+    /// Most concurrent streams (executions and watches) of one client (its IP address, over all its
+    /// connections).
+    pub max_streams_per_client: usize,
+    /// Interval of the HTTP/2 pings the server sends on every connection, seconds (0: none).
+    pub http2_keepalive_interval_s: f64,
+    /// How long a ping may go unanswered before the connection is closed, seconds.
+    pub http2_keepalive_timeout_s: f64,
+    /// Idle time before TCP keepalive probes start on a connection, seconds (0: none).
+    pub tcp_keepalive_s: f64,
+    /// A connection without an open stream and without a request for this long is closed, seconds (0: never).
+    pub idle_timeout_s: f64,
 }
 
 impl Default for Limits {
@@ -162,6 +192,20 @@ impl Default for Limits {
             max_steps: dmp::rollout::MAX_ROLLOUT_STEPS,
             stream_buffer: 4,
             workspace_m: 1000.0,
+            max_segment_bytes: 4 * 1024 * 1024,
+            max_stream_bytes: 32 * 1024 * 1024,
+            max_scene_bytes: 64 * 1024 * 1024,
+            max_server_bytes: 2 * 1024 * 1024 * 1024,
+            max_versions: 16,
+            list_page_size: 100,
+            max_list_page_size: 1000,
+            max_watches: 500,
+            max_streams_per_connection: 2000,
+            max_streams_per_client: 2500,
+            http2_keepalive_interval_s: 30.0,
+            http2_keepalive_timeout_s: 20.0,
+            tcp_keepalive_s: 60.0,
+            idle_timeout_s: 600.0,
         }
     }
 }

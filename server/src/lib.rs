@@ -16,6 +16,9 @@
 //! | the gRPC services, one file each | [`services`] |
 //! | served runs: the engine's execution paced into gRPC streams | [`executor`] |
 //! | many streams' segments in one write on a connection | [`write_batching`] |
+//! | a connection's streams and requests, and its idle timeout | [`connection`] |
+//! | who may open a stream: pools, per connection, per client | [`stream_permits`] |
+//! | the server's memory budget and its reservations | [`memory`] |
 
 pub mod cell;
 pub mod cells;
@@ -23,14 +26,17 @@ pub mod cli;
 pub mod clock;
 pub mod compute;
 pub mod config;
+pub mod connection;
 pub mod convert;
 pub mod error;
 pub mod executor;
+pub mod memory;
 pub mod robots;
 pub mod run;
 pub mod services;
 pub mod state;
 pub mod store;
+pub mod stream_permits;
 pub mod write_batching;
 pub mod zenoh_bridge;
 pub mod zenoh_threads;

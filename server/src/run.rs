@@ -11,10 +11,10 @@ use dmp_proto::v1::scene_service_server::SceneServiceServer;
 use dmp_proto::v1::server_service_server::ServerServiceServer;
 use dmp_proto::zenoh_session::locators;
 use tokio::net::TcpListener;
-use tokio::sync::Semaphore;
 use tokio::task::JoinHandle;
 use tokio_util::sync::CancellationToken;
 use tonic::transport::Server;
+use tonic::transport::server::TcpConnectInfo;
 use tracing::{info, warn};
 
 use crate::cells::Cells;
@@ -22,6 +22,7 @@ use crate::clock::Clock;
 use crate::compute::Compute;
 use crate::config::Config;
 use crate::error::ServerError;
+use crate::memory::MemoryBudget;
 use crate::robots::RobotBus;
 use crate::services::motion::MotionServiceImpl;
 use crate::services::primitives::PrimitiveServiceImpl;
@@ -29,7 +30,8 @@ use crate::services::scene::SceneServiceImpl;
 use crate::services::server::ServerServiceImpl;
 use crate::state::AppState;
 use crate::store::Store;
-use crate::write_batching::BatchedWrites;
+use crate::stream_permits::StreamPermits;
+use crate::write_batching::{BatchedConnectInfo, BatchedWrites};
 use crate::zenoh_bridge::{ZenohBridge, open_session};
 
 /// How long a shutdown waits for connections to drain before closing them.
@@ -58,9 +60,9 @@ impl ServerHandle {
         self.bridge_malformed.as_ref().map(|c| c.load(std::sync::atomic::Ordering::Relaxed)).unwrap_or(0)
     }
 
-    /// Streams currently open.
+    /// Streams currently open (executions and watches).
     pub fn open_streams(&self) -> usize {
-        self.state.open_streams()
+        self.state.streams.open_executions() + self.state.streams.open_watches()
     }
 
     /// Stops: streams end, gRPC drains, Zenoh closes. Returns once everything is down.
@@ -82,12 +84,12 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
     })?;
     let grpc_addr = listener.local_addr().map_err(|e| ServerError::Internal(e.to_string()))?;
     let dir = config.data_dir.clone();
-    let store = tokio::task::spawn_blocking(move || Store::open(&dir))
+    let max_versions = config.limits.max_versions;
+    let store = tokio::task::spawn_blocking(move || Store::open(&dir).map(|s| s.keep_versions(max_versions)))
         .await
         .map_err(|e| ServerError::Internal(e.to_string()))??;
-    let limits = &config.limits;
-    let cells =
-        Cells::new_in_workspace(&config.cell, limits.max_cells, limits.max_obstacles, limits.workspace_m)?;
+    let memory = MemoryBudget::new(config.limits.max_server_bytes);
+    let cells = Cells::with_limits(&config.cell, &config.limits, memory.clone())?;
     let shutdown = CancellationToken::new();
 
     let (session, bridge, robots, zenoh_locators) = if config.zenoh.disabled {
@@ -107,7 +109,8 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         .map_err(|e| ServerError::Internal(format!("cannot start the compute threads: {e}")))?;
     let state = Arc::new(AppState {
         compute,
-        streams: Arc::new(Semaphore::new(config.limits.max_streams)),
+        streams: StreamPermits::new(&config.limits),
+        memory,
         config,
         store,
         cells,
@@ -129,7 +132,12 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         .build_v1()
         .map_err(|e| ServerError::Internal(e.to_string()))?;
 
+    let limits = &state.config.limits;
     let router = Server::builder()
+        .http2_keepalive_interval(seconds(limits.http2_keepalive_interval_s))
+        .http2_keepalive_timeout(seconds(limits.http2_keepalive_timeout_s))
+        // Every request marks its connection active (the idle timeout counts from the last one).
+        .layer(tonic::service::InterceptorLayer::new(mark_active as fn(_) -> _))
         .add_service(health_service)
         .add_service(reflection)
         .add_service(
@@ -150,9 +158,12 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         .add_service(ServerServiceServer::new(ServerServiceImpl::new(state.clone())));
     // Segments are small and latency-critical: no Nagle delay on accepted connections; the server batches its
     // own writes instead, and writes at once what cannot wait (`write_batching`).
+    let idle_timeout = seconds(limits.idle_timeout_s);
     let incoming = tokio_stream::StreamExt::map(
-        tonic::transport::server::TcpIncoming::from(listener).with_nodelay(Some(true)),
-        |conn| conn.map(BatchedWrites::new),
+        tonic::transport::server::TcpIncoming::from(listener)
+            .with_nodelay(Some(true))
+            .with_keepalive(seconds(limits.tcp_keepalive_s)),
+        move |conn| conn.map(|c| BatchedWrites::new(c).with_idle_timeout(idle_timeout)),
     );
     let stop = shutdown.clone();
     let task = tokio::spawn(async move {
@@ -201,4 +212,17 @@ pub async fn run(
     shutdown.await;
     info!("shutting down: draining streams, closing Zenoh");
     handle.shutdown().await
+}
+
+/// A duration of `s` seconds; None for 0 (or anything not a positive finite number): the feature is off.
+fn seconds(s: f64) -> Option<std::time::Duration> {
+    (s.is_finite() && s > 0.0).then(|| std::time::Duration::from_secs_f64(s))
+}
+
+/// Marks the connection of a request active (see `connection`).
+fn mark_active(request: tonic::Request<()>) -> Result<tonic::Request<()>, tonic::Status> {
+    if let Some(info) = request.extensions().get::<BatchedConnectInfo<TcpConnectInfo>>() {
+        info.activity.touch();
+    }
+    Ok(request)
 }

@@ -1,8 +1,5 @@
 //! What every service shares.
 
-use std::sync::Arc;
-
-use tokio::sync::Semaphore;
 use tokio_util::sync::CancellationToken;
 
 use crate::cells::Cells;
@@ -10,8 +7,10 @@ use crate::clock::Clock;
 use crate::compute::Compute;
 use crate::config::Config;
 use crate::error::ServerError;
+use crate::memory::MemoryBudget;
 use crate::robots::RobotBus;
 use crate::store::Store;
+use crate::stream_permits::{Peer, StreamKind, StreamPermit, StreamPermits};
 
 /// The server's shared state: configuration, store, scene, the robots' state bus, stream permits and the shutdown
 /// signal.
@@ -25,8 +24,11 @@ pub struct AppState {
     pub cells: Cells,
     /// Publishes executing robots' states (over Zenoh when it is on).
     pub robots: RobotBus,
-    /// One permit per open stream, `limits.max_streams` in all.
-    pub streams: Arc<Semaphore>,
+    /// One permit per open stream: executions and watches in pools of their own, bounded per connection and per
+    /// client.
+    pub streams: StreamPermits,
+    /// The server's memory budget (`limits.max_server_bytes`): streams and scenes reserve from it.
+    pub memory: MemoryBudget,
     /// Cancelled when the server shuts down: every stream ends.
     pub shutdown: CancellationToken,
     /// Traffic counters.
@@ -53,22 +55,17 @@ impl Default for Counters {
 }
 
 impl AppState {
-    /// Streams open now.
+    /// Executions open now (what real-time pacing scales with).
     pub fn open_streams(&self) -> usize {
-        self.config.limits.max_streams.saturating_sub(self.streams.available_permits())
+        self.streams.open_executions()
     }
 
-    /// A stream permit, or ResourceExhausted when every one is taken.
-    pub fn stream_permit(&self) -> Result<tokio::sync::OwnedSemaphorePermit, ServerError> {
+    /// A permit for a stream of `kind` from `peer`, or ResourceExhausted naming the limit reached.
+    pub fn stream_permit(&self, kind: StreamKind, peer: &Peer) -> Result<StreamPermit, ServerError> {
         if self.shutdown.is_cancelled() {
             return Err(ServerError::ShuttingDown);
         }
-        self.streams.clone().try_acquire_owned().map_err(|_| {
-            ServerError::ResourceExhausted(format!(
-                "{} streams are open (the limit); retry later",
-                self.config.limits.max_streams
-            ))
-        })
+        self.streams.acquire(kind, peer)
     }
 }
 
@@ -77,12 +74,19 @@ impl AppState {
     /// A server's state for unit tests: the default configuration, the store in `dir`, cell `c`, no Zenoh.
     pub(crate) fn for_tests(dir: &std::path::Path, clock: Clock) -> Self {
         let config = Config::default();
+        let memory = MemoryBudget::new(config.limits.max_server_bytes);
         Self {
-            streams: Arc::new(Semaphore::new(config.limits.max_streams)),
+            streams: StreamPermits::new(&config.limits),
             store: Store::open(dir).expect("a store in a fresh directory"),
             robots: RobotBus::new(None),
-            cells: Cells::new("c", 10, config.limits.max_obstacles).expect("cell c"),
+            cells: Cells::with_limits(
+                "c",
+                &crate::config::Limits { max_cells: 10, ..config.limits.clone() },
+                memory.clone(),
+            )
+            .expect("cell c"),
             compute: Compute::start(&config.compute).expect("compute threads start"),
+            memory,
             config,
             shutdown: CancellationToken::new(),
             counters: Default::default(),

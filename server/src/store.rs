@@ -46,6 +46,8 @@ const LAST_VERSIONS: TableDefinition<'_, (&str, &str), u64> = TableDefinition::n
 pub struct Store {
     db: Arc<Database>,
     path: Arc<PathBuf>,
+    /// Versions kept per `(robot_id, name)`: a put beyond removes the oldest.
+    max_versions: usize,
 }
 
 impl fmt::Debug for Store {
@@ -80,9 +82,16 @@ impl Store {
                 )),
                 e => storage(format_args!("cannot open {shown}"), e),
             })?;
-        let store = Store { db: Arc::new(db), path: Arc::new(path.clone()) };
+        let store = Store { db: Arc::new(db), path: Arc::new(path.clone()), max_versions: usize::MAX };
         store.check_or_initialise()?;
         Ok(store)
+    }
+
+    /// The same store keeping at most `max_versions` (at least 1) versions of each primitive: every put beyond
+    /// removes the oldest, in its own transaction (all versions are kept by default).
+    pub fn keep_versions(mut self, max_versions: usize) -> Self {
+        self.max_versions = max_versions.max(1);
+        self
     }
 
     /// The database file.
@@ -159,6 +168,16 @@ impl Store {
             prims
                 .insert((robot_id, name, version), record.encode_to_vec().as_slice())
                 .map_err(|e| storage("write primitive", e))?;
+            // The oldest versions beyond `max_versions` go in the same transaction: a crash keeps both or neither.
+            let kept: Vec<u64> = prims
+                .range((robot_id, name, 0)..=(robot_id, name, version))
+                .map_err(|e| storage("read primitives", e))?
+                .map(|entry| entry.map(|(k, _)| k.value().2))
+                .collect::<Result<_, _>>()
+                .map_err(|e| storage("read primitives", e))?;
+            for v in &kept[..kept.len().saturating_sub(self.max_versions)] {
+                prims.remove((robot_id, name, *v)).map_err(|e| storage("prune primitive", e))?;
+            }
             record
         };
         tx.commit().map_err(|e| storage("commit", e))?;
@@ -190,9 +209,27 @@ impl Store {
 
     /// The latest version of each primitive of `robot_id`, sorted by name (empty when the robot has none).
     pub fn list(&self, robot_id: &str) -> Result<Vec<v1::PrimitiveRecord>, ServerError> {
+        Ok(self.list_page(robot_id, None, usize::MAX)?.0)
+    }
+
+    /// One page of [`Store::list`]: at most `page_size` records whose names come after `after` (from the first
+    /// when None), and the last name of the page when more follow (the next page's `after`).
+    pub fn list_page(
+        &self,
+        robot_id: &str,
+        after: Option<&str>,
+        page_size: usize,
+    ) -> Result<(Vec<v1::PrimitiveRecord>, Option<String>), ServerError> {
+        use std::ops::Bound;
         let read = self.db.begin_read().map_err(|e| storage("begin read", e))?;
         let prims = read.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
-        let range = prims.range((robot_id, "", 0)..).map_err(|e| storage("read primitives", e))?;
+        let start = match after {
+            Some(name) => Bound::Excluded((robot_id, name, u64::MAX)),
+            None => Bound::Included((robot_id, "", 0)),
+        };
+        let range = prims
+            .range::<(&str, &str, u64)>((start, Bound::Unbounded))
+            .map_err(|e| storage("read primitives", e))?;
         // Keys are sorted by (robot, name, version): the last entry of each name is its latest version.
         let mut out: Vec<v1::PrimitiveRecord> = Vec::new();
         let mut pending: Option<(String, Vec<u8>)> = None;
@@ -205,13 +242,17 @@ impl Store {
             if let Some((n, bytes)) = pending.take_if(|(n, _)| n != name) {
                 debug_assert!(n.as_str() < name);
                 out.push(decode(&bytes)?);
+                if out.len() >= page_size.max(1) {
+                    // Another name follows: the page is full.
+                    return Ok((out, Some(n)));
+                }
             }
             pending = Some((name.to_string(), value.value().to_vec()));
         }
         if let Some((_, bytes)) = pending {
             out.push(decode(&bytes)?);
         }
-        Ok(out)
+        Ok((out, None))
     }
 
     /// Deletes every version of `(robot_id, name)`; returns how many were removed (NotFound when none).
@@ -319,6 +360,52 @@ mod tests {
         );
         assert_eq!(store.get("r1", "a", 1).unwrap().created_unix_ms, 1);
         assert_eq!(store.put("r1", "a", &primitive(3.0), 4).unwrap().version, 3);
+    }
+
+    #[test]
+    fn store_keeps_the_last_versions_and_lists_in_pages() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap().keep_versions(3);
+        for i in 0..5 {
+            assert_eq!(store.put("r1", "a", &primitive(i as f64), i).unwrap().version, i as u64 + 1);
+        }
+        for v in 1..=2 {
+            assert!(matches!(store.get("r1", "a", v), Err(ServerError::NotFound(_))), "version {v} pruned");
+        }
+        for v in 3..=5 {
+            assert_eq!(store.get("r1", "a", v).unwrap().version, v);
+        }
+        assert_eq!(store.get("r1", "a", 0).unwrap().version, 5);
+        for name in ["b", "c", "d", "e"] {
+            store.put("r1", name, &primitive(0.0), 0).unwrap();
+        }
+        store.put("r2", "a", &primitive(0.0), 0).unwrap();
+        let mut pages = Vec::new();
+        let mut after = None;
+        loop {
+            let (page, next) = store.list_page("r1", after.as_deref(), 2).unwrap();
+            pages.push(page.iter().map(|r| (r.name.clone(), r.version)).collect::<Vec<_>>());
+            match next {
+                Some(n) => after = Some(n),
+                None => break,
+            }
+        }
+        let names = |v: &[(&str, u64)]| v.iter().map(|(n, v)| (n.to_string(), *v)).collect::<Vec<_>>();
+        assert_eq!(
+            pages,
+            [names(&[("a", 5), ("b", 1)]), names(&[("c", 1), ("d", 1)]), names(&[("e", 1)])],
+            "every name once, in order, the latest version"
+        );
+        assert_eq!(store.list("r1").unwrap().len(), 5);
+        // A page that ends exactly at the last name says so.
+        let (page, next) = store.list_page("r1", Some("c"), 2).unwrap();
+        assert_eq!((page.len(), next), (2, None));
+        drop(store);
+        // Pruning is durable: after a reopen the pruned versions stay gone and numbering goes on.
+        let store = Store::open(dir.path()).unwrap().keep_versions(3);
+        assert!(store.get("r1", "a", 2).is_err());
+        assert_eq!(store.put("r1", "a", &primitive(9.0), 9).unwrap().version, 6);
+        assert!(store.get("r1", "a", 3).is_err());
     }
 
     #[test]

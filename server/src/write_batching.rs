@@ -14,16 +14,21 @@
 //!   enough for the segment to reach it through the stream's channel and HTTP/2, whatever flushes come first;
 //! - more than [`HIGH_WATER`] bytes held are written at once, and at most [`MAX_HELD`] are held (then the writer
 //!   waits for the socket, as it would without the batching).
+//!
+//! The wrapper also closes an idle connection: one with no open stream and no request for its idle timeout (see
+//! [`ConnectionActivity`]); its reads end with an error, and HTTP/2 drops the connection.
 
 use std::io::{self, IoSlice};
 use std::pin::Pin;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, OnceLock};
 use std::task::{Context, Poll, ready};
 use std::time::Duration;
 
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio::time::{Instant, Sleep};
+
+use crate::connection::{ConnectionActivity, nanos_now};
 
 /// Longest a flushed write is held after the connection's previous write.
 pub const HOLD: Duration = Duration::from_millis(3);
@@ -51,12 +56,6 @@ impl Urgency {
     }
 }
 
-/// Nanoseconds since the first call (a monotonic clock of this process).
-fn nanos_now() -> u64 {
-    static EPOCH: OnceLock<std::time::Instant> = OnceLock::new();
-    EPOCH.get_or_init(std::time::Instant::now).elapsed().as_nanos() as u64
-}
-
 /// What a request on a [`BatchedWrites`] connection knows of it (tonic puts it in the request's extensions): the
 /// wrapped connection's own information and the connection's [`Urgency`].
 #[derive(Debug, Clone)]
@@ -65,6 +64,8 @@ pub struct BatchedConnectInfo<C> {
     pub inner: C,
     /// The connection's urgency.
     pub urgency: Urgency,
+    /// The connection's streams and requests.
+    pub activity: Arc<ConnectionActivity>,
 }
 
 /// A connection whose flushes are batched (see the module).
@@ -81,6 +82,11 @@ pub struct BatchedWrites<T> {
     urgency: Urgency,
     /// Longest a flushed write is held ([`HOLD`]).
     hold: Duration,
+    activity: Arc<ConnectionActivity>,
+    /// Closes the connection after this long without a stream or a request.
+    idle_timeout: Option<Duration>,
+    /// Wakes the connection to look whether it is idle.
+    idle_timer: Option<Pin<Box<Sleep>>>,
 }
 
 impl<T> BatchedWrites<T> {
@@ -98,6 +104,33 @@ impl<T> BatchedWrites<T> {
             timer: None,
             urgency: Urgency::default(),
             hold,
+            activity: Arc::default(),
+            idle_timeout: None,
+            idle_timer: None,
+        }
+    }
+
+    /// Closes the connection once it has had no open stream and no request for `timeout` (None: never).
+    pub fn with_idle_timeout(mut self, timeout: Option<Duration>) -> Self {
+        self.idle_timeout = timeout.filter(|t| !t.is_zero());
+        self
+    }
+
+    /// Whether the connection has been idle for its timeout; otherwise its timer is set to look again.
+    fn poll_idle(&mut self, cx: &mut Context<'_>) -> bool {
+        let Some(timeout) = self.idle_timeout else { return false };
+        loop {
+            let Some(remaining) = self.activity.idle_remaining(timeout) else { return true };
+            let at = Instant::now() + remaining;
+            let timer = self.idle_timer.get_or_insert_with(|| Box::pin(tokio::time::sleep_until(at)));
+            if timer.as_mut().poll(cx).is_pending() {
+                return false;
+            }
+            // The timer fired: the connection may have been active since; look again from now.
+            timer.as_mut().reset(at);
+            if timer.as_mut().poll(cx).is_pending() {
+                return false;
+            }
         }
     }
 
@@ -164,6 +197,12 @@ impl<T: AsyncRead + Unpin> AsyncRead for BatchedWrites<T> {
         cx: &mut Context<'_>,
         buf: &mut ReadBuf<'_>,
     ) -> Poll<io::Result<()>> {
+        if self.poll_idle(cx) {
+            return Poll::Ready(Err(io::Error::new(
+                io::ErrorKind::TimedOut,
+                "closed: no stream and no request for the idle timeout",
+            )));
+        }
         Pin::new(&mut self.io).poll_read(cx, buf)
     }
 }
@@ -207,7 +246,11 @@ impl<T: tonic::transport::server::Connected> tonic::transport::server::Connected
     type ConnectInfo = BatchedConnectInfo<T::ConnectInfo>;
 
     fn connect_info(&self) -> Self::ConnectInfo {
-        BatchedConnectInfo { inner: self.io.connect_info(), urgency: self.urgency.clone() }
+        BatchedConnectInfo {
+            inner: self.io.connect_info(),
+            urgency: self.urgency.clone(),
+            activity: self.activity.clone(),
+        }
     }
 }
 

@@ -18,7 +18,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
-use dmp_proto::keys::{self, EVERY_CELL};
+use dmp_proto::keys::{self, EVERY_CELL, check_name};
 use dmp_proto::payload::{decode_obstacle, decode_robot_state};
 use dmp_proto::zenoh_session::{locators, session_config};
 use tokio::task::JoinHandle;
@@ -54,7 +54,8 @@ pub async fn open_session(cfg: &ZenohConfig) -> Result<Session, ServerError> {
     Ok(session)
 }
 
-/// Spawns the task that removes expired obstacles of every cell every [`REAP_PERIOD`] until `stop` is cancelled.
+/// Spawns the task that removes expired obstacles of every cell, and the cells nothing uses any more, every
+/// [`REAP_PERIOD`] until `stop` is cancelled.
 /// The bridge starts one; without Zenoh, start one for the time to live of gRPC puts.
 pub fn spawn_reaper(cells: Cells, clock: Clock, stop: CancellationToken) -> JoinHandle<()> {
     tokio::spawn(async move {
@@ -70,6 +71,10 @@ pub fn spawn_reaper(cells: Cells, clock: Clock, stop: CancellationToken) -> Join
                         if n > 0 {
                             debug!(cell = scene.name(), expired = n, version = scene.snapshot().version, "obstacles expired");
                         }
+                    }
+                    let reclaimed = cells.reclaim();
+                    if reclaimed > 0 {
+                        debug!(reclaimed, cells = cells.len(), "unused cells reclaimed");
                     }
                 }
             }
@@ -96,13 +101,19 @@ impl SceneUpdater {
         let key = sample.key_expr().as_str();
         let names = keys::parse_obstacle_key(key)
             .ok_or_else(|| ServerError::invalid("key", "is not dmp/<cell>/obstacles/<obstacle-id>"))?;
-        let (scene, id) = (self.cells.get(names.cell)?, names.id);
+        let id = names.id;
         match sample.kind() {
             SampleKind::Delete => {
+                // A delete never creates a cell: in a cell that does not exist there is nothing to delete.
+                let Some(scene) = self.cells.find(names.cell)? else {
+                    debug!(key, "obstacle delete over zenoh for a cell that does not exist");
+                    return Ok(());
+                };
                 let (version, existed) = scene.delete(id);
                 debug!(key, existed, version, "obstacle deleted over zenoh");
             }
             SampleKind::Put => {
+                let scene = self.cells.get(names.cell)?;
                 let bytes = sample.payload().to_bytes();
                 // The encoding's name, with its schema if any (`application/protobuf;dmp.v1.Obstacle`).
                 let encoding = std::borrow::Cow::<'static, str>::from(sample.encoding());
@@ -124,13 +135,17 @@ impl SceneUpdater {
         let key = sample.key_expr().as_str();
         let names = keys::parse_robot_state_key(key)
             .ok_or_else(|| ServerError::invalid("key", "is not dmp/<cell>/robots/<robot-id>/state"))?;
-        let (scene, id) = (self.cells.get(names.cell)?, names.id);
+        let id = names.id;
         match sample.kind() {
             SampleKind::Delete => {
-                scene.remove_robot(id);
-                debug!(key, "robot retired over zenoh");
+                if let Some(scene) = self.cells.find(names.cell)? {
+                    scene.remove_robot(id);
+                    debug!(key, "robot retired over zenoh");
+                }
             }
             SampleKind::Put => {
+                check_name("robot_id", id)?;
+                let scene = self.cells.get(names.cell)?;
                 let (state, footprint) = decode_robot_state(&sample.payload().to_bytes(), id)?;
                 scene.update_robot(state, footprint);
             }

@@ -9,6 +9,7 @@ pub mod segments;
 pub mod served_run;
 pub mod step;
 pub mod stream;
+pub mod stream_memory;
 
 #[cfg(test)]
 mod tests;

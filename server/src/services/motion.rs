@@ -32,7 +32,9 @@ use crate::executor::plan::advance_cancellable;
 use crate::executor::segments::Batch;
 use crate::executor::served_run::{RunAvoidance, ServedRun};
 use crate::executor::stream::{Control, StreamConfig, run_stream};
+use crate::executor::stream_memory::StreamBytes;
 use crate::state::AppState;
+use crate::stream_permits::{Peer, StreamKind};
 use crate::write_batching::{BatchedConnectInfo, Urgency};
 
 use super::stream_request::{DEFAULT_DT, StreamRequest};
@@ -114,6 +116,7 @@ impl MotionServiceImpl {
         }
         let mut extra = Vec::with_capacity(spec.extra_obstacles.len());
         for (i, o) in spec.extra_obstacles.iter().enumerate() {
+            check_name(&format!("{prefix}.extra_obstacles[{i}].id"), &o.id)?;
             extra.push(
                 obstacle_from_proto(o, limits.workspace_m)
                     .map_err(|e| e.within(&format!("{prefix}.extra_obstacles[{i}]")))?,
@@ -194,24 +197,28 @@ impl MotionServiceImpl {
         }
     }
 
-    /// Spawns the producer of a stream and returns the receiving end.
+    /// Spawns the producer of a stream of `peer` and returns the receiving end. The stream's permit and its memory
+    /// (estimated now, refused when over a limit) live in the producer task: both are released when it ends.
     fn spawn(
         &self,
         run: ServedRun,
         cell: Cell,
         cfg: StreamConfig,
         control: Option<mpsc::Receiver<Control>>,
+        peer: &Peer,
     ) -> Result<mpsc::Receiver<Result<Batch, Status>>, ServerError> {
-        let permit = self.state.stream_permit()?;
-        let budget = self.admit_stream(&run, &cell, &cfg)?;
         // Real time: room for every segment computed in one wake-up (see `stream::MAX_REFILL`).
         let buffer = self.state.config.limits.stream_buffer.max(1)
             + if cfg.realtime { refill_segments(&cfg) } else { 0 };
+        let memory = StreamBytes::estimate(&cfg, run.execution.dim(), buffer)
+            .admit(&self.state.config.limits, &self.state.memory)?;
+        let permit = self.state.stream_permit(StreamKind::Execution, peer)?;
+        let budget = self.admit_stream(&run, &cell, &cfg)?;
         let (tx, rx) = mpsc::channel(buffer);
         let app = self.state.clone();
         tokio::spawn(async move {
             run_stream(app, run, cell, cfg, tx, control, budget).await;
-            drop(permit);
+            drop((permit, memory));
         });
         Ok(rx)
     }
@@ -303,7 +310,7 @@ impl MotionService for MotionServiceImpl {
         &self,
         request: Request<v1::ExecuteRequest>,
     ) -> Result<Response<Self::ExecuteStream>, Status> {
-        let urgency = urgency_of(&request);
+        let (urgency, peer) = (urgency_of(&request), Peer::of(&request));
         let req = request.into_inner();
         let r = self.resolve(req.motion.as_ref(), "motion").await?;
         let cfg = StreamRequest::of(&req).config(r.motion.tau, &self.state.config, urgency)?;
@@ -311,7 +318,7 @@ impl MotionService for MotionServiceImpl {
         self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
         let cell = r.cell.clone();
         let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
-        Ok(Response::new(one_robot_stream(self.spawn(run, cell, cfg, None)?)))
+        Ok(Response::new(one_robot_stream(self.spawn(run, cell, cfg, None, &peer)?)))
     }
 
     type SessionStream = SegmentStream;
@@ -321,7 +328,7 @@ impl MotionService for MotionServiceImpl {
         request: Request<Streaming<v1::SessionRequest>>,
     ) -> Result<Response<Self::SessionStream>, Status> {
         use v1::session_request::Message as M;
-        let urgency = urgency_of(&request);
+        let (urgency, peer) = (urgency_of(&request), Peer::of(&request));
         let mut inbound = request.into_inner();
         let first = tokio::time::timeout(Duration::from_secs(10), inbound.message())
             .await
@@ -341,7 +348,7 @@ impl MotionService for MotionServiceImpl {
         let cell = r.cell.clone();
         let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
         let (ctl_tx, ctl_rx) = mpsc::channel(64);
-        let rx = self.spawn(run, cell, cfg, Some(ctl_rx))?;
+        let rx = self.spawn(run, cell, cfg, Some(ctl_rx), &peer)?;
         let shutdown = self.state.shutdown.clone();
         // Reads the robot's messages; a bad one is logged and dropped (the stream goes on), the end of the inbound
         // stream stops nothing (the robot may just have nothing more to say).
@@ -387,7 +394,7 @@ impl MotionService for MotionServiceImpl {
         &self,
         request: Request<v1::ExecuteGroupRequest>,
     ) -> Result<Response<Self::ExecuteGroupStream>, Status> {
-        let urgency = urgency_of(&request);
+        let (urgency, peer) = (urgency_of(&request), Peer::of(&request));
         let req = request.into_inner();
         if req.members.len() < 2 {
             return Err(ServerError::invalid("members", "a group needs at least two members").into());
@@ -452,7 +459,7 @@ impl MotionService for MotionServiceImpl {
         info!(robots = members.len(), realtime = cfg.realtime, "execute group");
         self.check_message_size("segment_s", cfg.segment_points * primitive.dim)?;
         let run = ServedRun::new(primitive, motion, members, avoidance, cfg.stepping, history_len(&cfg))?;
-        let rx = self.spawn(run, cell, cfg, None)?;
+        let rx = self.spawn(run, cell, cfg, None, &peer)?;
         let stream = ReceiverStream::new(rx).map(|r| {
             r.map(|segments| v1::GroupSegment {
                 sequence: segments.first().map(|s| s.sequence).unwrap_or(0),

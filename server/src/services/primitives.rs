@@ -164,11 +164,23 @@ impl PrimitiveServiceImpl {
         req: v1::ListPrimitivesRequest,
     ) -> Result<v1::ListPrimitivesResponse, ServerError> {
         check_name("robot_id", &req.robot_id)?;
+        // The token is the last name of the previous page.
+        let after = (!req.page_token.is_empty()).then_some(req.page_token);
+        if let Some(token) = &after {
+            check_name("page_token", token)?;
+        }
+        let limits = &self.state.config.limits;
+        let page_size = match req.page_size as usize {
+            0 => limits.list_page_size,
+            n => n,
+        }
+        .clamp(1, limits.max_list_page_size.max(1));
         let store = self.state.store.clone();
         let robot_id = req.robot_id.clone();
-        let records = blocking(move || store.list(&robot_id)).await?;
-        debug!(robot = %req.robot_id, count = records.len(), "listed");
-        Ok(v1::ListPrimitivesResponse { records })
+        let (records, next) =
+            blocking(move || store.list_page(&robot_id, after.as_deref(), page_size)).await?;
+        debug!(robot = %req.robot_id, count = records.len(), more = next.is_some(), "listed");
+        Ok(v1::ListPrimitivesResponse { records, next_page_token: next.unwrap_or_default() })
     }
 
     async fn handle_delete(
@@ -269,7 +281,10 @@ mod tests {
         assert_eq!(PrimitiveService::get(&svc, Request::new(get(1))).await.unwrap().into_inner(), first);
         refused(PrimitiveService::get(&svc, Request::new(get(7))).await, Code::NotFound, "version 7");
 
-        let list = svc.list(Request::new(v1::ListPrimitivesRequest { robot_id: "r1".into() })).await.unwrap();
+        let list = svc
+            .list(Request::new(v1::ListPrimitivesRequest { robot_id: "r1".into(), ..Default::default() }))
+            .await
+            .unwrap();
         let names: Vec<_> = list.get_ref().records.iter().map(|r| (r.name.as_str(), r.version)).collect();
         assert_eq!(names, [("reach", 1), ("wave", 2)]);
 
@@ -370,7 +385,11 @@ mod tests {
         refused(svc.put(put(bad)).await, Code::InvalidArgument, "primitive: primitive format version 99");
 
         refused(
-            svc.list(Request::new(v1::ListPrimitivesRequest { robot_id: String::new() })).await,
+            svc.list(Request::new(v1::ListPrimitivesRequest {
+                robot_id: String::new(),
+                ..Default::default()
+            }))
+            .await,
             Code::InvalidArgument,
             "robot_id",
         );

@@ -3,9 +3,10 @@
 
 use std::sync::Arc;
 
+use dmp_proto::keys::check_name;
 use dmp_proto::v1;
 use dmp_proto::v1::scene_service_server::SceneService;
-use tokio::sync::{OwnedSemaphorePermit, mpsc};
+use tokio::sync::mpsc;
 use tokio_stream::wrappers::ReceiverStream;
 use tokio_util::sync::CancellationToken;
 use tonic::{Request, Response, Status};
@@ -15,6 +16,7 @@ use crate::cell::{Cell, ObstacleSet};
 use crate::clock::Clock;
 use crate::error::ServerError;
 use crate::state::AppState;
+use crate::stream_permits::{Peer, StreamKind};
 
 /// The scene service.
 #[derive(Debug, Clone)]
@@ -49,7 +51,7 @@ pub fn watch_stream(
     clock: Clock,
     buffer: usize,
     shutdown: CancellationToken,
-    permit: OwnedSemaphorePermit,
+    permit: impl Send + 'static,
 ) -> ReceiverStream<Result<v1::SceneEvent, Status>> {
     let (tx, rx) = mpsc::channel(buffer.max(1));
     let mut changes = scene.subscribe();
@@ -96,10 +98,12 @@ impl SceneService for SceneServiceImpl {
         request: Request<v1::DeleteObstacleRequest>,
     ) -> Result<Response<v1::SceneChange>, Status> {
         let v1::DeleteObstacleRequest { id, cell } = request.into_inner();
-        if id.is_empty() {
-            return Err(ServerError::invalid("id", "must not be empty").into());
-        }
-        let (version, changed) = self.state.cells.get(&cell)?.delete(&id);
+        check_name("id", &id).map_err(ServerError::from)?;
+        // A delete never creates a cell: in one that does not exist there is nothing to delete.
+        let Some(scene) = self.state.cells.find(&cell)? else {
+            return Ok(Response::new(v1::SceneChange { scene_version: 0, changed: false }));
+        };
+        let (version, changed) = scene.delete(&id);
         debug!(obstacle = %id, version, changed, "obstacle deleted over gRPC");
         Ok(Response::new(v1::SceneChange { scene_version: version, changed }))
     }
@@ -108,7 +112,10 @@ impl SceneService for SceneServiceImpl {
         &self,
         request: Request<v1::ListObstaclesRequest>,
     ) -> Result<Response<v1::SceneSnapshot>, Status> {
-        let scene = self.state.cells.get(&request.into_inner().cell)?;
+        // A read never creates a cell: one that does not exist is empty.
+        let Some(scene) = self.state.cells.find(&request.into_inner().cell)? else {
+            return Ok(Response::new(v1::SceneSnapshot::default()));
+        };
         Ok(Response::new(snapshot_to_proto(&scene.snapshot(), self.state.clock.now_unix_s())))
     }
 
@@ -119,8 +126,8 @@ impl SceneService for SceneServiceImpl {
         request: Request<v1::WatchSceneRequest>,
     ) -> Result<Response<Self::WatchSceneStream>, Status> {
         let s = &self.state;
+        let permit = s.stream_permit(StreamKind::Watch, &Peer::of(&request))?;
         let scene = s.cells.get(&request.into_inner().cell)?;
-        let permit = s.stream_permit()?;
         Ok(Response::new(watch_stream(
             &scene,
             s.clock,

@@ -31,7 +31,7 @@ impl ServerServiceImpl {
                 .map(|t| t.as_duration().as_secs_f64())
                 .unwrap_or(0.0),
             rss_bytes: memory_stats::memory_stats().map_or(0, |m| m.physical_mem as u64),
-            open_streams: (s.config.limits.max_streams - s.streams.available_permits()) as u32,
+            open_streams: (s.streams.open_executions() + s.streams.open_watches()) as u32,
             segments_sent: s.counters.segments_sent.load(Ordering::Relaxed),
             cells: cells.len() as u32,
             robots: cells.iter().map(|c| c.robot_count()).sum::<usize>() as u32,

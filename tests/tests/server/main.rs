@@ -4,6 +4,7 @@
 mod bad_input;
 mod hostile_compute;
 mod hostile_values;
+mod limits;
 mod load;
 mod matches_the_engine;
 mod primitives;
