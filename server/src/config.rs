@@ -144,6 +144,13 @@ pub struct Limits {
     /// Half-width of the workspace box, metres: every coordinate of a start, goal, obstacle centre or robot state
     /// must be within `[-workspace_m, workspace_m]`.
     pub workspace_m: f64,
+    /// Largest difference, seconds, between a robot state's stamp and the server's clock, either way: a state
+    /// further off (Zenoh or Session `state`) is dropped and counted (`ServerStats.robot_states_dropped`).
+    pub max_state_skew_s: f64,
+    /// Largest speed of a robot state, metres per second, on every coordinate of its velocity: a state moving
+    /// faster is dropped and counted (cell-mates are extrapolated along their velocity, so a huge one would throw
+    /// a robot's image across the cell).
+    pub max_state_speed_m_s: f64,
 }
 
 impl Default for Limits {
@@ -159,6 +166,8 @@ impl Default for Limits {
             max_steps: dmp::rollout::MAX_ROLLOUT_STEPS,
             stream_buffer: 4,
             workspace_m: 1000.0,
+            max_state_skew_s: 1.0,
+            max_state_speed_m_s: 10.0,
         }
     }
 }

@@ -21,12 +21,14 @@ use crate::cells::Cells;
 use crate::clock::Clock;
 use crate::config::Config;
 use crate::error::ServerError;
+use crate::executing::Executing;
 use crate::robots::RobotBus;
 use crate::services::motion::MotionServiceImpl;
 use crate::services::primitives::PrimitiveServiceImpl;
 use crate::services::scene::SceneServiceImpl;
 use crate::services::server::ServerServiceImpl;
 use crate::state::AppState;
+use crate::state_admission::StateAdmission;
 use crate::store::Store;
 use crate::write_batching::BatchedWrites;
 use crate::zenoh_bridge::{ZenohBridge, open_session};
@@ -86,6 +88,7 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         .map_err(|e| ServerError::Internal(e.to_string()))??;
     let cells = Cells::new(&config.cell, config.limits.max_cells, config.limits.max_obstacles)?;
     let shutdown = CancellationToken::new();
+    let state_admission = StateAdmission::new(&config.limits);
 
     let (session, bridge, robots, zenoh_locators) = if config.zenoh.disabled {
         // Without Zenoh the bridge's reaper is not there: obstacles put over gRPC with a ttl still expire.
@@ -93,7 +96,9 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         (None, None, RobotBus::new(None), Vec::new())
     } else {
         let session = open_session(&config.zenoh).await?;
-        let bridge = ZenohBridge::start(session.clone(), cells.clone(), clock, shutdown.clone()).await?;
+        let bridge =
+            ZenohBridge::start(session.clone(), cells.clone(), clock, state_admission.clone(), shutdown.clone())
+                .await?;
         let locs = locators(&session).await;
         let robots = RobotBus::new(Some((session.clone(), config.defaults.robot_state_period_s)));
         (Some(session), Some(bridge), robots, locs)
@@ -109,6 +114,8 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         shutdown: shutdown.clone(),
         counters: Default::default(),
         clock,
+        executing: Executing::default(),
+        state_admission,
     });
     let max = state.config.limits.max_message_bytes;
 

@@ -9,7 +9,9 @@ use crate::cells::Cells;
 use crate::clock::Clock;
 use crate::config::Config;
 use crate::error::ServerError;
+use crate::executing::Executing;
 use crate::robots::RobotBus;
+use crate::state_admission::StateAdmission;
 use crate::store::Store;
 
 /// The server's shared state: configuration, store, scene, the robots' state bus, stream permits and the shutdown
@@ -32,6 +34,10 @@ pub struct AppState {
     pub counters: Counters,
     /// Wall time and pacing instants.
     pub clock: Clock,
+    /// The robots executing now, one stream each.
+    pub executing: Executing,
+    /// Which robot states from outside the server the cells take, and how many were dropped.
+    pub state_admission: StateAdmission,
 }
 
 /// What the server has done so far.
@@ -79,6 +85,8 @@ impl AppState {
             store: Store::open(dir).expect("a store in a fresh directory"),
             robots: RobotBus::new(None),
             cells: Cells::new("c", 10, config.limits.max_obstacles).expect("cell c"),
+            executing: Executing::default(),
+            state_admission: StateAdmission::new(&config.limits),
             config,
             shutdown: CancellationToken::new(),
             counters: Default::default(),

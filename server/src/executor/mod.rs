@@ -9,3 +9,6 @@ pub mod stream;
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod rejection_tests;

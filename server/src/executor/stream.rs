@@ -19,6 +19,7 @@ use super::segments::{Batch, FirstPoint, member_segments, publish_states};
 use super::served_run::ServedRun;
 use crate::cell::{Cell, ObstacleSet, SeenRobot};
 use crate::error::ServerError;
+use crate::services::session_commands::engine_rejection;
 use crate::state::AppState;
 use crate::write_batching::Urgency;
 
@@ -57,6 +58,8 @@ pub enum Control {
     Stop,
     /// The robot's measured state: published to the cell.
     State(v1::RobotState),
+    /// A command that was refused: the warning goes to the robot with the next segment, the run goes on.
+    Rejected(v1::Warning),
 }
 
 /// Runs `run` until the goal, a stop, `max_duration`, the client leaving or shutdown. Items go to `tx` (mapped by
@@ -161,8 +164,11 @@ impl<'a> Producer<'a> {
         run.apply_scene(&snapshot, &self.others, self.wall_of(run.execution.time()))?;
         let mut wake = Wake::default();
         loop {
+            // Real time: a wake-up by messages alone (states, rejections) sends nothing ahead of time; what they
+            // leave goes with the next segment, due within a refill.
+            let messages_only = self.cfg.realtime && !wake.scene_changed && !wake.commands.is_empty();
             let changes_plan = self.apply(run, std::mem::take(&mut wake)).await?;
-            if (changes_plan || self.finished.is_none())
+            if (changes_plan || (self.finished.is_none() && !messages_only))
                 && let Some(reason) = self.send_due(run, changes_plan).await?
             {
                 return Ok(reason);
@@ -229,6 +235,11 @@ impl<'a> Producer<'a> {
                         members.iter().find(|m| m.id == s.robot_id).and_then(|m| m.footprint.clone());
                     self.app.robots.publish(self.cell, s.clone(), footprint).await;
                 }
+                Control::Rejected(w) => {
+                    self.warnings.push(w.clone());
+                    // Once the last segment is sent, only a superseding one can still carry it.
+                    changes_plan |= self.finished.is_some();
+                }
                 _ => changes_plan = true,
             }
         }
@@ -252,12 +263,20 @@ impl<'a> Producer<'a> {
         let e = &mut run.execution;
         for c in wake.commands {
             match c {
-                Control::SetGoal(g) => e.set_goal(g)?,
-                Control::SetTau(tau) => e.set_tau(tau)?,
+                Control::SetGoal(g) => {
+                    if let Err(i) = e.set_goal(g) {
+                        self.warnings.push(engine_rejection("set_goal", &i.field, &i.rule));
+                    }
+                }
+                Control::SetTau(tau) => {
+                    if let Err(i) = e.set_tau(tau) {
+                        self.warnings.push(engine_rejection("set_tau", &i.field, &i.rule));
+                    }
+                }
                 Control::Pause => e.set_holding(true),
                 Control::Resume => e.set_holding(false),
                 Control::Stop => e.stop(),
-                Control::State(_) => {}
+                Control::State(_) | Control::Rejected(_) => {}
             }
         }
         Ok(changes_plan)

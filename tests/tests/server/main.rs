@@ -2,6 +2,7 @@
 //! library exactly as robots and perception nodes drive it. Every await is under a timeout.
 
 mod bad_input;
+mod hostile_sessions;
 mod load;
 mod matches_the_engine;
 mod primitives;
