@@ -55,7 +55,8 @@ impl Executing {
     /// naming it, or with `take_over` that stream is told to end and this waits (at most [`TAKE_OVER_WAIT`]) until
     /// it has let go.
     pub async fn claim(&self, cell: &str, robots: &[&str], take_over: bool) -> Result<Claim, ServerError> {
-        let mut keys: Vec<(String, String)> = robots.iter().map(|r| (cell.to_owned(), (*r).to_owned())).collect();
+        let mut keys: Vec<(String, String)> =
+            robots.iter().map(|r| (cell.to_owned(), (*r).to_owned())).collect();
         keys.sort();
         keys.dedup();
         loop {
@@ -144,7 +145,10 @@ mod tests {
         let e = Executing::default();
         let first = e.claim("c", &["r1", "r2"], false).await.unwrap();
         let err = e.claim("c", &["r3", "r2"], false).await.unwrap_err();
-        assert!(matches!(&err, ServerError::AlreadyExists(m) if m.contains("`r2`") && m.contains("`c`")), "{err}");
+        assert!(
+            matches!(&err, ServerError::AlreadyExists(m) if m.contains("`r2`") && m.contains("`c`")),
+            "{err}"
+        );
         // Another cell, or another robot, is free.
         let other_cell = e.claim("d", &["r1"], false).await.unwrap();
         let other_robot = e.claim("c", &["r3"], false).await.unwrap();

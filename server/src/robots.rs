@@ -158,13 +158,14 @@ impl ZenohRobotBus {
                 }
                 // One stream per robot (`crate::executing`) publishes its states, so a robot's publisher and token
                 // are declared once.
-                let alive = match self.session.liveliness().declare_token(robot_alive_key(cell, robot_id)).await {
-                    Ok(token) => Some(token),
-                    Err(e) => {
-                        warn!(robot = %robot_id, error = %e, "zenoh: no liveliness token for the robot");
-                        None
-                    }
-                };
+                let alive =
+                    match self.session.liveliness().declare_token(robot_alive_key(cell, robot_id)).await {
+                        Ok(token) => Some(token),
+                        Err(e) => {
+                            warn!(robot = %robot_id, error = %e, "zenoh: no liveliness token for the robot");
+                            None
+                        }
+                    };
                 let out = Arc::new(RobotPublisher {
                     publisher,
                     matching,

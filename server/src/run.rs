@@ -96,9 +96,14 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         (None, None, RobotBus::new(None), Vec::new())
     } else {
         let session = open_session(&config.zenoh).await?;
-        let bridge =
-            ZenohBridge::start(session.clone(), cells.clone(), clock, state_admission.clone(), shutdown.clone())
-                .await?;
+        let bridge = ZenohBridge::start(
+            session.clone(),
+            cells.clone(),
+            clock,
+            state_admission.clone(),
+            shutdown.clone(),
+        )
+        .await?;
         let locs = locators(&session).await;
         let robots = RobotBus::new(Some((session.clone(), config.defaults.robot_state_period_s)));
         (Some(session), Some(bridge), robots, locs)

@@ -145,7 +145,9 @@ impl SceneUpdater {
                 let (state, footprint) = decode_robot_state(&sample.payload().to_bytes(), id)?;
                 match self.admission.admit(&state, self.clock.now_unix_s()) {
                     Ok(()) => scene.update_robot(state, footprint),
-                    Err(e) => warn!(key, reason = %e, dropped = self.admission.dropped(), "robot state dropped"),
+                    Err(e) => {
+                        warn!(key, reason = %e, dropped = self.admission.dropped(), "robot state dropped")
+                    }
                 }
             }
         }
@@ -156,7 +158,8 @@ impl SceneUpdater {
     fn liveliness(&self, sample: &Sample) {
         let key = sample.key_expr().as_str();
         let Some(names) = keys::parse_robot_alive_key(key) else {
-            return self.refuse(sample, ServerError::invalid("key", "is not dmp/<cell>/robots/<robot-id>/alive"));
+            return self
+                .refuse(sample, ServerError::invalid("key", "is not dmp/<cell>/robots/<robot-id>/alive"));
         };
         if sample.kind() == SampleKind::Delete {
             match self.cells.get(names.cell) {

@@ -39,7 +39,8 @@ async fn a_rejection_reaches_the_robot_within_a_refill_and_the_run_goes_on() {
         max_duration: 5.0,
         urgency: None,
     };
-    let p = Primitive::straight_line(50, 4.0, vec![1000.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 0.0]).unwrap();
+    let p =
+        Primitive::straight_line(50, 4.0, vec![1000.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 0.0]).unwrap();
     let member = Agent { id: "arm".into(), dims: vec![0, 1], footprint: None };
     let avoidance = RunAvoidance {
         obstacles: (Avoidance::NONE, 0),
@@ -47,9 +48,15 @@ async fn a_rejection_reaches_the_robot_within_a_refill_and_the_run_goes_on() {
         extra: Vec::new(),
         ignore_scene: true,
     };
-    let run =
-        ServedRun::new(p.clone(), Motion::of(&p), vec![(member, None)], avoidance, cfg.stepping, history_len(&cfg))
-            .unwrap();
+    let run = ServedRun::new(
+        p.clone(),
+        Motion::of(&p),
+        vec![(member, None)],
+        avoidance,
+        cfg.stepping,
+        history_len(&cfg),
+    )
+    .unwrap();
     let (tx, mut rx) = mpsc::channel(64);
     let (ctl_tx, ctl_rx) = mpsc::channel(8);
     let producer = tokio::spawn(run_stream(app.clone(), run, cell, cfg, tx, Some(ctl_rx)));

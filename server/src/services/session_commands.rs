@@ -27,7 +27,13 @@ pub struct SessionCommands {
 impl SessionCommands {
     /// The checks of a session of `robot_id`, moving in `dim` dimensions in the box `[-workspace_m, workspace_m]`;
     /// its states are stamped against `clock`.
-    pub fn new(robot_id: String, dim: usize, workspace_m: f64, admission: StateAdmission, clock: Clock) -> Self {
+    pub fn new(
+        robot_id: String,
+        dim: usize,
+        workspace_m: f64,
+        admission: StateAdmission,
+        clock: Clock,
+    ) -> Self {
         Self { robot_id, dim, workspace_m, admission, clock }
     }
 
@@ -66,9 +72,7 @@ impl SessionCommands {
     /// another dimension), or dropped (out of the admitted stamps, positions and speeds).
     fn state(&self, mut s: v1::RobotState) -> Control {
         s.robot_id.clone_from(&self.robot_id);
-        if let Err(e) =
-            check_robot_state(&s).and_then(|_| check_vector("position", &s.position, self.dim))
-        {
+        if let Err(e) = check_robot_state(&s).and_then(|_| check_vector("position", &s.position, self.dim)) {
             return rejected("state", &e);
         }
         match self.admission.admit(&s, self.clock.now_unix_s()) {
@@ -99,7 +103,13 @@ mod tests {
 
     fn commands() -> SessionCommands {
         let limits = Limits { workspace_m: 10.0, ..Limits::default() };
-        SessionCommands::new("r1".into(), 3, limits.workspace_m, StateAdmission::new(&limits), Clock::system())
+        SessionCommands::new(
+            "r1".into(),
+            3,
+            limits.workspace_m,
+            StateAdmission::new(&limits),
+            Clock::system(),
+        )
     }
 
     /// The warning of a rejected command: its kind and field.
@@ -165,8 +175,14 @@ mod tests {
         let c = commands();
         let now = crate::clock::system_unix_s();
         let dropped = |field: &str| (Kind::StateDropped, field.to_owned());
-        assert_eq!(rejection(c.control(Some(Message::State(state(now + 1e7, 1.0))))), dropped("state.stamp_unix_s"));
-        assert_eq!(rejection(c.control(Some(Message::State(state(now, 10.5))))), dropped("state.position[0]"));
+        assert_eq!(
+            rejection(c.control(Some(Message::State(state(now + 1e7, 1.0))))),
+            dropped("state.stamp_unix_s")
+        );
+        assert_eq!(
+            rejection(c.control(Some(Message::State(state(now, 10.5))))),
+            dropped("state.position[0]")
+        );
         assert_eq!(c.admission.dropped(), 2);
     }
 }

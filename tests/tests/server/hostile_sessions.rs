@@ -29,7 +29,9 @@ async fn bad_session_commands_are_rejected_and_the_run_reaches_its_goal() {
     let dir = tempfile::tempdir().unwrap();
     let (handle, client) = serve(dir.path()).await;
     let goal = vec![0.1, 0.0, 0.0];
-    within("put", client.put_primitive("psm1", "reach", &line(vec![0.0; 3], goal.clone(), 1.0))).await.unwrap();
+    within("put", client.put_primitive("psm1", "reach", &line(vec![0.0; 3], goal.clone(), 1.0)))
+        .await
+        .unwrap();
     let mut motion = spec("psm1", "reach");
     motion.ignore_scene = true;
     // Slow at first (tau 20 s), so that the run is still going when the commands arrive; a valid set_tau at the
@@ -43,10 +45,10 @@ async fn bad_session_commands_are_rejected_and_the_run_reaches_its_goal() {
         async move { within("send", tx.send(v1::SessionRequest { message })).await.unwrap() }
     };
     send(Some(Message::Start(start))).await;
-    let mut grpc =
-        within("connect", MotionServiceClient::connect(format!("http://{}", handle.grpc_addr))).await.unwrap();
-    let mut segments =
-        within("session", grpc.session(ReceiverStream::new(rx))).await.unwrap().into_inner();
+    let mut grpc = within("connect", MotionServiceClient::connect(format!("http://{}", handle.grpc_addr)))
+        .await
+        .unwrap();
+    let mut segments = within("session", grpc.session(ReceiverStream::new(rx))).await.unwrap().into_inner();
     let mut received = vec![within("segment", segments.next()).await.unwrap().unwrap()];
 
     let far_future = v1::RobotState {
@@ -116,10 +118,12 @@ fn phantom(id: &str, stamp_unix_s: f64) -> v1::RobotState {
 
 /// A raw Zenoh session connected to the server, once the server's robot-state subscriber is known to it.
 async fn robot_state_session(handle: &ServerHandle) -> ObstaclePublisher {
-    let zenoh = within("zenoh open", ObstaclePublisher::open("default", &handle.zenoh_locators, &[])).await.unwrap();
-    let probe = within("probe", zenoh.session().declare_publisher(robot_state_key("default", "probe")).into_future())
-        .await
-        .unwrap();
+    let zenoh =
+        within("zenoh open", ObstaclePublisher::open("default", &handle.zenoh_locators, &[])).await.unwrap();
+    let probe =
+        within("probe", zenoh.session().declare_publisher(robot_state_key("default", "probe")).into_future())
+            .await
+            .unwrap();
     within("matching", async {
         while !probe.matching_status().into_future().await.unwrap().matching() {
             tokio::time::sleep(Duration::from_millis(5)).await;
@@ -144,7 +148,12 @@ async fn a_far_future_robot_state_over_zenoh_does_not_bend_a_path_and_is_counted
     let zenoh = robot_state_session(&handle).await;
 
     let key = robot_state_key("default", "phantom");
-    within("put", zenoh.session().put(&key, codec::encode(&phantom("phantom", now_unix_s() + 1e7))).into_future()).await.unwrap();
+    within(
+        "put",
+        zenoh.session().put(&key, codec::encode(&phantom("phantom", now_unix_s() + 1e7))).into_future(),
+    )
+    .await
+    .unwrap();
     within("dropped", async {
         while within("stats", client.stats()).await.unwrap().robot_states_dropped < 1 {
             tokio::time::sleep(Duration::from_millis(5)).await;
@@ -157,14 +166,22 @@ async fn a_far_future_robot_state_over_zenoh_does_not_bend_a_path_and_is_counted
     // The control: the same robot with a fresh stamp (sent again and again, so that it stays fresh) bends the
     // path, so the comparison above can tell.
     let fresh_key = robot_state_key("default", "real");
-    within("put", zenoh.session().put(&fresh_key, codec::encode(&phantom("real", now_unix_s()))).into_future()).await.unwrap();
+    within(
+        "put",
+        zenoh.session().put(&fresh_key, codec::encode(&phantom("real", now_unix_s()))).into_future(),
+    )
+    .await
+    .unwrap();
     until("the fresh robot is seen", || robots_in_default_cell(&handle) == 1).await;
     let session = zenoh.session().clone();
     let refresh = tokio::spawn(async move {
         loop {
-            within("put", session.put(&fresh_key, codec::encode(&phantom("real", now_unix_s()))).into_future())
-                .await
-                .unwrap();
+            within(
+                "put",
+                session.put(&fresh_key, codec::encode(&phantom("real", now_unix_s()))).into_future(),
+            )
+            .await
+            .unwrap();
             tokio::time::sleep(Duration::from_millis(50)).await;
         }
     });
@@ -182,10 +199,16 @@ async fn a_robot_vanishes_when_its_liveliness_token_goes() {
     let dir = tempfile::tempdir().unwrap();
     let (handle, _client) = serve(dir.path()).await;
     let zenoh = robot_state_session(&handle).await;
-    let token =
-        within("token", zenoh.session().liveliness().declare_token(robot_alive_key("default", "ghost")).into_future()).await.unwrap();
+    let token = within(
+        "token",
+        zenoh.session().liveliness().declare_token(robot_alive_key("default", "ghost")).into_future(),
+    )
+    .await
+    .unwrap();
     let key = robot_state_key("default", "ghost");
-    within("put", zenoh.session().put(&key, codec::encode(&phantom("ghost", now_unix_s()))).into_future()).await.unwrap();
+    within("put", zenoh.session().put(&key, codec::encode(&phantom("ghost", now_unix_s()))).into_future())
+        .await
+        .unwrap();
     until("the robot is seen", || robots_in_default_cell(&handle) == 1).await;
     within("undeclare", token.undeclare().into_future()).await.unwrap();
     until("the robot is gone", || robots_in_default_cell(&handle) == 0).await;
@@ -204,7 +227,9 @@ fn status(e: ClientError) -> (tonic::Code, String) {
 async fn a_second_stream_of_a_robot_is_refused_unless_it_takes_over() {
     let dir = tempfile::tempdir().unwrap();
     let (handle, client) = serve(dir.path()).await;
-    within("put", client.put_primitive("r1", "line", &line(vec![0.0, 0.0], vec![0.5, 0.0], 3.0))).await.unwrap();
+    within("put", client.put_primitive("r1", "line", &line(vec![0.0, 0.0], vec![0.5, 0.0], 3.0)))
+        .await
+        .unwrap();
     let request = |take_over: bool| v1::ExecuteRequest {
         motion: Some(spec("r1", "line")),
         pacing: v1::Pacing::Realtime as i32,
