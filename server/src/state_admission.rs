@@ -39,7 +39,7 @@ impl StateAdmission {
     /// clock; the error names the field and the bound. Counts nothing.
     pub fn check(&self, state: &v1::RobotState, now_unix_s: f64) -> Result<(), WireError> {
         let skew = state.stamp_unix_s - now_unix_s;
-        if !(skew.abs() <= self.max_skew_s) {
+        if skew.is_nan() || skew.abs() > self.max_skew_s {
             return Err(WireError::new(
                 "stamp_unix_s",
                 format!(
@@ -49,7 +49,7 @@ impl StateAdmission {
             ));
         }
         check_in_workspace("position", &state.position, self.workspace_m)?;
-        if let Some(i) = state.velocity.iter().position(|v| !(v.abs() <= self.max_speed_m_s)) {
+        if let Some(i) = state.velocity.iter().position(|v| v.is_nan() || v.abs() > self.max_speed_m_s) {
             return Err(WireError::new(
                 format!("velocity[{i}]"),
                 format!(
