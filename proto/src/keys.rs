@@ -4,6 +4,7 @@
 //! | --- | --- |
 //! | `dmp/<cell>/obstacles/<obstacle-id>` | `dmp.v1.Obstacle` (encoding `application/protobuf`) or the JSON obstacle ([`crate::obstacle_json`]); a delete removes it |
 //! | `dmp/<cell>/robots/<robot-id>/state` | `dmp.v1.RobotState` (protobuf); a delete forgets the robot |
+//! | `dmp/<cell>/robots/<robot-id>/alive` | a Zenoh liveliness token of the robot's publisher: when it goes, the robot goes |
 //!
 //! [`EVERY_CELL`] in place of a cell (or `*` in place of an id) makes the expression that a subscriber declares.
 
@@ -53,6 +54,18 @@ pub fn robot_states_of(cell: &str) -> String {
     robot_state_key(cell, "*")
 }
 
+/// The key of the liveliness token that whoever publishes a robot's states declares:
+/// `dmp/<cell>/robots/<robot-id>/alive`.
+pub fn robot_alive_key(cell: &str, robot_id: &str) -> String {
+    format!("{ROOT}/{cell}/robots/{robot_id}/alive")
+}
+
+/// The expression of every robot's liveliness token of `cell` ([`EVERY_CELL`]: of every cell):
+/// `dmp/<cell>/robots/*/alive`.
+pub fn robots_alive_of(cell: &str) -> String {
+    robot_alive_key(cell, "*")
+}
+
 /// The names a key holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct KeyNames<'a> {
@@ -74,6 +87,14 @@ pub fn parse_obstacle_key(key: &str) -> Option<KeyNames<'_>> {
 pub fn parse_robot_state_key(key: &str) -> Option<KeyNames<'_>> {
     match key.split('/').collect::<Vec<_>>()[..] {
         [ROOT, cell, "robots", id, "state"] => Some(KeyNames { cell, id }),
+        _ => None,
+    }
+}
+
+/// The cell and robot id of `dmp/<cell>/robots/<robot-id>/alive`; None for any other key.
+pub fn parse_robot_alive_key(key: &str) -> Option<KeyNames<'_>> {
+    match key.split('/').collect::<Vec<_>>()[..] {
+        [ROOT, cell, "robots", id, "alive"] => Some(KeyNames { cell, id }),
         _ => None,
     }
 }
@@ -103,6 +124,11 @@ mod tests {
         let names = KeyNames { cell: "c1", id: "r1" };
         assert_eq!(parse_robot_state_key(&robot_state_key("c1", "r1")), Some(names));
         assert_eq!(parse_obstacle_key(&robot_state_key("c1", "r1")), None);
+        assert_eq!(robot_alive_key("c1", "r1"), "dmp/c1/robots/r1/alive");
+        assert_eq!(robots_alive_of(EVERY_CELL), "dmp/*/robots/*/alive");
+        assert_eq!(parse_robot_alive_key(&robot_alive_key("c1", "r1")), Some(names));
+        assert_eq!(parse_robot_alive_key(&robot_state_key("c1", "r1")), None);
+        assert_eq!(parse_robot_state_key(&robot_alive_key("c1", "r1")), None);
         assert_eq!(parse_robot_state_key(&obstacle_key("c1", "box1")), None);
         assert_eq!(parse_obstacle_key("dmp/c1/obstacles/a/b"), None);
         assert_eq!(parse_obstacle_key("other/c1/obstacles/a"), None);

@@ -177,6 +177,13 @@ pub struct Limits {
     pub tcp_keepalive_s: f64,
     /// A connection without an open stream and without a request for this long is closed, seconds (0: never).
     pub idle_timeout_s: f64,
+    /// Largest difference, seconds, between a robot state's stamp and the server's clock, either way: a state
+    /// further off (Zenoh or Session `state`) is dropped and counted (`ServerStats.robot_states_dropped`).
+    pub max_state_skew_s: f64,
+    /// Largest speed of a robot state, metres per second, on every coordinate of its velocity: a state moving
+    /// faster is dropped and counted (cell-mates are extrapolated along their velocity, so a huge one would throw
+    /// a robot's image across the cell).
+    pub max_state_speed_m_s: f64,
 }
 
 impl Default for Limits {
@@ -206,6 +213,8 @@ impl Default for Limits {
             http2_keepalive_timeout_s: 20.0,
             tcp_keepalive_s: 60.0,
             idle_timeout_s: 600.0,
+            max_state_skew_s: 1.0,
+            max_state_speed_m_s: 10.0,
         }
     }
 }

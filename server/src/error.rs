@@ -20,6 +20,12 @@ pub enum ServerError {
     /// A bound was reached (streams, sizes, counts).
     #[error("{0}")]
     ResourceExhausted(String),
+    /// The thing to create exists already (a second stream of an executing robot).
+    #[error("{0}")]
+    AlreadyExists(String),
+    /// The work was ended by a concurrent request (a stream taken over by another).
+    #[error("{0}")]
+    Aborted(String),
     /// The request is valid but cannot be served in the current state.
     #[error("{0}")]
     FailedPrecondition(String),
@@ -84,6 +90,8 @@ impl From<ServerError> for Status {
             ServerError::InvalidArgument { .. } => Status::invalid_argument(msg),
             ServerError::NotFound(_) => Status::not_found(msg),
             ServerError::ResourceExhausted(_) => Status::resource_exhausted(msg),
+            ServerError::AlreadyExists(_) => Status::already_exists(msg),
+            ServerError::Aborted(_) => Status::aborted(msg),
             ServerError::FailedPrecondition(_) => Status::failed_precondition(msg),
             ServerError::ShuttingDown => Status::unavailable(msg),
             ServerError::Cancelled(_) => Status::cancelled(msg),

@@ -12,6 +12,8 @@
 //! | shared state of the services | [`state`] |
 //! | the embedded store of primitives (redb) | [`store`] |
 //! | robots' states: local scene and `dmp/<cell>/robots/<id>/state` | [`robots`] |
+//! | which robot states from outside a cell takes (stamp, workspace, speed) | [`state_admission`] |
+//! | one stream per executing robot of a cell, and taking over | [`executing`] |
 //! | the Zenoh session and the subscribers that feed the scene | [`zenoh_bridge`] |
 //! | the gRPC services, one file each | [`services`] |
 //! | served runs: the engine's execution paced into gRPC streams | [`executor`] |
@@ -29,12 +31,14 @@ pub mod config;
 pub mod connection;
 pub mod convert;
 pub mod error;
+pub mod executing;
 pub mod executor;
 pub mod memory;
 pub mod robots;
 pub mod run;
 pub mod services;
 pub mod state;
+pub mod state_admission;
 pub mod store;
 pub mod stream_permits;
 pub mod write_batching;

@@ -1,16 +1,19 @@
 //! The robots' state bus: every executing robot's state is recorded in the local scene and, with Zenoh, published on
 //! `dmp/<cell>/robots/<robot-id>/state` (protobuf `dmp.v1.RobotState`), so that the robots of the cell, served by
-//! this server or another, see each other as moving obstacles.
+//! this server or another, see each other as moving obstacles. With each robot's publisher goes its liveliness token
+//! (`dmp/<cell>/robots/<robot-id>/alive`): when the robot retires, or this server's session goes, the other servers
+//! forget the robot.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
-use dmp_proto::keys::{check_name, robot_state_key};
+use dmp_proto::keys::{check_name, robot_alive_key, robot_state_key};
 use dmp_proto::{codec, v1};
 use tracing::{debug, warn};
 use zenoh::Session;
 use zenoh::bytes::Encoding;
+use zenoh::liveliness::LivelinessToken;
 use zenoh::pubsub::Publisher;
 use zenoh::sample::Locality;
 
@@ -32,6 +35,8 @@ struct RobotPublisher {
     /// nor put.
     matching: Arc<AtomicBool>,
     last_stamp: Mutex<f64>,
+    /// The robot's liveliness token, undeclared when the publisher is dropped (the robot retired).
+    _alive: Option<LivelinessToken>,
 }
 
 /// The Zenoh side: one publisher per robot, declared at its first state (a declared publisher keeps its routes,
@@ -151,10 +156,21 @@ impl ZenohRobotBus {
                     warn!(robot = %robot_id, error = %e, "zenoh: no matching listener, every state is published");
                     matching.store(true, Ordering::Relaxed);
                 }
+                // One stream per robot (`crate::executing`) publishes its states, so a robot's publisher and token
+                // are declared once.
+                let alive =
+                    match self.session.liveliness().declare_token(robot_alive_key(cell, robot_id)).await {
+                        Ok(token) => Some(token),
+                        Err(e) => {
+                            warn!(robot = %robot_id, error = %e, "zenoh: no liveliness token for the robot");
+                            None
+                        }
+                    };
                 let out = Arc::new(RobotPublisher {
                     publisher,
                     matching,
                     last_stamp: Mutex::new(f64::NEG_INFINITY),
+                    _alive: alive,
                 });
                 let mut map = self.publishers.lock().unwrap_or_else(|p| p.into_inner());
                 // A concurrent first publish may have won: keep its publisher, drop (undeclare) this one.
@@ -222,7 +238,13 @@ mod tests {
         let shutdown = CancellationToken::new();
         let bridge = within(
             "bridge b",
-            ZenohBridge::start(b.clone(), cells_b, crate::clock::Clock::system(), shutdown.clone()),
+            ZenohBridge::start(
+                b.clone(),
+                cells_b,
+                crate::clock::Clock::system(),
+                crate::state_admission::StateAdmission::new(&Default::default()),
+                shutdown.clone(),
+            ),
         )
         .await
         .unwrap();

@@ -22,6 +22,7 @@ use crate::clock::Clock;
 use crate::compute::Compute;
 use crate::config::Config;
 use crate::error::ServerError;
+use crate::executing::Executing;
 use crate::memory::MemoryBudget;
 use crate::robots::RobotBus;
 use crate::services::motion::MotionServiceImpl;
@@ -29,6 +30,7 @@ use crate::services::primitives::PrimitiveServiceImpl;
 use crate::services::scene::SceneServiceImpl;
 use crate::services::server::ServerServiceImpl;
 use crate::state::AppState;
+use crate::state_admission::StateAdmission;
 use crate::store::Store;
 use crate::stream_permits::StreamPermits;
 use crate::write_batching::{BatchedConnectInfo, BatchedWrites};
@@ -91,6 +93,7 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
     let memory = MemoryBudget::new(config.limits.max_server_bytes);
     let cells = Cells::with_limits(&config.cell, &config.limits, memory.clone())?;
     let shutdown = CancellationToken::new();
+    let state_admission = StateAdmission::new(&config.limits);
 
     let (session, bridge, robots, zenoh_locators) = if config.zenoh.disabled {
         // Without Zenoh the bridge's reaper is not there: obstacles put over gRPC with a ttl still expire.
@@ -98,7 +101,14 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         (None, None, RobotBus::new(None), Vec::new())
     } else {
         let session = open_session(&config.zenoh).await?;
-        let bridge = ZenohBridge::start(session.clone(), cells.clone(), clock, shutdown.clone()).await?;
+        let bridge = ZenohBridge::start(
+            session.clone(),
+            cells.clone(),
+            clock,
+            state_admission.clone(),
+            shutdown.clone(),
+        )
+        .await?;
         let locs = locators(&session).await;
         let robots = RobotBus::new(Some((session.clone(), config.defaults.robot_state_period_s)));
         (Some(session), Some(bridge), robots, locs)
@@ -118,6 +128,8 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         shutdown: shutdown.clone(),
         counters: Default::default(),
         clock,
+        executing: Executing::default(),
+        state_admission,
     });
     let max = state.config.limits.max_message_bytes;
 

@@ -7,8 +7,10 @@ use crate::clock::Clock;
 use crate::compute::Compute;
 use crate::config::Config;
 use crate::error::ServerError;
+use crate::executing::Executing;
 use crate::memory::MemoryBudget;
 use crate::robots::RobotBus;
+use crate::state_admission::StateAdmission;
 use crate::store::Store;
 use crate::stream_permits::{Peer, StreamKind, StreamPermit, StreamPermits};
 
@@ -37,6 +39,10 @@ pub struct AppState {
     pub clock: Clock,
     /// The compute pools and their admission budgets.
     pub compute: Compute,
+    /// The robots executing now, one stream each.
+    pub executing: Executing,
+    /// Which robot states from outside the server the cells take, and how many were dropped.
+    pub state_admission: StateAdmission,
 }
 
 /// What the server has done so far.
@@ -87,6 +93,8 @@ impl AppState {
             .expect("cell c"),
             compute: Compute::start(&config.compute).expect("compute threads start"),
             memory,
+            executing: Executing::default(),
+            state_admission: StateAdmission::new(&config.limits),
             config,
             shutdown: CancellationToken::new(),
             counters: Default::default(),

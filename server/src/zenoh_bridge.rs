@@ -8,6 +8,15 @@
 //! | `dmp/<cell>/obstacles/<obstacle-id>` delete | | removes it |
 //! | `dmp/<cell>/robots/<robot-id>/state` put | `dmp.v1.RobotState` (protobuf) | records the robot, a moving obstacle for the others |
 //! | `dmp/<cell>/robots/<robot-id>/state` delete | | forgets the robot |
+//! | `dmp/<cell>/robots/<robot-id>/alive` liveliness token gone | | forgets the robot |
+//!
+//! A robot state whose stamp is too far from the server's clock, or whose position or velocity is out of bounds
+//! ([`StateAdmission`]), is dropped and counted (`ServerStats.robot_states_dropped`). Whoever publishes robot states
+//! declares the robot's liveliness token (`dmp_proto::keys::robot_alive_key`; the server's [`crate::robots`] does):
+//! when it goes (the robot retired, or its publisher's session closed or lost), the robot vanishes from its cell. The
+//! bridge subscribes to the tokens with history, so it also learns those declared before it started. A state from a
+//! publisher without a token is still taken: a stream uses a cell-mate's state only while it is fresh (0.5 s), so
+//! such a robot stops counting soon after its publisher stops.
 //!
 //! The keys are `dmp_proto::keys`'s and the payloads are decoded by `dmp_proto::payload`. A payload that cannot
 //! be decoded or validated is logged at warn with its key and the reason, counted
@@ -32,6 +41,7 @@ use crate::cells::Cells;
 use crate::clock::Clock;
 use crate::config::ZenohConfig;
 use crate::error::ServerError;
+use crate::state_admission::StateAdmission;
 
 /// Period of the reaper that removes obstacles whose time to live has passed.
 pub const REAP_PERIOD: Duration = Duration::from_millis(100);
@@ -88,6 +98,7 @@ struct SceneUpdater {
     cells: Cells,
     malformed: Arc<AtomicU64>,
     clock: Clock,
+    admission: StateAdmission,
 }
 
 impl SceneUpdater {
@@ -147,10 +158,33 @@ impl SceneUpdater {
                 check_name("robot_id", id)?;
                 let scene = self.cells.get(names.cell)?;
                 let (state, footprint) = decode_robot_state(&sample.payload().to_bytes(), id)?;
-                scene.update_robot(state, footprint);
+                match self.admission.admit(&state, self.clock.now_unix_s()) {
+                    Ok(()) => scene.update_robot(state, footprint),
+                    Err(e) => {
+                        warn!(key, reason = %e, dropped = self.admission.dropped(), "robot state dropped")
+                    }
+                }
             }
         }
         Ok(())
+    }
+
+    /// A robot's liveliness token came or went: gone, the robot is forgotten.
+    fn liveliness(&self, sample: &Sample) {
+        let key = sample.key_expr().as_str();
+        let Some(names) = keys::parse_robot_alive_key(key) else {
+            return self
+                .refuse(sample, ServerError::invalid("key", "is not dmp/<cell>/robots/<robot-id>/alive"));
+        };
+        if sample.kind() == SampleKind::Delete {
+            match self.cells.get(names.cell) {
+                Ok(scene) => {
+                    scene.remove_robot(names.id);
+                    debug!(key, "robot gone with its liveliness token");
+                }
+                Err(e) => self.refuse(sample, e),
+            }
+        }
     }
 
     fn refuse(&self, sample: &Sample, reason: ServerError) {
@@ -164,6 +198,8 @@ impl SceneUpdater {
 pub struct ZenohBridge {
     obstacles: Subscriber<()>,
     robots: Subscriber<()>,
+    /// The robots' liveliness tokens.
+    alive: Subscriber<()>,
     reaper: JoinHandle<()>,
     /// Cancels the reaper when the bridge is closed or dropped (it also stops on the server's shutdown).
     stop: DropGuard,
@@ -173,15 +209,17 @@ pub struct ZenohBridge {
 impl ZenohBridge {
     /// Subscribes to the obstacles and robot states of every cell on `session` and starts the reaper, which stops
     /// on `shutdown` or [`ZenohBridge::close`]. The robot states this session publishes itself ([`crate::robots`])
-    /// are not received back: the publisher records them locally.
+    /// are not received back: the publisher records them locally. Robot states from elsewhere are taken as
+    /// `admission` says.
     pub async fn start(
         session: Session,
         cells: Cells,
         clock: Clock,
+        admission: StateAdmission,
         shutdown: CancellationToken,
     ) -> Result<Self, ServerError> {
         let malformed = Arc::new(AtomicU64::new(0));
-        let updater = SceneUpdater { cells: cells.clone(), malformed: malformed.clone(), clock };
+        let updater = SceneUpdater { cells: cells.clone(), malformed: malformed.clone(), clock, admission };
         let zenoh_err = |e: zenoh::Error| ServerError::Internal(format!("zenoh: cannot subscribe: {e}"));
 
         let obstacles_key = keys::obstacles_of(EVERY_CELL);
@@ -192,17 +230,26 @@ impl ZenohBridge {
             .await
             .map_err(zenoh_err)?;
         let robots_key = keys::robot_states_of(EVERY_CELL);
+        let on_robot = updater.clone();
         let robots = session
             .declare_subscriber(&robots_key)
-            .callback(move |sample| updater.robot(&sample))
+            .callback(move |sample| on_robot.robot(&sample))
             .allowed_origin(Locality::Remote)
+            .await
+            .map_err(zenoh_err)?;
+        let alive_key = keys::robots_alive_of(EVERY_CELL);
+        let alive = session
+            .liveliness()
+            .declare_subscriber(&alive_key)
+            .history(true)
+            .callback(move |sample| updater.liveliness(&sample))
             .await
             .map_err(zenoh_err)?;
 
         let stop = shutdown.child_token();
         let reaper = spawn_reaper(cells, clock, stop.clone());
-        info!(obstacles = %obstacles_key, robots = %robots_key, "zenoh bridge subscribed");
-        Ok(Self { obstacles, robots, reaper, stop: stop.drop_guard(), malformed })
+        info!(obstacles = %obstacles_key, robots = %robots_key, alive = %alive_key, "zenoh bridge subscribed");
+        Ok(Self { obstacles, robots, alive, reaper, stop: stop.drop_guard(), malformed })
     }
 
     /// How many payloads were refused so far (malformed, invalid, or over a limit).
@@ -218,10 +265,10 @@ impl ZenohBridge {
     /// Undeclares the subscribers (waiting for running callbacks, so the scene changes no more) and stops the
     /// reaper. The session can be closed afterwards.
     pub async fn close(self) {
-        let Self { obstacles, robots, reaper, stop, malformed: _ } = self;
+        let Self { obstacles, robots, alive, reaper, stop, malformed: _ } = self;
         drop(stop);
         let undeclared = tokio::task::spawn_blocking(move || {
-            for s in [obstacles, robots] {
+            for s in [obstacles, robots, alive] {
                 let key = s.key_expr().to_string();
                 if let Err(e) = s.undeclare().wait_callbacks().wait() {
                     debug!(key, error = %e, "zenoh subscriber undeclare failed (session closed?)");

@@ -256,13 +256,12 @@ async fn run_robot_group(
         // RK4 at the output rate, as offline (the server's default interpolates between coarser steps).
         integration_step_s: p.dt,
         integration_tolerance: 0.0,
+        take_over: false,
     };
     let dims: Vec<&[usize]> = s.robots.iter().map(|r| r.dims.as_slice()).collect();
-    let (adapted, free) = tokio::join!(
-        execute_group_joined(client, request(false), &dims, p),
-        execute_group_joined(client, request(true), &dims, p)
-    );
-    let (mut adapted, mut free) = (adapted?, free?);
+    // One after the other: the two runs move the same robots, and a robot executes one stream at a time.
+    let mut adapted = execute_group_joined(client, request(false), &dims, p).await?;
+    let mut free = execute_group_joined(client, request(true), &dims, p).await?;
     // Streams stop on segment boundaries: rows past the scenario's duration are cut, so that the metrics are over
     // the same span as offline (`final_goal_distance` at T). A shorter stream is noted.
     let rows = adapted.len().min(free.len()).min(p.steps + 1);

@@ -173,6 +173,7 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
         max_duration_s: a.max_duration.unwrap_or(0.0),
         integration_step_s: 0.0,
         integration_tolerance: 0.0,
+        take_over: false,
     };
     let mut segments = client.execute(request).await?;
     let mut s = Setpoints::new();

@@ -86,7 +86,7 @@ impl Admission {
 
     /// Checks that one computation of `per_job` work units fits `compute.max_job_work`.
     pub fn check_job(&self, per_job: f64, what: &str) -> Result<(), ServerError> {
-        if !(per_job <= self.max_job) {
+        if per_job.is_nan() || per_job > self.max_job {
             return Err(ServerError::ResourceExhausted(format!(
                 "{what}: one computation of this run would take {} work units, more than the limit of {} \
                  (`compute.max_job_work`); use shorter segments, fewer obstacles or fewer boundary samples",
@@ -99,7 +99,7 @@ impl Admission {
 
     /// Checks that a request of `total` work units fits `compute.max_request_work`.
     pub fn check_request(&self, total: f64, what: &str) -> Result<(), ServerError> {
-        if !(total <= self.max_request) {
+        if total.is_nan() || total > self.max_request {
             return Err(ServerError::ResourceExhausted(format!(
                 "{what}: this request would take {} work units, more than the limit of {} \
                  (`compute.max_request_work`); ask for less (a shorter run, fewer obstacles, samples or basis \

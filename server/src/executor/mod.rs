@@ -13,3 +13,6 @@ pub mod stream_memory;
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod rejection_tests;

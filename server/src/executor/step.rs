@@ -15,6 +15,7 @@ use super::stream::Control;
 use crate::cell::{ObstacleSet, SeenRobot};
 use crate::compute::pool::JobContext;
 use crate::error::ServerError;
+use crate::services::session_commands::engine_rejection;
 
 /// What one wake-up asks of the run.
 #[derive(Debug)]
@@ -84,23 +85,28 @@ pub fn compute(run: &mut ServedRun, step: Step, job: &JobContext<'_>) -> Result<
         Some(scene) => run.apply_scene(scene, &step.others, now)?,
         None => run.set_cellmates(&step.others, now)?,
     }
+    // A change the engine refuses is a warning for the robot; the run goes on as before it.
     for c in &step.commands {
         let e = &mut run.execution;
-        let (field, applied) = match c {
-            Control::SetGoal(g) => ("set_goal.goal", e.set_goal(g.clone())),
-            Control::SetTau(tau) => ("set_tau.tau", e.set_tau(*tau)),
-            Control::Pause => ("pause", Ok(e.set_holding(true))),
-            Control::Resume => ("resume", Ok(e.set_holding(false))),
-            Control::Stop => ("stop", Ok(e.stop())),
-            Control::State(_) => continue,
+        let (command, applied) = match c {
+            Control::SetGoal(g) => ("set_goal", e.set_goal(g.clone())),
+            Control::SetTau(tau) => ("set_tau", e.set_tau(*tau)),
+            Control::Pause => {
+                e.set_holding(true);
+                continue;
+            }
+            Control::Resume => {
+                e.set_holding(false);
+                continue;
+            }
+            Control::Stop => {
+                e.stop();
+                continue;
+            }
+            Control::State(_) | Control::Rejected(_) => continue,
         };
-        if let Err(err) = applied {
-            out.warnings.push(v1::Warning {
-                kind: v1::warning::Kind::CommandRejected as i32,
-                field: field.into(),
-                reason: err.to_string(),
-                obstacle_id: String::new(),
-            });
+        if let Err(i) = applied {
+            out.warnings.push(engine_rejection(command, &i.field, &i.rule));
         }
     }
     if step.max_segments == 0 {

@@ -62,6 +62,8 @@ pub enum Control {
     Stop,
     /// The robot's measured state: published to the cell.
     State(v1::RobotState),
+    /// A command that was refused: the warning goes to the robot with the next segment, the run goes on.
+    Rejected(v1::Warning),
 }
 
 /// Runs `run` until the goal, a stop, `max_duration`, the client leaving or shutdown. Items go to `tx` (mapped by
@@ -233,16 +235,27 @@ impl<'a> Producer<'a> {
     /// superseding segment goes out on its own first). Measured states are published and change nothing in the
     /// plan. `Some(reason)` when the stream is over.
     async fn wake_up(&mut self, wake: Wake, first: bool) -> Result<Option<&'static str>, ServerError> {
+        // Real time: a wake-up by messages alone (states, rejections) sends nothing ahead of time; what they leave
+        // goes with the next segment, due within a refill.
+        let messages_only = self.cfg.realtime && !wake.scene_changed && !wake.commands.is_empty();
         let mut changes_plan = wake.scene_changed && !first;
         let mut commands = Vec::with_capacity(wake.commands.len());
         for c in wake.commands {
             match c {
                 Control::State(s) => self.publish_measured(s).await,
+                Control::Rejected(w) => {
+                    self.warnings.push(w);
+                    // Once the last segment is sent, only a superseding one can still carry it.
+                    changes_plan |= self.finished.is_some();
+                }
                 c => {
                     changes_plan = true;
                     commands.push(c);
                 }
             }
+        }
+        if messages_only && !changes_plan {
+            return Ok(None);
         }
         let realtime = self.cfg.realtime;
         let rollback_to = (changes_plan && realtime)

@@ -1,7 +1,9 @@
-//! The gRPC services, one file each, and what a streamed execution asks for (`stream_request.rs`).
+//! The gRPC services, one file each, what a streamed execution asks for (`stream_request.rs`), and a session's
+//! commands checked (`session_commands.rs`).
 
 pub mod motion;
 pub mod primitives;
 pub mod scene;
 pub mod server;
+pub(crate) mod session_commands;
 mod stream_request;

@@ -10,7 +10,6 @@ use dmp::{Motion, Primitive, Stepping};
 use dmp_proto::avoidance::avoidance_from_proto;
 use dmp_proto::check::{check_in_workspace, check_tau, check_vector};
 use dmp_proto::keys::check_name;
-use dmp_proto::robot_state::check_robot_state;
 use dmp_proto::shape::superquadric_to_shape;
 use dmp_proto::status::segment_status;
 use dmp_proto::v1;
@@ -20,12 +19,13 @@ use tokio_stream::wrappers::ReceiverStream;
 use tokio_stream::{Stream, StreamExt};
 use tonic::transport::server::TcpConnectInfo;
 use tonic::{Request, Response, Status, Streaming};
-use tracing::info;
+use tracing::{debug, info};
 
 use crate::cell::Cell;
 use crate::compute::admission::Reservation;
 use crate::convert::{obstacle_from_proto, stored_primitive};
 use crate::error::ServerError;
+use crate::executing::Claim;
 use crate::executor::ignored::push_obstacle_warnings;
 use crate::executor::pacing::{MAX_REFILL, history_len, refill_segments};
 use crate::executor::plan::advance_cancellable;
@@ -37,6 +37,7 @@ use crate::state::AppState;
 use crate::stream_permits::{Peer, StreamKind};
 use crate::write_batching::{BatchedConnectInfo, Urgency};
 
+use super::session_commands::SessionCommands;
 use super::stream_request::{DEFAULT_DT, StreamRequest};
 
 /// Implements `dmp.v1.MotionService`.
@@ -197,8 +198,15 @@ impl MotionServiceImpl {
         }
     }
 
-    /// Spawns the producer of a stream of `peer` and returns the receiving end. The stream's permit and its memory
-    /// (estimated now, refused when over a limit) live in the producer task: both are released when it ends.
+    /// Claims `robots` of `cell` for a new stream (see [`crate::executing`]).
+    async fn claim(&self, cell: &Cell, robots: &[&str], take_over: bool) -> Result<Claim, ServerError> {
+        self.state.executing.claim(cell.name(), robots, take_over).await
+    }
+
+    /// Spawns the producer of a stream of `peer`, which holds `claim` until it ends, and returns the receiving end.
+    /// The stream's permit, its memory (estimated now, refused when over a limit) and its compute reservation live
+    /// in the producer task: all are released when it ends. Taken over, the stream ends at once with ABORTED (its
+    /// robots' states stay: the stream taking over goes on with them).
     fn spawn(
         &self,
         run: ServedRun,
@@ -206,6 +214,7 @@ impl MotionServiceImpl {
         cfg: StreamConfig,
         control: Option<mpsc::Receiver<Control>>,
         peer: &Peer,
+        claim: Claim,
     ) -> Result<mpsc::Receiver<Result<Batch, Status>>, ServerError> {
         // Real time: room for every segment computed in one wake-up (see `stream::MAX_REFILL`).
         let buffer = self.state.config.limits.stream_buffer.max(1)
@@ -217,7 +226,24 @@ impl MotionServiceImpl {
         let (tx, rx) = mpsc::channel(buffer);
         let app = self.state.clone();
         tokio::spawn(async move {
-            run_stream(app, run, cell, cfg, tx, control, budget).await;
+            let taken_over = claim.taken_over();
+            let shutdown = app.shutdown.clone();
+            let ended = tokio::select! {
+                _ = run_stream(app, run, cell, cfg, tx.clone(), control, budget) => true,
+                _ = taken_over => false,
+            };
+            // Let go first: the stream taking over waits for it.
+            drop(claim);
+            if !ended {
+                info!("stream taken over by another stream");
+                let aborted = ServerError::Aborted("taken over by another stream".into()).into();
+                // A reader that stopped reading is not waited for long.
+                tokio::select! {
+                    _ = tx.send(Err(aborted)) => {}
+                    _ = tokio::time::sleep(Duration::from_secs(1)) => {}
+                    _ = shutdown.cancelled() => {}
+                }
+            }
             drop((permit, memory));
         });
         Ok(rx)
@@ -317,8 +343,9 @@ impl MotionService for MotionServiceImpl {
         info!(robot = %r.robot_id, cell = r.cell.name(), realtime = cfg.realtime, "execute");
         self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
         let cell = r.cell.clone();
+        let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await?;
         let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
-        Ok(Response::new(one_robot_stream(self.spawn(run, cell, cfg, None, &peer)?)))
+        Ok(Response::new(one_robot_stream(self.spawn(run, cell, cfg, None, &peer, claim)?)))
     }
 
     type SessionStream = SegmentStream;
@@ -346,12 +373,21 @@ impl MotionService for MotionServiceImpl {
         let dim = r.primitive.dim;
         self.check_message_size("start.segment_s", cfg.segment_points * dim)?;
         let cell = r.cell.clone();
+        let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await.map_err(|e| e.within("start"))?;
         let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
         let (ctl_tx, ctl_rx) = mpsc::channel(64);
-        let rx = self.spawn(run, cell, cfg, Some(ctl_rx), &peer)?;
+        let rx = self.spawn(run, cell, cfg, Some(ctl_rx), &peer, claim)?;
         let shutdown = self.state.shutdown.clone();
-        // Reads the robot's messages; a bad one is logged and dropped (the stream goes on), the end of the inbound
-        // stream stops nothing (the robot may just have nothing more to say).
+        let limits = &self.state.config.limits;
+        let commands = SessionCommands::new(
+            robot_id,
+            dim,
+            limits.workspace_m,
+            self.state.state_admission.clone(),
+            self.state.clock,
+        );
+        // Reads the robot's messages; a bad one is rejected with a warning on the reply stream (the run goes on),
+        // the end of the inbound stream stops nothing (the robot may just have nothing more to say).
         tokio::spawn(async move {
             loop {
                 let msg = tokio::select! {
@@ -359,27 +395,10 @@ impl MotionService for MotionServiceImpl {
                     _ = shutdown.cancelled() => break,
                 };
                 let Ok(Some(msg)) = msg else { break };
-                let control = match msg.message {
-                    Some(M::SetGoal(g)) if g.goal.len() == dim && g.goal.iter().all(|v| v.is_finite()) => {
-                        Control::SetGoal(g.goal)
-                    }
-                    Some(M::SetTau(t)) if t.tau.is_finite() && t.tau > 0.0 => Control::SetTau(t.tau),
-                    Some(M::Pause(_)) => Control::Pause,
-                    Some(M::Resume(_)) => Control::Resume,
-                    Some(M::Stop(_)) => Control::Stop,
-                    Some(M::State(mut s)) => {
-                        s.robot_id = robot_id.clone();
-                        if let Err(e) = check_robot_state(&s) {
-                            tracing::warn!(robot = %robot_id, error = %e, "ignored an invalid robot state");
-                            continue;
-                        }
-                        Control::State(s)
-                    }
-                    other => {
-                        tracing::warn!(robot = %robot_id, message = ?other, "ignored an invalid session message");
-                        continue;
-                    }
-                };
+                let control = commands.control(msg.message);
+                if let Control::Rejected(w) = &control {
+                    debug!(field = %w.field, reason = %w.reason, "session message rejected");
+                }
                 if ctl_tx.send(control).await.is_err() {
                     break;
                 }
@@ -458,8 +477,10 @@ impl MotionService for MotionServiceImpl {
             agents.into_iter().zip(resolved.into_iter().map(|r| r.footprint_proto)).collect::<Vec<_>>();
         info!(robots = members.len(), realtime = cfg.realtime, "execute group");
         self.check_message_size("segment_s", cfg.segment_points * primitive.dim)?;
+        let ids: Vec<&str> = members.iter().map(|(agent, _)| agent.id.as_str()).collect();
+        let claim = self.claim(&cell, &ids, req.take_over).await?;
         let run = ServedRun::new(primitive, motion, members, avoidance, cfg.stepping, history_len(&cfg))?;
-        let rx = self.spawn(run, cell, cfg, None, &peer)?;
+        let rx = self.spawn(run, cell, cfg, None, &peer, claim)?;
         let stream = ReceiverStream::new(rx).map(|r| {
             r.map(|segments| v1::GroupSegment {
                 sequence: segments.first().map(|s| s.sequence).unwrap_or(0),

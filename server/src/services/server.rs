@@ -35,6 +35,7 @@ impl ServerServiceImpl {
             segments_sent: s.counters.segments_sent.load(Ordering::Relaxed),
             cells: cells.len() as u32,
             robots: cells.iter().map(|c| c.robot_count()).sum::<usize>() as u32,
+            robot_states_dropped: s.state_admission.dropped(),
             ..s.compute.stats()
         }
     }

@@ -42,7 +42,13 @@ async fn pair(cell: &str) -> Pair {
     let shutdown = CancellationToken::new();
     let bridge = within(
         "bridge",
-        ZenohBridge::start(server.clone(), cells, crate::clock::Clock::system(), shutdown.clone()),
+        ZenohBridge::start(
+            server.clone(),
+            cells,
+            crate::clock::Clock::system(),
+            crate::state_admission::StateAdmission::new(&Default::default()),
+            shutdown.clone(),
+        ),
     )
     .await
     .unwrap();

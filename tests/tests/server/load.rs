@@ -14,11 +14,13 @@ async fn a_hundred_concurrent_streams_complete_and_a_leaving_client_frees_its_st
         .await
         .unwrap();
     let mut tasks = Vec::new();
-    for _ in 0..100 {
+    for i in 0..100 {
         let client = client.clone();
         tasks.push(tokio::spawn(async move {
             let mut motion = spec("fleet", "hop");
             motion.ignore_scene = true;
+            // A robot executes one stream at a time in a cell: the same robot in a hundred cells.
+            motion.cell = format!("bay{i}");
             let request =
                 v1::ExecuteRequest { motion: Some(motion), max_duration_s: 2.0, ..Default::default() };
             let mut stream = client.execute(request).await.unwrap();

@@ -3,6 +3,7 @@
 
 mod bad_input;
 mod hostile_compute;
+mod hostile_sessions;
 mod hostile_values;
 mod limits;
 mod load;

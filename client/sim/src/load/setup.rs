@@ -104,5 +104,6 @@ pub fn start_request(p: &Params, r: &RobotPlan, cell: &str) -> v1::ExecuteReques
         max_duration_s: p.args.duration + MAX_DURATION_SLACK_S,
         integration_step_s: p.args.integration_step_ms * 1e-3,
         integration_tolerance: p.args.integration_tolerance,
+        take_over: false,
     }
 }

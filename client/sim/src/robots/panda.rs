@@ -227,8 +227,10 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     let carry_static =
         carry("carry-static", "Panda: move to peg (static potential)", Method::Static { a: 10.0, eta: 2.0 });
     let carry_dynamic = carry("carry-dynamic", "Panda: move to peg (dynamic potential)", dynamic);
-    let (a, b) = tokio::join!(carry_static.run(client, options), carry_dynamic.run(client, options));
-    carry_static.record(client, options, &a?, &mut report).await?;
-    carry_dynamic.record(client, options, &b?, &mut report).await?;
+    // One after the other: a robot executes one stream at a time.
+    let a = carry_static.run(client, options).await?;
+    let b = carry_dynamic.run(client, options).await?;
+    carry_static.record(client, options, &a, &mut report).await?;
+    carry_dynamic.record(client, options, &b, &mut report).await?;
     Ok(report)
 }

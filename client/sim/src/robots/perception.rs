@@ -161,19 +161,22 @@ pub fn fitted_obstacle(id: &str, cloud: &[[f64; 2]]) -> Result<JsonObstacle, Sim
     })
 }
 
-fn spec(method: Method) -> v1::MotionSpec {
+/// The two runs of an event move at once in the same perceived scene, one robot per potential (a robot executes one
+/// stream at a time); they do not avoid each other (they are the same robot, twice).
+fn spec(robot: &str, method: Method) -> v1::MotionSpec {
     v1::MotionSpec {
-        robot_id: "youbot".into(),
+        robot_id: robot.into(),
         primitive: "corridor".into(),
         avoidance: Some(avoidance(method)),
+        robot_avoidance: Some(avoidance(Method::None)),
         extra_obstacles: walls(ROBOT_RADIUS).iter().map(JsonObstacle::to_proto).collect(),
         ..Default::default()
     }
 }
 
-fn request(method: Method) -> v1::ExecuteRequest {
+fn request(robot: &str, method: Method) -> v1::ExecuteRequest {
     v1::ExecuteRequest {
-        motion: Some(spec(method)),
+        motion: Some(spec(robot, method)),
         dt: DT,
         segment_s: 0.05,
         pacing: v1::Pacing::Realtime as i32,
@@ -230,7 +233,10 @@ async fn wait_absent(client: &DmpClient, id: &str) -> Result<(), SimError> {
 pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     let (t, rows) = ramped_line(&START, &GOAL, TAU, RAMP_S, DT);
     let parameters = super::learn_parameters(STIFFNESS);
-    within("learn", client.learn("youbot", "corridor", &t, &rows, parameters)).await??;
+    let robots = ["youbot-static", "youbot-dynamic"];
+    for robot in robots {
+        within("learn", client.learn(robot, "corridor", &t, &rows, parameters.clone())).await??;
+    }
     let publisher =
         within("zenoh open", ObstaclePublisher::open(&options.cell, &options.zenoh_connect, &[])).await??;
     within("zenoh subscriber", publisher.wait_for_subscriber(super::STEP_TIMEOUT)).await??;
@@ -251,8 +257,8 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
                     }
                 };
                 tokio::join!(
-                    execute(client, request(methods[0].1), true, |c| set(&tx0, c.origin_unix())),
-                    execute(client, request(methods[1].1), true, |c| set(&tx1, c.origin_unix())),
+                    execute(client, request(robots[0], methods[0].1), true, |c| set(&tx0, c.origin_unix())),
+                    execute(client, request(robots[1], methods[1].1), true, |c| set(&tx1, c.origin_unix())),
                 )
             };
             let (robots, seen) = tokio::join!(robots, perceive(&publisher, event, rx));
@@ -299,7 +305,7 @@ async fn record(
     });
     report.metrics.insert(format!("{key}/max_abs_y_m"), all);
     report.metrics.insert(format!("{key}/max_abs_y_past_box_m"), past);
-    let free = free_plan(client, &spec(method), DT).await?;
+    let free = free_plan(client, &spec("youbot-static", method), DT).await?;
     let mut planned: Vec<dmp::Obstacle> = walls(ROBOT_RADIUS)
         .iter()
         .map(JsonObstacle::to_engine)

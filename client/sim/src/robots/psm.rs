@@ -344,10 +344,11 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
             <[Executed; 2]>::try_from(runs)
                 .map_err(|_| SimError::protocol("a group of two answered for another count".into()))
         };
-        // The three runs are independent (each its own phase): at once.
-        let (runs, without_robots, free) =
-            tokio::join!(group(Avoid::Everything), group(Avoid::Obstacles), group(Avoid::Nothing));
-        let (runs, without_robots, free) = (runs?, without_robots?, free?);
+        // The three runs are independent (each its own phase), one after the other: they move the same robots, and
+        // a robot executes one stream at a time.
+        let runs = group(Avoid::Everything).await?;
+        let without_robots = group(Avoid::Obstacles).await?;
+        let free = group(Avoid::Nothing).await?;
         record(options, stage, &runs, &free, clock, &mut report)?;
         // How close the jaws came without the robot term.
         for i in 0..2 {
