@@ -71,11 +71,31 @@ pub async fn send(channel: &Channel, call: SceneCall) -> TestCaseResult {
     }
 }
 
+/// Deletes every obstacle of the cells the cases name, so that each case starts from an empty scene (and a
+/// failure shrinks to the calls that cause it).
+pub async fn clear(channel: &Channel) -> TestCaseResult {
+    let mut c = SceneServiceClient::new(channel.clone());
+    for cell in CELLS {
+        let request = v1::ListObstaclesRequest { cell: (*cell).into() };
+        let snapshot = bounded("list obstacles", c.list_obstacles(request))
+            .await?
+            .map_err(|s| TestCaseError::fail(format!("listing `{cell}` failed: {s}")))?;
+        for o in &snapshot.get_ref().obstacles {
+            let request = v1::DeleteObstacleRequest { id: o.id.clone(), cell: (*cell).into() };
+            bounded("delete obstacle", c.delete_obstacle(request))
+                .await?
+                .map_err(|s| TestCaseError::fail(format!("deleting `{}` failed: {s}", o.id)))?;
+        }
+    }
+    Ok(())
+}
+
 #[test]
 fn fuzz_grpc_scene() {
     let server = Fuzzed::start();
     fuzz("grpc_scene", 200, 50, vec(scene_call(), 1..=5), |calls| {
         server.case(async {
+            clear(&server.channel).await?;
             for c in calls {
                 send(&server.channel, c).await?;
             }
