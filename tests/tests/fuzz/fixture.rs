@@ -42,7 +42,7 @@ pub fn refused(what: &str, s: &Status) -> TestCaseResult {
 /// Fails unless a segment is well formed and every number in it is finite.
 pub fn check_segment(s: &v1::Segment) -> TestCaseResult {
     let d = s.dim as usize;
-    if d == 0 || s.positions.len() % d != 0 {
+    if d == 0 || !s.positions.len().is_multiple_of(d) {
         return Err(TestCaseError::fail(format!("segment of dim {d} with {} positions", s.positions.len())));
     }
     for (what, v) in [("velocities", &s.velocities), ("accelerations", &s.accelerations)] {

@@ -99,13 +99,13 @@ impl Edit {
 fn edit() -> impl Strategy<Value = Edit> {
     let at = any::<usize>();
     prop_oneof![
-        3 => (at.clone(), 0..8u8).prop_map(|(at, bit)| Edit::Flip { at, bit }),
-        2 => (at.clone(), any::<u8>()).prop_map(|(at, byte)| Edit::Insert { at, byte }),
-        2 => (at.clone(), 1..8usize).prop_map(|(at, len)| Edit::Delete { at, len }),
-        2 => (at.clone(), prop_oneof![any::<u8>(), Just(0u8), Just(0xff), Just(0x80)])
+        3 => (at, 0..8u8).prop_map(|(at, bit)| Edit::Flip { at, bit }),
+        2 => (at, any::<u8>()).prop_map(|(at, byte)| Edit::Insert { at, byte }),
+        2 => (at, 1..8usize).prop_map(|(at, len)| Edit::Delete { at, len }),
+        2 => (at, prop_oneof![any::<u8>(), Just(0u8), Just(0xff), Just(0x80)])
             .prop_map(|(at, byte)| Edit::Set { at, byte }),
-        3 => (at.clone(), any::<usize>(), 0..6usize).prop_map(|(at, token, len)| Edit::Token { at, token, len }),
-        1 => (at.clone(), 1..16usize, 1..8usize).prop_map(|(at, len, times)| Edit::Repeat { at, len, times }),
+        3 => (at, any::<usize>(), 0..6usize).prop_map(|(at, token, len)| Edit::Token { at, token, len }),
+        1 => (at, 1..16usize, 1..8usize).prop_map(|(at, len, times)| Edit::Repeat { at, len, times }),
         1 => at.prop_map(|at| Edit::Truncate { at }),
     ]
 }
