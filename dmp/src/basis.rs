@@ -25,9 +25,8 @@ impl GaussianBasis {
         if n < 1 {
             return Err(InvalidInput::new("N", "must be at least 1 (the basis has N + 1 functions)").into());
         }
-        if !(alpha.is_finite() && alpha > 0.0) {
-            return Err(InvalidInput::new("alpha", "must be a finite number greater than zero").into());
-        }
+        // A decay outside the range makes neighbouring centres coincide (a width of 1 / 0) or underflow.
+        crate::ranges::check_range("alpha", alpha, &crate::ranges::ALPHA, "")?;
         let centers: Vec<f64> = (0..=n).map(|i| (-alpha * i as f64 / n as f64).exp()).collect();
         let mut widths: Vec<f64> = centers.windows(2).map(|c| 1.0 / (c[1] - c[0]).powi(2)).collect();
         widths.push(widths[n - 1]);
@@ -74,6 +73,10 @@ impl GaussianBasis {
             } else {
                 *o = 0.0;
             }
+        }
+        if lo > hi {
+            // Not a single finite activation (a phase that is not finite): nothing is active.
+            return 0..0;
         }
         for o in &mut out[lo..hi] {
             *o /= sum;

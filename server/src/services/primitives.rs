@@ -113,6 +113,7 @@ impl PrimitiveServiceImpl {
         let _budget = self.state.compute.admission.batch(s * b * b + s * b * dim as f64, "demonstration")?;
         let store = self.state.store.clone();
         let (robot_id, name) = (req.robot_id, req.name);
+        let limits = limits.clone();
         // On the batch pool: dropping this future (the client cancelled, left or passed its deadline) skips it, or
         // keeps what it learned from being stored.
         let record = self
@@ -123,6 +124,15 @@ impl PrimitiveServiceImpl {
                 let primitive = dmp::learn(&demo, &config).map_err(|e| match e {
                     dmp::DmpError::Learning(reason) => ServerError::invalid("demonstration", reason),
                     other => learn_field(other.into()),
+                })?;
+                // What is stored must be usable: the same ranges as a Put (a demonstration too fast for its
+                // stiffness can need weights beyond them).
+                primitive_from_proto(&dmp_proto::primitive::primitive_to_proto(&primitive), &limits).map_err(|e| {
+                    ServerError::invalid(
+                        "demonstration",
+                        format!("the primitive learned from it is outside the accepted ranges ({e}): use a slower \
+                             demonstration or a larger parameters.k"),
+                    )
                 })?;
                 if job.cancelled() {
                     return Err(ServerError::Cancelled(

@@ -27,9 +27,6 @@ pub fn check_scenario(text: &str) -> TestCaseResult {
     if s.demonstration.t.len() > max_samples || s.dmp.n > max_basis || s.point_samples > max_points {
         return Ok(());
     }
-    if crate::known::tiny_alpha(s.dmp.alpha) {
-        return Ok(());
-    }
     let Ok(prepared) = dmp::scenario::prepare(&s) else { return Ok(()) };
     all_finite("primitive.goal", &prepared.primitive.goal)?;
     for w in &prepared.primitive.weights {

@@ -42,7 +42,7 @@ fn call() -> impl Strategy<Value = PrimitiveCall> {
             }),
         2 => (robot.clone(), prim.clone(), prop_oneof![Just(0u64), 1..4u64, any::<u64>()])
             .prop_map(|(robot_id, name, version)| PrimitiveCall::Get(v1::GetPrimitiveRequest { robot_id, name, version })),
-        1 => robot.clone().prop_map(|robot_id| PrimitiveCall::List(v1::ListPrimitivesRequest { robot_id })),
+        1 => robot.clone().prop_map(|robot_id| PrimitiveCall::List(v1::ListPrimitivesRequest { robot_id, ..Default::default() })),
         1 => (robot, prim).prop_map(|(robot_id, name)| PrimitiveCall::Delete(v1::DeletePrimitiveRequest { robot_id, name })),
     ]
 }

@@ -29,7 +29,6 @@ mod grpc_motion;
 mod grpc_primitives;
 mod grpc_scene;
 mod grpc_session;
-mod known;
 mod mutate;
 mod regressions;
 mod requests;

@@ -1,13 +1,11 @@
-//! Inputs the fuzzer failed on, replayed through the same checks as the targets. The ignored ones are bugs being
-//! fixed elsewhere (see `known`): un-ignore them when their fix lands.
+//! Inputs the fuzzer failed on, replayed through the same checks as the targets.
 
 use crate::files::check_scenario;
 use crate::wire::check_obstacle_payload;
 
 /// The scenario of `scenario_files`' failure: `alpha = 5e-324` makes learning panic in `dmp/src/basis.rs:78`
-/// (slice index `usize::MAX..`). The check skips this input (`known::tiny_alpha`); learn directly to see the panic.
+/// (slice index `usize::MAX..`).
 #[test]
-#[ignore = "known bug (alpha without a lower bound), fixed by the validation-range workstream"]
 fn a_vanishing_alpha_is_refused_not_a_panic() {
     let t: Vec<f64> = (0..13).map(|i| f64::from(i) / 260.0).collect();
     let demo = dmp::Demonstration::new(t, vec![vec![0.0; 3]; 13]).unwrap();
@@ -29,7 +27,6 @@ fn the_vanishing_alpha_scenario_file_reads() {
 /// The obstacle of `obstacle_payloads`' failure: a semi-axis of 5e-324 is accepted, and its potential at its centre
 /// is NaN.
 #[test]
-#[ignore = "known bug (semi-axes without a lower bound), fixed by the validation-range workstream"]
 fn a_vanishing_semi_axis_is_refused() {
     let json = br#"{"id": "a", "center": [0.0, 0.0], "semi_axes": [0.01, 5e-324],
         "rotation": [[0.5289743876335489, -0.8486377891819996], [0.8486377891819996, 0.5289743876335489]],
@@ -38,7 +35,7 @@ fn a_vanishing_semi_axis_is_refused() {
     assert!(dmp_proto::obstacle::obstacle_to_engine(&o).is_err(), "accepted: {o:?}");
 }
 
-/// The same payload through the target's check (which skips the NaN until the range lands).
+/// The same payload through the target's check.
 #[test]
 fn the_vanishing_semi_axis_payload_decodes() {
     let json = br#"{"center": [0.0, 0.0], "semi_axes": [0.01, 5e-324], "velocity": [1e300, 0]}"#;

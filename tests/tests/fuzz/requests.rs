@@ -105,6 +105,7 @@ pub fn execute_request() -> BoxedStrategy<v1::ExecuteRequest> {
                 max_duration_s,
                 integration_step_s: step,
                 integration_tolerance: tol,
+                take_over: false,
             }
         })
         .boxed()
@@ -124,6 +125,7 @@ pub fn group_request() -> BoxedStrategy<v1::ExecuteGroupRequest> {
                 tau,
                 integration_step_s: step,
                 integration_tolerance: tol,
+                take_over: false,
             }
         })
         .boxed()
