@@ -10,6 +10,7 @@ use dmp_proto::keys::check_name;
 
 use crate::cell::Cell;
 use crate::error::ServerError;
+use crate::staleness::SceneConfig;
 
 /// Every cell's scene, by name. Cheap to clone.
 #[derive(Debug, Clone)]
@@ -17,6 +18,8 @@ pub struct Cells {
     default: Arc<str>,
     max_cells: usize,
     max_obstacles: usize,
+    /// Each cell's staleness rule is read from here when it is created.
+    scene: Arc<SceneConfig>,
     /// The lock is held only to look up or insert, never across an await.
     map: Arc<Mutex<HashMap<Arc<str>, Cell>>>,
 }
@@ -26,8 +29,24 @@ impl Cells {
     /// `max_obstacles`, and there are at most `max_cells`.
     pub fn new(default: &str, max_cells: usize, max_obstacles: usize) -> Result<Self, ServerError> {
         check_name("cell", default)?;
-        let cells =
-            Self { default: default.into(), max_cells: max_cells.max(1), max_obstacles, map: Arc::default() };
+        Self::with_scene(default, max_cells, max_obstacles, SceneConfig::default())
+    }
+
+    /// [`Cells::new`] whose cells' obstacles go stale by `scene` (`[scene]` of the configuration).
+    pub fn with_scene(
+        default: &str,
+        max_cells: usize,
+        max_obstacles: usize,
+        scene: SceneConfig,
+    ) -> Result<Self, ServerError> {
+        check_name("cell", default)?;
+        let cells = Self {
+            default: default.into(),
+            max_cells: max_cells.max(1),
+            max_obstacles,
+            scene: Arc::new(scene),
+            map: Arc::default(),
+        };
         cells.get("")?;
         Ok(cells)
     }
@@ -53,7 +72,7 @@ impl Cells {
             )));
         }
         let name: Arc<str> = name.into();
-        let scene = Cell::new(name.clone(), self.max_obstacles);
+        let scene = Cell::new(name.clone(), self.max_obstacles).with_staleness(self.scene.for_cell(&name));
         map.insert(name, scene.clone());
         Ok(scene)
     }

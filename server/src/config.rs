@@ -5,6 +5,8 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
+use crate::staleness::SceneConfig;
+
 /// Everything the server needs to start.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -21,6 +23,8 @@ pub struct Config {
     pub defaults: Defaults,
     /// Bounds on requests and resources.
     pub limits: Limits,
+    /// Obstacles that nobody updates any more ([`crate::staleness`]).
+    pub scene: SceneConfig,
 }
 
 impl Default for Config {
@@ -32,6 +36,7 @@ impl Default for Config {
             zenoh: ZenohConfig::default(),
             defaults: Defaults::default(),
             limits: Limits::default(),
+            scene: SceneConfig::default(),
         }
     }
 }

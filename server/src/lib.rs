@@ -11,6 +11,7 @@
 //! | one cell: its obstacles (versioned) and its robots' states | [`cell`] |
 //! | shared state of the services | [`state`] |
 //! | the embedded store of primitives (redb) | [`store`] |
+//! | obstacles nobody updates any more: stale, dropped, or holding the robots | [`staleness`] |
 //! | robots' states: local scene and `dmp/<cell>/robots/<id>/state` | [`robots`] |
 //! | the Zenoh session and the subscribers that feed the scene | [`zenoh_bridge`] |
 //! | the gRPC services, one file each | [`services`] |
@@ -28,6 +29,7 @@ pub mod executor;
 pub mod robots;
 pub mod run;
 pub mod services;
+pub mod staleness;
 pub mod state;
 pub mod store;
 pub mod write_batching;

@@ -29,7 +29,7 @@ use crate::services::server::ServerServiceImpl;
 use crate::state::AppState;
 use crate::store::Store;
 use crate::write_batching::BatchedWrites;
-use crate::zenoh_bridge::{ZenohBridge, open_session};
+use crate::zenoh_bridge::{ZenohBridge, open_session, reachability};
 
 /// How long a shutdown waits for connections to drain before closing them.
 const DRAIN_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(5);
@@ -84,7 +84,9 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
     let store = tokio::task::spawn_blocking(move || Store::open(&dir))
         .await
         .map_err(|e| ServerError::Internal(e.to_string()))??;
-    let cells = Cells::new(&config.cell, config.limits.max_cells, config.limits.max_obstacles)?;
+    config.scene.check()?;
+    let cells =
+        Cells::with_scene(&config.cell, config.limits.max_cells, config.limits.max_obstacles, config.scene.clone())?;
     let shutdown = CancellationToken::new();
 
     let (session, bridge, robots, zenoh_locators) = if config.zenoh.disabled {
@@ -118,6 +120,11 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
     health.set_serving::<MotionServiceServer<MotionServiceImpl>>().await;
     health.set_serving::<ServerServiceServer<ServerServiceImpl>>().await;
     health.set_service_status("", tonic_health::ServingStatus::Serving).await;
+    // The scene serves only while the configured Zenoh routers or peers are reachable.
+    if let Some(s) = &session {
+        let z = &state.config.zenoh;
+        reachability::spawn(s, &z.connect, z.mode == "client", health.clone(), shutdown.clone()).await?;
+    }
     let reflection = tonic_reflection::server::Builder::configure()
         .register_encoded_file_descriptor_set(dmp_proto::FILE_DESCRIPTOR_SET)
         .build_v1()

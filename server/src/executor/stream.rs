@@ -19,6 +19,7 @@ use super::segments::{Batch, FirstPoint, member_segments, publish_states};
 use super::served_run::ServedRun;
 use crate::cell::{Cell, ObstacleSet, SeenRobot};
 use crate::error::ServerError;
+use crate::staleness::StaleGuard;
 use crate::state::AppState;
 use crate::write_batching::Urgency;
 
@@ -72,6 +73,7 @@ pub async fn run_stream(
     run.execution.set_end_time(cfg.max_duration);
     let ids: Vec<String> = run.execution.members().iter().map(|m| m.id.clone()).collect();
     let mut producer = Producer::new(&app, &cell, &cfg, &tx, control);
+    producer.stale = StaleGuard::new(cell.staleness(), run.ignore_scene);
     let result = producer.produce(&mut run).await;
     for id in &ids {
         app.robots.retire(&cell, id).await;
@@ -119,6 +121,8 @@ struct Producer<'a> {
     finished: Option<(f64, &'static str)>,
     /// Warnings not yet sent: they go with the next segment (every member's, for a group).
     warnings: Vec<v1::Warning>,
+    /// Flags the segments computed with stale obstacles, and holds the robots under the `stop` policy.
+    stale: StaleGuard,
 }
 
 impl<'a> Producer<'a> {
@@ -145,6 +149,7 @@ impl<'a> Producer<'a> {
             sequence: 0,
             finished: None,
             warnings: Vec::new(),
+            stale: StaleGuard::new(cell.staleness(), false),
         }
     }
 
@@ -159,6 +164,8 @@ impl<'a> Producer<'a> {
         let snapshot = self.scene_rx.borrow_and_update().clone();
         self.read_cellmates(run);
         run.apply_scene(&snapshot, &self.others, self.wall_of(run.execution.time()))?;
+        self.stale.observe(&snapshot, &mut self.warnings);
+        self.stale.enforce(&mut run.execution);
         let mut wake = Wake::default();
         loop {
             let changes_plan = self.apply(run, std::mem::take(&mut wake)).await?;
@@ -245,10 +252,12 @@ impl<'a> Producer<'a> {
         if wake.scene_changed {
             let snapshot = self.scene_rx.borrow_and_update().clone();
             run.apply_scene(&snapshot, &self.others, now)?;
+            self.stale.observe(&snapshot, &mut self.warnings);
             debug!(version = snapshot.version, t = run.execution.time(), "scene applied");
         } else {
             run.set_cellmates(&self.others, now)?;
         }
+        self.stale.note_commands(&wake.commands);
         let e = &mut run.execution;
         for c in wake.commands {
             match c {
@@ -260,6 +269,7 @@ impl<'a> Producer<'a> {
                 Control::State(_) => {}
             }
         }
+        self.stale.enforce(e);
         Ok(changes_plan)
     }
 
@@ -296,6 +306,9 @@ impl<'a> Producer<'a> {
             let outcome = stretch.outcome;
             let first = first_of_wake.then(|| FirstPoint::of(&stretch, e.dim()));
             let mut batch = member_segments(run, stretch, self.sequence, segment_status(outcome), start_unix);
+            for segment in &mut batch {
+                segment.scene_stale = self.stale.is_stale();
+            }
             if !self.warnings.is_empty() {
                 for segment in &mut batch {
                     segment.warnings.clone_from(&self.warnings);
