@@ -197,11 +197,7 @@ impl ObstaclePublisher {
         check_name("id", id)?;
         let key = obstacle_key(&self.cell, id);
         self.remember(&key, None);
-        self.session
-            .delete(key)
-            .congestion_control(CongestionControl::Block)
-            .await
-            .map_err(zerr("delete"))
+        self.session.delete(key).congestion_control(CongestionControl::Block).await.map_err(zerr("delete"))
     }
 
     /// Closes the session gracefully (what was put is sent first).
@@ -313,8 +309,10 @@ mod tests {
         let (server, locator) = subscriber_peer().await;
         let mut publisher = ObstaclePublisher::open("cellQ", &[locator], &[]).await.unwrap();
         let spec = |id: &str| -> ObstacleSpec {
-            serde_json::from_value(serde_json::json!({"id": id, "center": [0.5, 0.5], "semi_axes": [0.2, 0.1]}))
-                .unwrap()
+            serde_json::from_value(
+                serde_json::json!({"id": id, "center": [0.5, 0.5], "semi_axes": [0.2, 0.1]}),
+            )
+            .unwrap()
         };
         publisher.put_spec(&spec("a"), 0.0).await.unwrap();
         publisher.put_spec(&spec("b"), 0.0).await.unwrap();

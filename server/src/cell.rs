@@ -181,7 +181,8 @@ impl Cell {
             for (id, o) in &snap.obstacles {
                 if o.expires_unix_s.is_some_and(|e| e <= now_unix_s) {
                     expired.push(id.clone());
-                } else if !o.stale && stale_after.is_some_and(|after| now_unix_s - o.received_unix_s > after) {
+                } else if !o.stale && stale_after.is_some_and(|after| now_unix_s - o.received_unix_s > after)
+                {
                     if drop_stale { expired.push(id.clone()) } else { stale.push(id.clone()) }
                 }
             }

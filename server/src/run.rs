@@ -85,8 +85,12 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         .await
         .map_err(|e| ServerError::Internal(e.to_string()))??;
     config.scene.check()?;
-    let cells =
-        Cells::with_scene(&config.cell, config.limits.max_cells, config.limits.max_obstacles, config.scene.clone())?;
+    let cells = Cells::with_scene(
+        &config.cell,
+        config.limits.max_cells,
+        config.limits.max_obstacles,
+        config.scene.clone(),
+    )?;
     let shutdown = CancellationToken::new();
 
     let (session, bridge, robots, zenoh_locators) = if config.zenoh.disabled {

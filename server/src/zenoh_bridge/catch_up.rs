@@ -31,7 +31,8 @@ pub(super) async fn spawn(
     updater: SceneUpdater,
     stop: CancellationToken,
 ) -> Result<JoinHandle<()>, ServerError> {
-    let zenoh_err = |e: zenoh::Error| ServerError::Internal(format!("zenoh: cannot declare the querier: {e}"));
+    let zenoh_err =
+        |e: zenoh::Error| ServerError::Internal(format!("zenoh: cannot declare the querier: {e}"));
     let querier = session
         .declare_querier(format!("{}/**", obstacles_of(EVERY_CELL)))
         .target(QueryTarget::All)

@@ -96,7 +96,8 @@ pub async fn spawn(
         addresses.push(endpoint.address().as_str().to_string());
     }
     let targets = Targets { addresses, need_all: !client_mode };
-    let zenoh_err = |e: zenoh::Error| ServerError::Internal(format!("zenoh: cannot listen to link events: {e}"));
+    let zenoh_err =
+        |e: zenoh::Error| ServerError::Internal(format!("zenoh: cannot listen to link events: {e}"));
     let links = session.info().link_events_listener().await.map_err(zenoh_err)?;
     let transports = session.info().transport_events_listener().await.map_err(zenoh_err)?;
     let mut serving = update(session, &targets, &health, None, &Gone::Nothing).await;
