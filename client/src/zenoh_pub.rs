@@ -50,6 +50,9 @@ pub fn publisher_options(connect: &[String], listen: &[String]) -> SessionOption
     }
 }
 
+/// The latest encoding and payload put on each key.
+type Latest = BTreeMap<String, (Encoding, Vec<u8>)>;
+
 /// A Zenoh peer that publishes the obstacles of one cell.
 pub struct ObstaclePublisher {
     cell: String,
@@ -59,7 +62,7 @@ pub struct ObstaclePublisher {
     probe: Publisher<'static>,
     /// The latest payload put on each key (deletes remove them), for [`ObstaclePublisher::serve_latest`]. The lock
     /// is held to update or copy, never across an await.
-    latest: Arc<Mutex<BTreeMap<String, (Encoding, Vec<u8>)>>>,
+    latest: Arc<Mutex<Latest>>,
     /// Answers queries with `latest`, once [`ObstaclePublisher::serve_latest`] was called.
     queryable: Option<Queryable<()>>,
 }
@@ -209,7 +212,7 @@ impl ObstaclePublisher {
 }
 
 /// Replies to `query` with every remembered payload whose key it asks for (a copy is taken under the lock).
-fn reply_latest(latest: &Mutex<BTreeMap<String, (Encoding, Vec<u8>)>>, query: &Query) {
+fn reply_latest(latest: &Mutex<Latest>, query: &Query) {
     let asked: Vec<(KeyExpr<'static>, Encoding, Vec<u8>)> = {
         let map = latest.lock().unwrap_or_else(|p| p.into_inner());
         map.iter()
