@@ -10,8 +10,9 @@
 //! not asked again: it sends its obstacles anyway when it (re)starts.
 //!
 //! Tested end to end with perception nodes the server connects to directly (`tests/tests/server/stale_scene.rs`).
-//! Not yet working: a perception node that joins through a router after the server did was not queried in a test
-//! (its queryable did not turn the server's querier's matching status on, or the query did not reach it).
+//! Not yet working: a perception node that joins through a router after the server did, or that connects to the
+//! server itself, was not queried in tests: its queryable answers a plain `get`, but does not turn the querier's
+//! matching status on, which is what triggers the query here.
 
 use std::time::Duration;
 
