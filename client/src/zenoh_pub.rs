@@ -9,8 +9,15 @@
 //! [`ObstaclePublisher::wait_for_subscriber`] once after opening, before the first put. Puts use congestion control
 //! `Block` and [`ObstaclePublisher::close`] closes the session gracefully, so a short-lived program loses nothing.
 //! `zenoh::open` needs tokio's multi-threaded runtime.
+//!
+//! A server that starts (or reconnects) after an obstacle was published asks for the current obstacles with a
+//! Zenoh query on `dmp/*/obstacles/**`. [`ObstaclePublisher::serve_latest`] answers it: the publisher keeps the
+//! latest payload of every key it put (a delete forgets it) and replies with those the query asks for. The other
+//! way is a zenohd storage of `dmp/*/obstacles/**` (see the README).
 
+use std::collections::BTreeMap;
 use std::fmt;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use dmp::scenario::ObstacleSpec;
@@ -18,9 +25,12 @@ use dmp_proto::keys::{check_name, obstacle_key, obstacles_of};
 use dmp_proto::obstacle_json::JsonObstacle;
 use dmp_proto::zenoh_session::{SessionOptions, session_config};
 use dmp_proto::{codec, v1};
+use zenoh::Wait;
 use zenoh::bytes::Encoding;
+use zenoh::key_expr::KeyExpr;
 use zenoh::pubsub::Publisher;
 use zenoh::qos::CongestionControl;
+use zenoh::query::{Query, Queryable};
 
 use crate::error::ClientError;
 
@@ -40,6 +50,9 @@ pub fn publisher_options(connect: &[String], listen: &[String]) -> SessionOption
     }
 }
 
+/// The latest encoding and payload put on each key.
+type Latest = BTreeMap<String, (Encoding, Vec<u8>)>;
+
 /// A Zenoh peer that publishes the obstacles of one cell.
 pub struct ObstaclePublisher {
     cell: String,
@@ -47,6 +60,11 @@ pub struct ObstaclePublisher {
     /// Declared on `dmp/<cell>/obstacles/*` and never put on: its matching status says whether a subscriber of the
     /// cell's obstacles is known.
     probe: Publisher<'static>,
+    /// The latest payload put on each key (deletes remove them), for [`ObstaclePublisher::serve_latest`]. The lock
+    /// is held to update or copy, never across an await.
+    latest: Arc<Mutex<Latest>>,
+    /// Answers queries with `latest`, once [`ObstaclePublisher::serve_latest`] was called.
+    queryable: Option<Queryable<()>>,
 }
 
 impl fmt::Debug for ObstaclePublisher {
@@ -70,7 +88,7 @@ impl ObstaclePublisher {
         let session = zenoh::open(config).await.map_err(zerr("opening the session"))?;
         let probe =
             session.declare_publisher(obstacles_of(cell)).await.map_err(zerr("declaring the publisher"))?;
-        Ok(Self { cell: cell.into(), session, probe })
+        Ok(Self { cell: cell.into(), session, probe, latest: Arc::default(), queryable: None })
     }
 
     /// The cell.
@@ -81,6 +99,31 @@ impl ObstaclePublisher {
     /// The session (e.g. to read its locators).
     pub fn session(&self) -> &zenoh::Session {
         &self.session
+    }
+
+    /// Answers queries on `dmp/*/obstacles/**` (a server catching up after a start or a reconnect) with the latest
+    /// payload of every obstacle this publisher put and did not delete, before and after this call. Idempotent.
+    pub async fn serve_latest(&mut self) -> Result<(), ClientError> {
+        if self.queryable.is_some() {
+            return Ok(());
+        }
+        let latest = self.latest.clone();
+        let queryable = self
+            .session
+            .declare_queryable(format!("{}/**", obstacles_of(dmp_proto::keys::EVERY_CELL)))
+            .callback(move |query| reply_latest(&latest, &query))
+            .await
+            .map_err(zerr("declaring the queryable"))?;
+        self.queryable = Some(queryable);
+        Ok(())
+    }
+
+    fn remember(&self, key: &str, latest: Option<(Encoding, Vec<u8>)>) {
+        let mut map = self.latest.lock().unwrap_or_else(|p| p.into_inner());
+        match latest {
+            Some(v) => map.insert(key.to_string(), v),
+            None => map.remove(key),
+        };
     }
 
     /// Waits until a subscriber of the cell's obstacles (the server) is known, at most `timeout`.
@@ -112,8 +155,10 @@ impl ObstaclePublisher {
         check_name("id", id)?;
         let bytes =
             serde_json::to_vec(obstacle).map_err(|e| ClientError::argument("obstacle", e.to_string()))?;
+        let key = obstacle_key(&self.cell, id);
+        self.remember(&key, Some((Encoding::APPLICATION_JSON, bytes.clone())));
         self.session
-            .put(obstacle_key(&self.cell, id), bytes)
+            .put(key, bytes)
             .encoding(Encoding::APPLICATION_JSON)
             .congestion_control(CongestionControl::Block)
             .await
@@ -140,8 +185,10 @@ impl ObstaclePublisher {
     pub async fn put_proto_in(&self, cell: &str, obstacle: &v1::Obstacle) -> Result<(), ClientError> {
         check_name("cell", cell)?;
         check_name("id", &obstacle.id)?;
+        let (key, bytes) = (obstacle_key(cell, &obstacle.id), codec::encode(obstacle));
+        self.remember(&key, Some((Encoding::from(codec::PROTOBUF_ENCODING), bytes.clone())));
         self.session
-            .put(obstacle_key(cell, &obstacle.id), codec::encode(obstacle))
+            .put(key, bytes)
             .encoding(Encoding::from(codec::PROTOBUF_ENCODING))
             .congestion_control(CongestionControl::Block)
             .await
@@ -151,17 +198,33 @@ impl ObstaclePublisher {
     /// Removes the obstacle `id`.
     pub async fn delete(&self, id: &str) -> Result<(), ClientError> {
         check_name("id", id)?;
-        self.session
-            .delete(obstacle_key(&self.cell, id))
-            .congestion_control(CongestionControl::Block)
-            .await
-            .map_err(zerr("delete"))
+        let key = obstacle_key(&self.cell, id);
+        self.remember(&key, None);
+        self.session.delete(key).congestion_control(CongestionControl::Block).await.map_err(zerr("delete"))
     }
 
     /// Closes the session gracefully (what was put is sent first).
     pub async fn close(self) -> Result<(), ClientError> {
         drop(self.probe);
+        drop(self.queryable);
         self.session.close().await.map_err(zerr("close"))
+    }
+}
+
+/// Replies to `query` with every remembered payload whose key it asks for (a copy is taken under the lock).
+fn reply_latest(latest: &Mutex<Latest>, query: &Query) {
+    let asked: Vec<(KeyExpr<'static>, Encoding, Vec<u8>)> = {
+        let map = latest.lock().unwrap_or_else(|p| p.into_inner());
+        map.iter()
+            .filter_map(|(key, (encoding, bytes))| {
+                let key = KeyExpr::try_from(key.clone()).ok()?;
+                query.key_expr().intersects(&key).then(|| (key, encoding.clone(), bytes.clone()))
+            })
+            .collect()
+    };
+    for (key, encoding, bytes) in asked {
+        // A reply fails only when the session is closing: there is no one left to answer.
+        let _ = query.reply(key, bytes).encoding(encoding).wait();
     }
 }
 
@@ -242,6 +305,58 @@ mod tests {
         assert!(e.is_bad_input() && e.to_string().contains("id"), "{e}");
         publisher.close().await.unwrap();
         other.close().await.unwrap();
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn serve_latest_answers_queries_with_what_was_put_and_not_deleted() {
+        // The querying side connects to the publisher (the direction the server's catch-up is tested in).
+        let config = session_config(&SessionOptions::loopback_peer(Vec::new())).unwrap();
+        let mut publisher = ObstaclePublisher::open_with("cellQ", config).await.unwrap();
+        let locator = publisher.session().info().locators().await[0].to_string();
+        let server = zenoh::open(session_config(&SessionOptions::loopback_peer(vec![locator])).unwrap())
+            .await
+            .unwrap();
+        let spec = |id: &str| -> ObstacleSpec {
+            serde_json::from_value(
+                serde_json::json!({"id": id, "center": [0.5, 0.5], "semi_axes": [0.2, 0.1]}),
+            )
+            .unwrap()
+        };
+        publisher.put_spec(&spec("a"), 0.0).await.unwrap();
+        publisher.put_spec(&spec("b"), 0.0).await.unwrap();
+        publisher.serve_latest().await.unwrap();
+        let proto = JsonObstacle { spec: spec("c"), margin: 0.0, ttl_s: 0.0 }.to_proto();
+        publisher.put_proto_in("other", &proto).await.unwrap();
+        publisher.delete("b").await.unwrap();
+
+        // Polls until the queryable is known to the querying side (an empty answer before).
+        let mut keys = Vec::new();
+        tokio::time::timeout(WAIT, async {
+            while keys.is_empty() {
+                let replies = server.get("dmp/*/obstacles/**").await.unwrap();
+                while let Ok(r) = replies.recv_async().await {
+                    let s = r.result().unwrap();
+                    keys.push((s.key_expr().to_string(), s.encoding().to_string()));
+                }
+            }
+        })
+        .await
+        .unwrap();
+        keys.sort();
+        assert_eq!(
+            keys,
+            [
+                (obstacle_key("cellQ", "a"), Encoding::APPLICATION_JSON.to_string()),
+                (obstacle_key("other", "c"), codec::PROTOBUF_ENCODING.to_string()),
+            ]
+        );
+        // A query of one cell gets that cell's only.
+        let replies = tokio::time::timeout(WAIT, server.get("dmp/other/obstacles/*")).await.unwrap().unwrap();
+        let r = tokio::time::timeout(WAIT, replies.recv_async()).await.unwrap().unwrap();
+        assert_eq!(r.result().unwrap().key_expr().as_str(), obstacle_key("other", "c"));
+        assert!(tokio::time::timeout(WAIT, replies.recv_async()).await.unwrap().is_err(), "one reply");
+        publisher.close().await.unwrap();
+        server.close().await.unwrap();
     }
 
     #[tokio::test(flavor = "multi_thread")]

@@ -11,6 +11,7 @@ use tokio::sync::watch;
 
 use crate::error::ServerError;
 use crate::memory::{MemoryBudget, Reservation};
+use crate::staleness::{StalePolicy, Staleness};
 
 /// An obstacle as the cell holds it.
 #[derive(Debug, Clone)]
@@ -25,6 +26,9 @@ pub struct ReceivedObstacle {
     pub expires_unix_s: Option<f64>,
     /// Its estimated memory ([`obstacle_bytes`]).
     pub bytes: usize,
+    /// Not updated within the cell's `stale_after_s`: frozen where it was then (its velocity zeroed), flagged
+    /// until the next update ([`crate::staleness`]).
+    pub stale: bool,
 }
 
 /// The estimated memory of an obstacle in a scene: the message and the engine's copy of it (each about its encoded
@@ -56,6 +60,13 @@ pub struct ObstacleSet {
     pub bytes: usize,
 }
 
+impl ObstacleSet {
+    /// The ids of the stale obstacles, in order.
+    pub fn stale_ids(&self) -> impl Iterator<Item = &str> {
+        self.obstacles.values().filter(|o| o.stale).map(|o| o.proto.id.as_str())
+    }
+}
+
 /// A robot seen by the cell (its last published state).
 #[derive(Debug, Clone)]
 pub struct SeenRobot {
@@ -80,6 +91,7 @@ pub struct Cell {
     memory: Arc<Mutex<Reservation>>,
     /// Half-width of the workspace box every obstacle's centre must lie in, metres.
     workspace_m: f64,
+    staleness: Staleness,
 }
 
 impl Cell {
@@ -107,8 +119,21 @@ impl Cell {
             max_bytes,
             memory: Arc::new(Mutex::new(memory.empty())),
             workspace_m,
+            staleness: Staleness::default(),
         }
     }
+
+    /// The same cell with its obstacles going stale by `staleness` (default: never).
+    pub fn with_staleness(mut self, staleness: Staleness) -> Self {
+        self.staleness = staleness;
+        self
+    }
+
+    /// The cell's staleness rule.
+    pub fn staleness(&self) -> Staleness {
+        self.staleness
+    }
+
     /// Whether nothing holds or uses the cell but the map of cells: no obstacle, no robot, no stream and no
     /// subscriber (every stream and watch holds a clone or a receiver).
     pub(crate) fn is_unused(&self) -> bool {
@@ -156,8 +181,14 @@ impl Cell {
             .map_err(|e| e.within("obstacle"))?;
         let expires_unix_s = (obstacle.ttl_s > 0.0).then_some(now_unix_s + obstacle.ttl_s);
         let bytes = obstacle_bytes(&obstacle);
-        let entry =
-            ReceivedObstacle { proto: obstacle, engine, received_unix_s: now_unix_s, expires_unix_s, bytes };
+        let entry = ReceivedObstacle {
+            proto: obstacle,
+            engine,
+            received_unix_s: now_unix_s,
+            expires_unix_s,
+            bytes,
+            stale: false,
+        };
         let mut result = Ok(0);
         self.tx.send_if_modified(|snap| {
             let old = snap.obstacles.get(&entry.proto.id).map(|o| o.bytes);
@@ -212,17 +243,24 @@ impl Cell {
         out
     }
 
-    /// Removes the obstacles whose time to live has passed; returns how many.
+    /// Removes the obstacles whose time to live has passed, and handles those not updated within the cell's
+    /// `stale_after_s` by its policy (dropped, or frozen and flagged); returns how many changed.
     pub fn expire(&self, now_unix_s: f64) -> usize {
+        let stale_after = (!self.staleness.is_off()).then_some(self.staleness.after_s);
+        let drop_stale = self.staleness.policy == StalePolicy::Drop;
         let mut n = 0;
         self.tx.send_if_modified(|snap| {
-            let expired: Vec<String> = snap
-                .obstacles
-                .iter()
-                .filter(|(_, o)| o.expires_unix_s.is_some_and(|e| e <= now_unix_s))
-                .map(|(id, _)| id.clone())
-                .collect();
-            if expired.is_empty() {
+            let mut expired = Vec::new();
+            let mut stale = Vec::new();
+            for (id, o) in &snap.obstacles {
+                if o.expires_unix_s.is_some_and(|e| e <= now_unix_s) {
+                    expired.push(id.clone());
+                } else if !o.stale && stale_after.is_some_and(|after| now_unix_s - o.received_unix_s > after)
+                {
+                    if drop_stale { expired.push(id.clone()) } else { stale.push(id.clone()) }
+                }
+            }
+            if expired.is_empty() && stale.is_empty() {
                 return false;
             }
             let s = Arc::make_mut(snap);
@@ -232,8 +270,13 @@ impl Cell {
                     let _ = self.account(o.bytes, 0, id);
                 }
             }
+            for id in &stale {
+                if let Some(o) = s.obstacles.get_mut(id) {
+                    freeze(o, now_unix_s);
+                }
+            }
             s.version += 1;
-            n = expired.len();
+            n = expired.len() + stale.len();
             true
         });
         n
@@ -279,5 +322,65 @@ impl Cell {
                 .filter(|r| r.state.robot_id != robot_id && now_unix_s - r.state.stamp_unix_s <= max_age_s)
                 .cloned(),
         );
+    }
+}
+
+/// Flags `o` stale and stops it where it is at `now_unix_s`: with no fresh data its velocity is a guess that would
+/// carry it away forever.
+fn freeze(o: &mut ReceivedObstacle, now_unix_s: f64) {
+    let mut proto = o.proto_at(now_unix_s);
+    proto.velocity.iter_mut().for_each(|v| *v = 0.0);
+    // The same shape at a valid centre: it converted before, so it converts again.
+    if let Ok(engine) = dmp_proto::obstacle::obstacle_to_engine(&proto) {
+        o.engine = engine;
+        o.proto = proto;
+        o.received_unix_s = now_unix_s;
+    }
+    o.stale = true;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn moving(id: &str, ttl_s: f64) -> v1::Obstacle {
+        v1::Obstacle {
+            id: id.into(),
+            shape: Some(v1::obstacle::Shape::Superquadric(v1::Superquadric {
+                semi_axes: vec![0.1, 0.1],
+                exponents: vec![1.0, 1.0],
+            })),
+            center: vec![0.0, 0.0],
+            velocity: vec![1.0, 0.0],
+            ttl_s,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn stale_obstacles_are_frozen_and_flagged_or_dropped_and_an_update_refreshes_them() {
+        let keep = Cell::new("c", 10).with_staleness(Staleness { after_s: 1.0, policy: StalePolicy::Keep });
+        keep.put(moving("a", 0.0), 100.0).unwrap();
+        keep.put(moving("b", 0.0), 100.8).unwrap();
+        assert_eq!(keep.expire(101.0), 0, "not stale yet");
+        assert_eq!(keep.expire(101.5), 1);
+        let snap = keep.snapshot();
+        assert_eq!(snap.stale_ids().collect::<Vec<_>>(), ["a"]);
+        // Frozen where it was when it went stale: it drifts no more.
+        let a = &snap.obstacles["a"];
+        assert_eq!(a.proto_at(1000.0).center, vec![1.5, 0.0]);
+        assert_eq!(keep.expire(101.6), 0, "flagged once");
+        keep.put(moving("a", 0.0), 102.0).unwrap();
+        assert_eq!(keep.snapshot().stale_ids().count(), 0, "an update makes it fresh");
+
+        let drop = Cell::new("c", 10).with_staleness(Staleness { after_s: 1.0, policy: StalePolicy::Drop });
+        drop.put(moving("a", 0.0), 100.0).unwrap();
+        drop.put(moving("t", 0.5), 100.0).unwrap();
+        assert_eq!(drop.expire(101.5), 2, "the ttl and the stale one");
+        assert!(drop.snapshot().obstacles.is_empty());
+
+        let off = Cell::new("c", 10);
+        off.put(moving("a", 0.0), 100.0).unwrap();
+        assert_eq!(off.expire(1.0e6), 0, "off: it lives until deleted");
     }
 }

@@ -13,6 +13,7 @@ use crate::cell::Cell;
 use crate::config::Limits;
 use crate::error::ServerError;
 use crate::memory::MemoryBudget;
+use crate::staleness::SceneConfig;
 
 /// Every cell's scene, by name. Cheap to clone.
 #[derive(Debug, Clone)]
@@ -24,6 +25,8 @@ pub struct Cells {
     memory: MemoryBudget,
     /// Half-width of the workspace box every obstacle's centre must lie in, metres.
     workspace_m: f64,
+    /// Each cell's staleness rule is read from here when it is created.
+    scene: Arc<SceneConfig>,
     /// The lock is held only to look up or insert, never across an await.
     map: Arc<Mutex<HashMap<Arc<str>, Cell>>>,
 }
@@ -33,12 +36,18 @@ impl Cells {
     /// `max_obstacles`, and there are at most `max_cells`.
     pub fn new(default: &str, max_cells: usize, max_obstacles: usize) -> Result<Self, ServerError> {
         let limits = Limits { max_cells, max_obstacles, max_scene_bytes: usize::MAX, ..Limits::default() };
-        Self::with_limits(default, &limits, MemoryBudget::new(usize::MAX))
+        Self::with_limits(default, &limits, MemoryBudget::new(usize::MAX), SceneConfig::default())
     }
 
     /// The cells of a server whose default cell is `default` (created now), bounded by `limits` (cells, obstacles
-    /// and bytes per scene); the scenes reserve their memory from `memory`.
-    pub fn with_limits(default: &str, limits: &Limits, memory: MemoryBudget) -> Result<Self, ServerError> {
+    /// and bytes per scene); the scenes reserve their memory from `memory`, and their obstacles go stale by
+    /// `scene` (`[scene]` of the configuration).
+    pub fn with_limits(
+        default: &str,
+        limits: &Limits,
+        memory: MemoryBudget,
+        scene: SceneConfig,
+    ) -> Result<Self, ServerError> {
         check_name("cell", default)?;
         let cells = Self {
             default: default.into(),
@@ -47,6 +56,7 @@ impl Cells {
             max_scene_bytes: limits.max_scene_bytes,
             memory,
             workspace_m: limits.workspace_m,
+            scene: Arc::new(scene),
             map: Arc::default(),
         };
         cells.get("")?;
@@ -77,8 +87,14 @@ impl Cells {
             )));
         }
         let name: Arc<str> = name.into();
-        let scene =
-            Cell::with_budget(name.clone(), self.max_obstacles, self.max_scene_bytes, &self.memory, self.workspace_m);
+        let scene = Cell::with_budget(
+            name.clone(),
+            self.max_obstacles,
+            self.max_scene_bytes,
+            &self.memory,
+            self.workspace_m,
+        )
+        .with_staleness(self.scene.for_cell(&name));
         map.insert(name, scene.clone());
         Ok(scene)
     }
@@ -186,7 +202,7 @@ mod tests {
     fn scenes_are_bounded_in_bytes_per_cell_and_across_cells() {
         let limits = Limits { max_scene_bytes: 3_000, max_server_bytes: 5_000, ..Limits::default() };
         let memory = MemoryBudget::new(limits.max_server_bytes);
-        let cells = Cells::with_limits("home", &limits, memory.clone()).unwrap();
+        let cells = Cells::with_limits("home", &limits, memory.clone(), Default::default()).unwrap();
         let o = |id: &str| dmp_proto::v1::Obstacle {
             id: id.into(),
             shape: Some(dmp_proto::v1::obstacle::Shape::Superquadric(dmp_proto::v1::Superquadric {

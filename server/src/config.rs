@@ -5,6 +5,8 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
+use crate::staleness::SceneConfig;
+
 /// Everything the server needs to start.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -23,6 +25,8 @@ pub struct Config {
     pub limits: Limits,
     /// The compute threads and what they may be asked to do.
     pub compute: ComputeConfig,
+    /// Obstacles that nobody updates any more ([`crate::staleness`]).
+    pub scene: SceneConfig,
 }
 
 impl Default for Config {
@@ -35,6 +39,7 @@ impl Default for Config {
             defaults: Defaults::default(),
             limits: Limits::default(),
             compute: ComputeConfig::default(),
+            scene: SceneConfig::default(),
         }
     }
 }

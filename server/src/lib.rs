@@ -11,6 +11,7 @@
 //! | one cell: its obstacles (versioned) and its robots' states | [`cell`] |
 //! | shared state of the services | [`state`] |
 //! | the embedded store of primitives (redb) | [`store`] |
+//! | obstacles nobody updates any more: stale, dropped, or holding the robots | [`staleness`] |
 //! | robots' states: local scene and `dmp/<cell>/robots/<id>/state` | [`robots`] |
 //! | which robot states from outside a cell takes (stamp, workspace, speed) | [`state_admission`] |
 //! | one stream per executing robot of a cell, and taking over | [`executing`] |
@@ -37,6 +38,7 @@ pub mod memory;
 pub mod robots;
 pub mod run;
 pub mod services;
+pub mod staleness;
 pub mod state;
 pub mod state_admission;
 pub mod store;

@@ -34,7 +34,7 @@ use crate::state_admission::StateAdmission;
 use crate::store::Store;
 use crate::stream_permits::StreamPermits;
 use crate::write_batching::{BatchedConnectInfo, BatchedWrites};
-use crate::zenoh_bridge::{ZenohBridge, open_session};
+use crate::zenoh_bridge::{ZenohBridge, open_session, reachability};
 
 /// How long a shutdown waits for connections to drain before closing them.
 const DRAIN_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(5);
@@ -90,8 +90,9 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
     let store = tokio::task::spawn_blocking(move || Store::open(&dir).map(|s| s.keep_versions(max_versions)))
         .await
         .map_err(|e| ServerError::Internal(e.to_string()))??;
+    config.scene.check()?;
     let memory = MemoryBudget::new(config.limits.max_server_bytes);
-    let cells = Cells::with_limits(&config.cell, &config.limits, memory.clone())?;
+    let cells = Cells::with_limits(&config.cell, &config.limits, memory.clone(), config.scene.clone())?;
     let shutdown = CancellationToken::new();
     let state_admission = StateAdmission::new(&config.limits);
 
@@ -139,6 +140,11 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
     health.set_serving::<MotionServiceServer<MotionServiceImpl>>().await;
     health.set_serving::<ServerServiceServer<ServerServiceImpl>>().await;
     health.set_service_status("", tonic_health::ServingStatus::Serving).await;
+    // The scene serves only while the configured Zenoh routers or peers are reachable.
+    if let Some(s) = &session {
+        let z = &state.config.zenoh;
+        reachability::spawn(s, &z.connect, z.mode == "client", health.clone(), shutdown.clone()).await?;
+    }
     let reflection = tonic_reflection::server::Builder::configure()
         .register_encoded_file_descriptor_set(dmp_proto::FILE_DESCRIPTOR_SET)
         .build_v1()

@@ -89,6 +89,7 @@ impl AppState {
                 "c",
                 &crate::config::Limits { max_cells: 10, ..config.limits.clone() },
                 memory.clone(),
+                Default::default(),
             )
             .expect("cell c"),
             compute: Compute::start(&config.compute).expect("compute threads start"),

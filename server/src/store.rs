@@ -56,6 +56,10 @@ impl fmt::Debug for Store {
     }
 }
 
+/// What a refusal of a damaged store file says to do.
+pub const START_FRESH: &str =
+    "the store file is damaged or truncated; move it away or delete it to start with an empty store";
+
 /// A storage error naming what failed.
 fn storage(what: impl fmt::Display, e: impl Into<redb::Error>) -> ServerError {
     ServerError::Storage(format!("{what}: {}", e.into()))
@@ -71,6 +75,15 @@ impl Store {
         })?;
         let path = dir.join(FILE_NAME);
         let shown = path.display();
+        // redb initialises a 0-byte file as a new database: an existing file that is empty lost its content
+        // (a failed copy, a full disk) and is refused rather than silently served as an empty store.
+        let existed = match std::fs::metadata(&path) {
+            Ok(m) if m.len() == 0 => {
+                return Err(ServerError::Storage(format!("{shown} is empty (0 bytes): {START_FRESH}")));
+            }
+            Ok(_) => true,
+            Err(_) => false,
+        };
         let db = Database::builder()
             // The file is small (kilobytes per primitive): verifying every page on open turns a file damaged
             // outside redb into an error instead of a panic.
@@ -80,6 +93,7 @@ impl Store {
                 redb::DatabaseError::DatabaseAlreadyOpen => ServerError::Storage(format!(
                     "cannot open {shown}: it is already open (is another dmp-server using this data directory?)"
                 )),
+                e if existed => storage(format_args!("cannot open {shown} ({START_FRESH})"), e),
                 e => storage(format_args!("cannot open {shown}"), e),
             })?;
         let store = Store { db: Arc::new(db), path: Arc::new(path.clone()), max_versions: usize::MAX };
@@ -428,6 +442,32 @@ mod tests {
         drop(store);
         let store = Store::open(dir.path()).unwrap();
         assert!(store.get("r1", "a", 0).is_err(), "the delete is durable");
+    }
+
+    #[test]
+    fn store_refuses_an_empty_or_truncated_file_and_says_how_to_start_fresh() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(FILE_NAME);
+        std::fs::write(&path, b"").unwrap();
+        let e = Store::open(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("empty") && e.contains(START_FRESH), "{e}");
+        assert_eq!(std::fs::metadata(&path).unwrap().len(), 0, "the empty file is left as it was");
+
+        {
+            let store = Store::open(tempfile::tempdir().unwrap().path()).unwrap();
+            drop(store);
+        }
+        std::fs::remove_file(&path).unwrap();
+        {
+            let store = Store::open(dir.path()).unwrap();
+            store.put("r1", "a", &primitive(0.0), 1).unwrap();
+        }
+        let full = std::fs::read(&path).unwrap();
+        for keep in [full.len() / 2, 100, 1] {
+            std::fs::write(&path, &full[..keep]).unwrap();
+            let e = Store::open(dir.path()).unwrap_err().to_string();
+            assert!(e.contains(START_FRESH), "truncated to {keep} bytes: {e}");
+        }
     }
 
     #[test]

@@ -18,6 +18,9 @@
 //! publisher without a token is still taken: a stream uses a cell-mate's state only while it is fresh (0.5 s), so
 //! such a robot stops counting soon after its publisher stops.
 //!
+//! On start, and whenever a source comes (back), the bridge also queries `dmp/*/obstacles/**` and applies the
+//! replies as samples ([`catch_up`]): obstacles published once before the server started are not lost.
+//!
 //! The keys are `dmp_proto::keys`'s and the payloads are decoded by `dmp_proto::payload`. A payload that cannot
 //! be decoded or validated is logged at warn with its key and the reason, counted
 //! ([`ZenohBridge::malformed_payloads`]) and changes nothing else. Samples are handled in Zenoh's callbacks: decoding
@@ -193,7 +196,7 @@ impl SceneUpdater {
     }
 }
 
-/// The subscribers that feed the scene from Zenoh, and the time-to-live reaper.
+/// The subscribers that feed the scene from Zenoh, the catch-up querier, and the time-to-live reaper.
 #[derive(Debug)]
 pub struct ZenohBridge {
     obstacles: Subscriber<()>,
@@ -201,6 +204,7 @@ pub struct ZenohBridge {
     /// The robots' liveliness tokens.
     alive: Subscriber<()>,
     reaper: JoinHandle<()>,
+    catch_up: JoinHandle<()>,
     /// Cancels the reaper when the bridge is closed or dropped (it also stops on the server's shutdown).
     stop: DropGuard,
     malformed: Arc<AtomicU64>,
@@ -229,6 +233,8 @@ impl ZenohBridge {
             .callback(move |sample| on_obstacle.obstacle(&sample))
             .await
             .map_err(zenoh_err)?;
+        let stop = shutdown.child_token();
+        let catch_up = catch_up::spawn(&session, updater.clone(), stop.clone()).await?;
         let robots_key = keys::robot_states_of(EVERY_CELL);
         let on_robot = updater.clone();
         let robots = session
@@ -246,10 +252,9 @@ impl ZenohBridge {
             .await
             .map_err(zenoh_err)?;
 
-        let stop = shutdown.child_token();
         let reaper = spawn_reaper(cells, clock, stop.clone());
         info!(obstacles = %obstacles_key, robots = %robots_key, alive = %alive_key, "zenoh bridge subscribed");
-        Ok(Self { obstacles, robots, alive, reaper, stop: stop.drop_guard(), malformed })
+        Ok(Self { obstacles, robots, alive, reaper, catch_up, stop: stop.drop_guard(), malformed })
     }
 
     /// How many payloads were refused so far (malformed, invalid, or over a limit).
@@ -265,7 +270,7 @@ impl ZenohBridge {
     /// Undeclares the subscribers (waiting for running callbacks, so the scene changes no more) and stops the
     /// reaper. The session can be closed afterwards.
     pub async fn close(self) {
-        let Self { obstacles, robots, alive, reaper, stop, malformed: _ } = self;
+        let Self { obstacles, robots, alive, reaper, catch_up, stop, malformed: _ } = self;
         drop(stop);
         let undeclared = tokio::task::spawn_blocking(move || {
             for s in [obstacles, robots, alive] {
@@ -279,6 +284,9 @@ impl ZenohBridge {
         if let Err(e) = undeclared {
             warn!(error = %e, "zenoh subscriber undeclare task failed");
         }
+        if let Err(e) = catch_up.await {
+            warn!(error = %e, "catch-up task failed");
+        }
         if let Err(e) = reaper.await {
             warn!(error = %e, "ttl reaper task failed");
         }
@@ -286,5 +294,7 @@ impl ZenohBridge {
     }
 }
 
+pub mod catch_up;
+pub mod reachability;
 #[cfg(test)]
 mod tests;

@@ -33,6 +33,9 @@ pub struct Step {
     pub now_unix_s: f64,
     /// Changes of plan (goal, tau, pause, resume, stop) in the order received.
     pub commands: Vec<Control>,
+    /// After the commands: hold position (true) or not (false); `None` leaves it to them (the scene's staleness
+    /// under the `stop` policy, [`crate::staleness::StaleGuard::hold`]).
+    pub hold: Option<bool>,
     /// Real time: compute until the run reaches this run time (the lookahead and a refill ahead of the robot);
     /// `None`: as fast as read, one segment.
     pub horizon: Option<f64>,
@@ -108,6 +111,9 @@ pub fn compute(run: &mut ServedRun, step: Step, job: &JobContext<'_>) -> Result<
         if let Err(i) = applied {
             out.warnings.push(engine_rejection(command, &i.field, &i.rule));
         }
+    }
+    if let Some(hold) = step.hold {
+        run.execution.set_holding(hold);
     }
     if step.max_segments == 0 {
         return Ok(out);

@@ -24,6 +24,7 @@ use crate::cell::{Cell, ObstacleSet, SeenRobot};
 use crate::compute::admission::Reservation;
 use crate::compute::pool::Pool;
 use crate::error::ServerError;
+use crate::staleness::StaleGuard;
 use crate::state::AppState;
 use crate::write_batching::Urgency;
 
@@ -80,7 +81,9 @@ pub async fn run_stream(
 ) {
     run.execution.set_end_time(cfg.max_duration);
     let ids: Vec<String> = run.execution.members().iter().map(|m| m.id.clone()).collect();
+    let stale = StaleGuard::new(cell.staleness(), run.ignore_scene);
     let mut producer = Producer::new(&app, &cell, &cfg, &tx, control, run);
+    producer.stale = stale;
     let result = producer.produce().await;
     let t = producer.time;
     drop(producer);
@@ -137,6 +140,8 @@ struct Producer<'a> {
     finished: Option<(f64, &'static str)>,
     /// Warnings not yet sent: they go with the next segment (every member's, for a group).
     warnings: Vec<v1::Warning>,
+    /// Flags the segments computed with stale obstacles, and holds the robots under the `stop` policy.
+    stale: StaleGuard,
 }
 
 impl<'a> Producer<'a> {
@@ -167,6 +172,7 @@ impl<'a> Producer<'a> {
             sequence: 0,
             finished: None,
             warnings: Vec::new(),
+            stale: StaleGuard::new(cell.staleness(), false),
         }
     }
 
@@ -268,8 +274,10 @@ impl<'a> Producer<'a> {
         }
         let scene = wake.scene_changed.then(|| self.scene_rx.borrow_and_update().clone());
         if let Some(s) = &scene {
+            self.stale.observe(s, &mut self.warnings);
             debug!(version = s.version, "scene applied");
         }
+        self.stale.note_commands(&commands);
         let horizon = realtime.then(|| {
             (self.start.elapsed() + self.cfg.lookahead + refill(self.app.open_streams())).as_secs_f64()
         });
@@ -282,6 +290,7 @@ impl<'a> Producer<'a> {
             start_unix: realtime.then_some(self.start_unix),
             now_unix_s: self.app.clock.now_unix_s(),
             commands,
+            hold: self.stale.hold(),
             horizon,
             max_segments: if supersedes || !realtime { 1 } else { usize::MAX },
             segment_points: self.cfg.segment_points,
@@ -302,6 +311,7 @@ impl<'a> Producer<'a> {
                 start_unix: Some(self.start_unix),
                 now_unix_s: self.app.clock.now_unix_s(),
                 commands: Vec::new(),
+                hold: None,
                 horizon,
                 max_segments: usize::MAX,
                 segment_points: self.cfg.segment_points,
@@ -337,6 +347,9 @@ impl<'a> Producer<'a> {
         self.warnings.extend(warnings);
         let app = self.app;
         for (k, mut computed) in segments.into_iter().enumerate() {
+            for segment in &mut computed.batch {
+                segment.scene_stale = self.stale.is_stale();
+            }
             if !self.warnings.is_empty() {
                 for segment in &mut computed.batch {
                     segment.warnings.clone_from(&self.warnings);

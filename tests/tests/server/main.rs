@@ -11,6 +11,7 @@ mod matches_the_engine;
 mod primitives;
 mod scene_over_zenoh;
 mod sessions_and_groups;
+mod stale_scene;
 
 use std::path::Path;
 use std::time::Duration;

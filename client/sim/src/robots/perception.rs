@@ -237,8 +237,10 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     for robot in robots {
         within("learn", client.learn(robot, "corridor", &t, &rows, parameters.clone())).await??;
     }
-    let publisher =
+    let mut publisher =
         within("zenoh open", ObstaclePublisher::open(&options.cell, &options.zenoh_connect, &[])).await??;
+    // A server that restarts or reconnects mid-run asks for the boxes it missed.
+    within("zenoh queryable", publisher.serve_latest()).await??;
     within("zenoh subscriber", publisher.wait_for_subscriber(super::STEP_TIMEOUT)).await??;
     let mut report = SimReport::new("youbot-perception", true);
     report.notes.push("set-up: see client/sim/src/robots/perception.rs; always paced in real time".into());
