@@ -14,7 +14,15 @@ use crate::{line, spec, until};
 
 /// `n` spheres 50 m away.
 fn far_obstacles(n: usize) -> Vec<v1::Obstacle> {
-    (0..n).map(|i| crate::ellipse(&format!("far-{i}"), vec![50.0 + i as f64, 50.0], vec![0.1, 0.1])).collect()
+    (0..n)
+        .map(|i| {
+            crate::ellipse(
+                &format!("far-{i}"),
+                vec![50.0 + (i % 100) as f64, 50.0 + (i / 100) as f64],
+                vec![0.1, 0.1],
+            )
+        })
+        .collect()
 }
 
 async fn channel(server: &TestServer) -> tonic::transport::Channel {
@@ -68,7 +76,8 @@ async fn a_learn_whose_client_left_is_not_stored() {
     })
     .await;
     let client = server.client().await;
-    let samples = 5_000;
+    // Big enough to take longer than its deadline (`MAX_LEARN_CELLS` allows 200,000 samples of 51 Gaussians).
+    let samples = 200_000;
     let t: Vec<f64> = (0..samples).map(|i| i as f64 * 1e-3).collect();
     let demonstration =
         v1::Demonstration { positions: t.iter().flat_map(|t| [t.sin(), t.cos()]).collect(), t, dim: 2 };
@@ -77,9 +86,9 @@ async fn a_learn_whose_client_left_is_not_stored() {
             robot_id: "r".into(),
             name: name.into(),
             demonstration: Some(demonstration.clone()),
-            parameters: Some(v1::LearnParameters { n_basis: 150, ..Default::default() }),
+            parameters: Some(v1::LearnParameters { n_basis: 50, ..Default::default() }),
         });
-        r.set_timeout(Duration::from_millis(500));
+        r.set_timeout(Duration::from_millis(300));
         r
     };
     let mut primitives = PrimitiveServiceClient::new(channel(&server).await);
@@ -110,9 +119,11 @@ async fn requests_beyond_the_budgets_are_refused_with_their_cost_and_others_go_o
     })
     .await;
     let client = server.client().await;
-    within("put", client.put_primitive("r", "line", &line(vec![0.0, 0.0], vec![1.0, 0.0], 1.0)))
-        .await
-        .unwrap();
+    for robot in ["r", "r2"] {
+        within("put", client.put_primitive(robot, "line", &line(vec![0.0, 0.0], vec![1.0, 0.0], 1.0)))
+            .await
+            .unwrap();
+    }
     let realtime = |robot: &str, obstacles: usize| {
         let mut motion = spec(robot, "line");
         motion.extra_obstacles = far_obstacles(obstacles);
@@ -122,12 +133,12 @@ async fn requests_beyond_the_budgets_are_refused_with_their_cost_and_others_go_o
     let mut running = within("execute", client.execute(realtime("r", 0))).await.unwrap();
     within("first segment", running.next()).await.unwrap().unwrap();
     // A real-time run beyond what is left of the budget.
-    let Err(e) = within("execute", client.execute(realtime("r", 300))).await else { panic!("admitted") };
+    let Err(e) = within("execute", client.execute(realtime("r2", 300))).await else { panic!("admitted") };
     assert_eq!(e.code(), Some(tonic::Code::ResourceExhausted), "{e}");
     assert!(e.to_string().contains("work units per second"), "{e}");
     assert!(e.to_string().contains("realtime_work_per_thread_s"), "{e}");
     // One segment too costly for one computation.
-    let mut long = realtime("r", 20);
+    let mut long = realtime("r2", 20);
     long.segment_s = 10.0;
     let Err(e) = within("execute", client.execute(long)).await else { panic!("admitted") };
     assert!(e.to_string().contains("max_job_work"), "{e}");

@@ -57,7 +57,10 @@ async fn streams_are_bounded_in_memory_and_a_cancelled_unread_one_gives_it_back(
     })
     .await;
     let client = server.client().await;
-    slow_line(&client, "r").await;
+    // One robot per stream: a robot executes in one stream at a time.
+    for robot in ["r", "a", "b", "c"] {
+        slow_line(&client, robot).await;
+    }
     let memory = &server.handle().state().memory;
 
     // 10 s segments: one segment alone is over its limit.
@@ -73,10 +76,10 @@ async fn streams_are_bounded_in_memory_and_a_cancelled_unread_one_gives_it_back(
     assert_eq!(memory.used(), 0, "refusals reserve nothing");
 
     // Two streams that are never read fill the server's budget; a third is refused, naming it.
-    let unread_a = within("execute a", client.execute(long_execute("r"))).await.unwrap();
-    let unread_b = within("execute b", client.execute(long_execute("r"))).await.unwrap();
+    let unread_a = within("execute a", client.execute(long_execute("a"))).await.unwrap();
+    let unread_b = within("execute b", client.execute(long_execute("b"))).await.unwrap();
     assert_eq!(memory.used(), 2 * one);
-    let (c, msg) = code(within("execute c", client.execute(long_execute("r"))).await);
+    let (c, msg) = code(within("execute c", client.execute(long_execute("c"))).await);
     assert_eq!(c, Some(Code::ResourceExhausted), "{msg}");
     assert!(msg.contains("max_server_bytes") && msg.contains(&format!("about {one} bytes")), "{msg}");
     // Everything else is served meanwhile.
@@ -87,7 +90,7 @@ async fn streams_are_bounded_in_memory_and_a_cancelled_unread_one_gives_it_back(
     // The client cancels a stream it never read: its producer ends and its memory comes back.
     drop(unread_a);
     until("the cancelled stream's memory is back", || memory.used() == one).await;
-    let mut stream = within("execute again", client.execute(long_execute("r"))).await.unwrap();
+    let mut stream = within("execute again", client.execute(long_execute("c"))).await.unwrap();
     within("segment", stream.next()).await.unwrap().unwrap();
     drop((stream, unread_b));
     until("every stream's memory is back", || memory.used() == 0 && server.handle().open_streams() == 0)
@@ -262,7 +265,10 @@ async fn watches_never_starve_executions_and_streams_are_bounded_per_connection_
     // One connection per client value (each `client()` connects anew); all from 127.0.0.1.
     let watcher = server.client().await;
     let robot = server.client().await;
-    slow_line(&robot, "r").await;
+    // One robot per stream: a robot executes in one stream at a time.
+    for r in ["r", "w1", "w2", "x1", "x2", "x3", "x4"] {
+        slow_line(&robot, r).await;
+    }
     let mut watches = Vec::new();
     for _ in 0..3 {
         watches.push(within("watch", watcher.watch_scene()).await.unwrap());
@@ -285,20 +291,20 @@ async fn watches_never_starve_executions_and_streams_are_bounded_per_connection_
 
     // Per connection: the watcher's connection holds 3 watches; one execution more and it is full.
     let on_watcher =
-        within("execute on the watcher's connection", watcher.execute(long_execute("r"))).await.unwrap();
-    let (c, msg) = code(within("a 5th on one connection", watcher.execute(long_execute("r"))).await);
+        within("execute on the watcher's connection", watcher.execute(long_execute("w1"))).await.unwrap();
+    let (c, msg) = code(within("a 5th on one connection", watcher.execute(long_execute("w2"))).await);
     assert_eq!(c, Some(Code::ResourceExhausted), "{msg}");
     assert!(msg.contains("max_streams_per_connection = 4"), "{msg}");
     // Per client: another connection of the same address has room for 2 more, then the client is full.
-    let r1 = within("execute 1", robot.execute(long_execute("r"))).await.unwrap();
-    let r2 = within("execute 2", robot.execute(long_execute("r"))).await.unwrap();
-    let (c, msg) = code(within("a 7th of one client", robot.execute(long_execute("r"))).await);
+    let r1 = within("execute 1", robot.execute(long_execute("x1"))).await.unwrap();
+    let r2 = within("execute 2", robot.execute(long_execute("x2"))).await.unwrap();
+    let (c, msg) = code(within("a 7th of one client", robot.execute(long_execute("x3"))).await);
     assert_eq!(c, Some(Code::ResourceExhausted), "{msg}");
     assert!(msg.contains("client 127.0.0.1") && msg.contains("max_streams_per_client = 6"), "{msg}");
     // Streams that end give their places back.
     drop(watches);
     until("the watches are gone", || server.handle().state().streams.open_watches() == 0).await;
-    let r3 = within("execute after the watches left", robot.execute(long_execute("r"))).await.unwrap();
+    let r3 = within("execute after the watches left", robot.execute(long_execute("x4"))).await.unwrap();
     drop((on_watcher, r1, r2, r3));
     until("every stream is gone", || server.handle().open_streams() == 0).await;
     server.stop().await;
