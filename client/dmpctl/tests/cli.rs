@@ -119,7 +119,7 @@ fn bad_scenarios_name_the_field_and_exit_2() {
         "avoidance",
         "missing field `lambda`",
     );
-    refused_after(|v| v["avoidance"]["beta"] = 0.5.into(), "avoidance.beta", ">= 1");
+    refused_after(|v| v["avoidance"]["beta"] = 0.5.into(), "avoidance.beta", "between 1 and 100");
     refused_after(|v| v["rollout"]["dt"] = 0.0.into(), "rollout.dt", "greater than zero");
     refused_after(|v| v["rollout"]["dt"] = (-0.001).into(), "rollout.dt", "greater than zero");
     refused_after(|v| v["rollout"]["duration"] = 1e9.into(), "rollout.duration", "limit");
