@@ -14,9 +14,11 @@ use dmp::{Method, Stepping};
 
 /// The stages of one fixed RK4 step.
 const RK4_STAGES: f64 = 4.0;
-/// The stages of one adaptive Dormand–Prince step (seven, the last reused on acceptance; rejected steps are
-/// charged by costing the smallest step, `dt`).
+/// The stages of one adaptive Dormand–Prince step (seven, the last reused on acceptance).
 const DP_STAGES: f64 = 7.0;
+/// Adaptive steps per largest step allowed: the steps it takes, rejected ones included, in the stiff parts of a
+/// run, charged on average over the run.
+const ADAPTIVE_STEPS_PER_LARGEST: f64 = 2.0;
 
 /// The weight of one boundary sample (point methods) or one obstacle (volumetric methods) of `method`, in basis
 /// functions: the relative cost of its term, from the engine's step benchmark (`cargo bench -p dmp --bench step`).
@@ -77,7 +79,9 @@ impl Workload {
         let robot_terms = avoided.robot_count as f64 * samples_per_obstacle(rm, rs) * term_weight(rm);
         let (stages, steps_per_point) = match stepping.tolerance {
             None => (RK4_STAGES, 1.0 / stepping.step_points.max(1) as f64),
-            Some(_) => (DP_STAGES, 1.0),
+            Some(_) => {
+                (DP_STAGES, (ADAPTIVE_STEPS_PER_LARGEST / stepping.step_points.max(1) as f64).min(1.0))
+            }
         };
         Self {
             per_step: stages * d * (basis as f64 + obstacle_terms + robot_terms),
