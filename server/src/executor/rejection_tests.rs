@@ -4,14 +4,12 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use dmp::field::Agent;
-use dmp::{Avoidance, Motion, Primitive, Stepping};
+use dmp::Stepping;
 use dmp_proto::v1;
 use dmp_proto::v1::warning::Kind;
 use tokio::sync::mpsc;
 
-use super::pacing::{MAX_REFILL, history_len};
-use super::served_run::{RunAvoidance, ServedRun};
+use super::pacing::MAX_REFILL;
 use super::stream::{Control, StreamConfig, run_stream};
 use crate::clock::Clock;
 use crate::state::AppState;
@@ -39,24 +37,7 @@ async fn a_rejection_reaches_the_robot_within_a_refill_and_the_run_goes_on() {
         max_duration: 5.0,
         urgency: None,
     };
-    let p =
-        Primitive::straight_line(50, 4.0, vec![1000.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 0.0]).unwrap();
-    let member = Agent { id: "arm".into(), dims: vec![0, 1], footprint: None };
-    let avoidance = RunAvoidance {
-        obstacles: (Avoidance::NONE, 0),
-        robots: (Avoidance::NONE, 0),
-        extra: Vec::new(),
-        ignore_scene: true,
-    };
-    let run = ServedRun::new(
-        p.clone(),
-        Motion::of(&p),
-        vec![(member, None)],
-        avoidance,
-        cfg.stepping,
-        history_len(&cfg),
-    )
-    .unwrap();
+    let run = super::tests::reach(&cfg);
     let (tx, mut rx) = mpsc::channel(64);
     let (ctl_tx, ctl_rx) = mpsc::channel(8);
     let producer = tokio::spawn(run_stream(app.clone(), run, cell, cfg, tx, Some(ctl_rx), None));

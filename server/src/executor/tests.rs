@@ -16,7 +16,7 @@ use crate::clock::Clock;
 use crate::state::AppState;
 
 /// A straight 2-D reach from the origin to (1, 0) in `tau` = 1 s, streamed in real time in 10 ms segments.
-fn reach(cfg: &StreamConfig) -> ServedRun {
+pub(super) fn reach(cfg: &StreamConfig) -> ServedRun {
     let p =
         Primitive::straight_line(50, 4.0, vec![1000.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 0.0]).unwrap();
     let member = Agent { id: "arm".into(), dims: vec![0, 1], footprint: None };
