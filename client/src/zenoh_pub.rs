@@ -10,15 +10,22 @@
 //! `Block` and [`ObstaclePublisher::close`] closes the session gracefully, so a short-lived program loses nothing.
 //! `zenoh::open` needs tokio's multi-threaded runtime.
 //!
-//! A server that starts (or reconnects) after an obstacle was published asks for the current obstacles with a
-//! Zenoh query on `dmp/*/obstacles/**`. [`ObstaclePublisher::serve_latest`] answers it: the publisher keeps the
-//! latest payload of every key it put (a delete forgets it) and replies with those the query asks for. The other
-//! way is a zenohd storage of `dmp/*/obstacles/**` (see the README).
+//! A server that starts (or reconnects) after an obstacle was published must still get it.
+//! [`ObstaclePublisher::serve_latest`] keeps the latest payload of every key put (a delete forgets it, and so does
+//! the end of its `ttl_s`) and sends it again in two ways, as Zenoh topologies differ in which one reaches the
+//! server:
+//! - it answers the server's catch-up query on `dmp/*/obstacles/**` (the server connects to the node, or the node
+//!   was known when the server started);
+//! - it puts them again every time a subscriber of the cell's obstacles appears (the node connects to the server,
+//!   or reaches it through a router, and the server (re)started or came back after the link was lost). A put and
+//!   a resend are serialised, so a resend never brings back a deleted obstacle.
+//!
+//! The other way is a zenohd storage of `dmp/*/obstacles/**` (see the README).
 
 use std::collections::BTreeMap;
 use std::fmt;
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use dmp::scenario::ObstacleSpec;
 use dmp_proto::keys::{check_name, obstacle_key, obstacles_of};
@@ -50,8 +57,30 @@ pub fn publisher_options(connect: &[String], listen: &[String]) -> SessionOption
     }
 }
 
-/// The latest encoding and payload put on each key.
-type Latest = BTreeMap<String, (Encoding, Vec<u8>)>;
+/// What was last put on a key: its encoding, its payload, and when its `ttl_s` ends (`None`: never).
+#[derive(Clone)]
+struct Put {
+    encoding: Encoding,
+    bytes: Vec<u8>,
+    expires: Option<Instant>,
+}
+
+impl Put {
+    fn new(encoding: Encoding, bytes: Vec<u8>, ttl_s: f64) -> Self {
+        let expires = (ttl_s > 0.0)
+            .then(|| Duration::try_from_secs_f64(ttl_s).ok())
+            .flatten()
+            .and_then(|ttl| Instant::now().checked_add(ttl));
+        Self { encoding, bytes, expires }
+    }
+
+    fn live(&self, now: Instant) -> bool {
+        self.expires.is_none_or(|t| now < t)
+    }
+}
+
+/// The latest put on each key.
+type Latest = BTreeMap<String, Put>;
 
 /// A Zenoh peer that publishes the obstacles of one cell.
 pub struct ObstaclePublisher {
@@ -65,6 +94,18 @@ pub struct ObstaclePublisher {
     latest: Arc<Mutex<Latest>>,
     /// Answers queries with `latest`, once [`ObstaclePublisher::serve_latest`] was called.
     queryable: Option<Queryable<()>>,
+    /// Puts `latest` again when a subscriber appears, once [`ObstaclePublisher::serve_latest`] was called.
+    resender: Option<tokio::task::JoinHandle<()>>,
+    /// Held across each put or delete and across a resend, so that they reach the subscribers in order.
+    sending: Arc<tokio::sync::Mutex<()>>,
+}
+
+impl Drop for ObstaclePublisher {
+    fn drop(&mut self) {
+        if let Some(task) = self.resender.take() {
+            task.abort();
+        }
+    }
 }
 
 impl fmt::Debug for ObstaclePublisher {
@@ -88,7 +129,15 @@ impl ObstaclePublisher {
         let session = zenoh::open(config).await.map_err(zerr("opening the session"))?;
         let probe =
             session.declare_publisher(obstacles_of(cell)).await.map_err(zerr("declaring the publisher"))?;
-        Ok(Self { cell: cell.into(), session, probe, latest: Arc::default(), queryable: None })
+        Ok(Self {
+            cell: cell.into(),
+            session,
+            probe,
+            latest: Arc::default(),
+            queryable: None,
+            resender: None,
+            sending: Arc::default(),
+        })
     }
 
     /// The cell.
@@ -101,8 +150,9 @@ impl ObstaclePublisher {
         &self.session
     }
 
-    /// Answers queries on `dmp/*/obstacles/**` (a server catching up after a start or a reconnect) with the latest
-    /// payload of every obstacle this publisher put and did not delete, before and after this call. Idempotent.
+    /// Serves the latest payload of every obstacle this publisher put and did not delete, before and after this
+    /// call, to a server that (re)starts or reconnects: answers queries on `dmp/*/obstacles/**` with them, and puts
+    /// them again each time a subscriber of the cell's obstacles appears (see the module). Idempotent.
     pub async fn serve_latest(&mut self) -> Result<(), ClientError> {
         if self.queryable.is_some() {
             return Ok(());
@@ -114,16 +164,51 @@ impl ObstaclePublisher {
             .callback(move |query| reply_latest(&latest, &query))
             .await
             .map_err(zerr("declaring the queryable"))?;
+        let listener = self.probe.matching_listener().await.map_err(zerr("matching listener"))?;
+        let mut matching = self.probe.matching_status().await.map_err(zerr("matching status"))?.matching();
+        let (session, latest, sending) = (self.session.clone(), self.latest.clone(), self.sending.clone());
+        self.resender = Some(tokio::spawn(async move {
+            while let Ok(status) = listener.recv_async().await {
+                if status.matching() && !matching {
+                    let _order = sending.lock().await;
+                    for (key, put) in live(&latest) {
+                        // Fails only when the session is closing: there is no one left to send to.
+                        let _ = session
+                            .put(key, put.bytes)
+                            .encoding(put.encoding)
+                            .congestion_control(CongestionControl::Block)
+                            .await;
+                    }
+                }
+                matching = status.matching();
+            }
+        }));
         self.queryable = Some(queryable);
         Ok(())
     }
 
-    fn remember(&self, key: &str, latest: Option<(Encoding, Vec<u8>)>) {
-        let mut map = self.latest.lock().unwrap_or_else(|p| p.into_inner());
-        match latest {
-            Some(v) => map.insert(key.to_string(), v),
-            None => map.remove(key),
+    /// Remembers what is put on `key` (or forgets it) and sends it, in order with the other sends and resends.
+    async fn send(&self, key: String, put: Option<Put>) -> Result<(), ClientError> {
+        let _order = self.sending.lock().await;
+        {
+            let mut map = self.latest.lock().unwrap_or_else(|p| p.into_inner());
+            match &put {
+                Some(p) => map.insert(key.clone(), p.clone()),
+                None => map.remove(&key),
+            };
+        }
+        let context = if put.is_some() { "put" } else { "delete" };
+        let sent = match put {
+            Some(Put { encoding, bytes, .. }) => {
+                self.session
+                    .put(key, bytes)
+                    .encoding(encoding)
+                    .congestion_control(CongestionControl::Block)
+                    .await
+            }
+            None => self.session.delete(key).congestion_control(CongestionControl::Block).await,
         };
+        sent.map_err(zerr(context))
     }
 
     /// Waits until a subscriber of the cell's obstacles (the server) is known, at most `timeout`.
@@ -155,14 +240,9 @@ impl ObstaclePublisher {
         check_name("id", id)?;
         let bytes =
             serde_json::to_vec(obstacle).map_err(|e| ClientError::argument("obstacle", e.to_string()))?;
-        let key = obstacle_key(&self.cell, id);
-        self.remember(&key, Some((Encoding::APPLICATION_JSON, bytes.clone())));
-        self.session
-            .put(key, bytes)
-            .encoding(Encoding::APPLICATION_JSON)
-            .congestion_control(CongestionControl::Block)
+        let ttl_s = obstacle.get("ttl_s").and_then(serde_json::Value::as_f64).unwrap_or(0.0);
+        self.send(obstacle_key(&self.cell, id), Some(Put::new(Encoding::APPLICATION_JSON, bytes, ttl_s)))
             .await
-            .map_err(zerr("put"))
     }
 
     /// Puts a scenario-format obstacle with an optional time to live (seconds; 0: forever).
@@ -185,46 +265,41 @@ impl ObstaclePublisher {
     pub async fn put_proto_in(&self, cell: &str, obstacle: &v1::Obstacle) -> Result<(), ClientError> {
         check_name("cell", cell)?;
         check_name("id", &obstacle.id)?;
-        let (key, bytes) = (obstacle_key(cell, &obstacle.id), codec::encode(obstacle));
-        self.remember(&key, Some((Encoding::from(codec::PROTOBUF_ENCODING), bytes.clone())));
-        self.session
-            .put(key, bytes)
-            .encoding(Encoding::from(codec::PROTOBUF_ENCODING))
-            .congestion_control(CongestionControl::Block)
-            .await
-            .map_err(zerr("put"))
+        let put = Put::new(Encoding::from(codec::PROTOBUF_ENCODING), codec::encode(obstacle), obstacle.ttl_s);
+        self.send(obstacle_key(cell, &obstacle.id), Some(put)).await
     }
 
     /// Removes the obstacle `id`.
     pub async fn delete(&self, id: &str) -> Result<(), ClientError> {
         check_name("id", id)?;
-        let key = obstacle_key(&self.cell, id);
-        self.remember(&key, None);
-        self.session.delete(key).congestion_control(CongestionControl::Block).await.map_err(zerr("delete"))
+        self.send(obstacle_key(&self.cell, id), None).await
     }
 
     /// Closes the session gracefully (what was put is sent first).
-    pub async fn close(self) -> Result<(), ClientError> {
-        drop(self.probe);
-        drop(self.queryable);
+    pub async fn close(mut self) -> Result<(), ClientError> {
+        if let Some(task) = self.resender.take() {
+            task.abort();
+        }
+        drop(self.queryable.take());
         self.session.close().await.map_err(zerr("close"))
     }
 }
 
-/// Replies to `query` with every remembered payload whose key it asks for (a copy is taken under the lock).
+/// A copy (taken under the lock) of the remembered puts whose `ttl_s` has not ended.
+fn live(latest: &Mutex<Latest>) -> Vec<(KeyExpr<'static>, Put)> {
+    let now = Instant::now();
+    let map = latest.lock().unwrap_or_else(|p| p.into_inner());
+    map.iter()
+        .filter(|(_, put)| put.live(now))
+        .filter_map(|(key, put)| Some((KeyExpr::try_from(key.clone()).ok()?, put.clone())))
+        .collect()
+}
+
+/// Replies to `query` with every live remembered payload whose key it asks for.
 fn reply_latest(latest: &Mutex<Latest>, query: &Query) {
-    let asked: Vec<(KeyExpr<'static>, Encoding, Vec<u8>)> = {
-        let map = latest.lock().unwrap_or_else(|p| p.into_inner());
-        map.iter()
-            .filter_map(|(key, (encoding, bytes))| {
-                let key = KeyExpr::try_from(key.clone()).ok()?;
-                query.key_expr().intersects(&key).then(|| (key, encoding.clone(), bytes.clone()))
-            })
-            .collect()
-    };
-    for (key, encoding, bytes) in asked {
+    for (key, put) in live(latest).into_iter().filter(|(key, _)| query.key_expr().intersects(key)) {
         // A reply fails only when the session is closing: there is no one left to answer.
-        let _ = query.reply(key, bytes).encoding(encoding).wait();
+        let _ = query.reply(key, put.bytes).encoding(put.encoding).wait();
     }
 }
 
@@ -355,6 +430,41 @@ mod tests {
         let r = tokio::time::timeout(WAIT, replies.recv_async()).await.unwrap().unwrap();
         assert_eq!(r.result().unwrap().key_expr().as_str(), obstacle_key("other", "c"));
         assert!(tokio::time::timeout(WAIT, replies.recv_async()).await.unwrap().is_err(), "one reply");
+        publisher.close().await.unwrap();
+        server.close().await.unwrap();
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
+    async fn serve_latest_puts_again_what_is_live_when_a_subscriber_appears() {
+        let config = session_config(&SessionOptions::loopback_peer(Vec::new())).unwrap();
+        let mut publisher = ObstaclePublisher::open_with("cellR", config).await.unwrap();
+        publisher.serve_latest().await.unwrap();
+        let spec = |id: &str| -> ObstacleSpec {
+            serde_json::from_value(
+                serde_json::json!({"id": id, "center": [0.5, 0.5], "semi_axes": [0.2, 0.1]}),
+            )
+            .unwrap()
+        };
+        // Before any subscriber: these puts reach no one.
+        publisher.put_spec(&spec("kept"), 0.0).await.unwrap();
+        publisher.put_spec(&spec("deleted"), 0.0).await.unwrap();
+        // Its ttl_s of 1 ms ends long before a subscriber can have opened its session.
+        publisher.put_spec(&spec("expired"), 0.001).await.unwrap();
+        publisher.delete("deleted").await.unwrap();
+
+        // A subscriber that only subscribes (it does not query) gets what is live once it is known.
+        let locator = publisher.session().info().locators().await[0].to_string();
+        let server = zenoh::open(session_config(&SessionOptions::loopback_peer(vec![locator])).unwrap())
+            .await
+            .unwrap();
+        let sub = server.declare_subscriber("dmp/*/obstacles/**").await.unwrap();
+        let s = tokio::time::timeout(WAIT, sub.recv_async()).await.unwrap().unwrap();
+        assert_eq!(
+            (s.kind(), s.key_expr().as_str()),
+            (SampleKind::Put, obstacle_key("cellR", "kept").as_str())
+        );
+        let more = tokio::time::timeout(Duration::from_millis(300), sub.recv_async()).await;
+        assert!(more.is_err(), "only the live obstacle is sent again: {more:?}");
         publisher.close().await.unwrap();
         server.close().await.unwrap();
     }

@@ -9,10 +9,10 @@
 //! declaration has arrived, so the query reaches it. A perception node that answers while others already do is
 //! not asked again: it sends its obstacles anyway when it (re)starts.
 //!
-//! Tested end to end with perception nodes the server connects to directly (`tests/tests/server/stale_scene.rs`).
-//! Not yet working: a perception node that joins through a router after the server did, or that connects to the
-//! server itself, was not queried in tests: its queryable answers a plain `get`, but does not turn the querier's
-//! matching status on, which is what triggers the query here.
+//! Tested end to end (`tests/tests/server/catch_up.rs`): the server connecting to a perception node, a node
+//! connecting to the server across a server restart, and a server joining a router (as its client) after the node.
+//! The client library's node also puts its obstacles again when the server's subscriber appears, a second way for
+//! the cases this query would miss.
 
 use std::time::Duration;
 

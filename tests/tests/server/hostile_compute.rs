@@ -120,6 +120,35 @@ async fn a_learn_whose_client_left_is_not_stored() {
 }
 
 #[tokio::test(flavor = "multi_thread")]
+async fn a_learn_cancelled_while_it_runs_is_not_stored() {
+    let server = TestServer::start_with(|c| c.zenoh.disabled = true).await;
+    let client = server.client().await;
+    // Least squares of 30,000 samples x 301 Gaussians (within the learn limits): long enough to be cancelled
+    // while it runs.
+    let samples = 30_000;
+    let t: Vec<f64> = (0..samples).map(|i| i as f64 * 1e-3).collect();
+    let demonstration =
+        v1::Demonstration { positions: t.iter().flat_map(|t| [t.sin(), t.cos()]).collect(), t, dim: 2 };
+    let request = v1::LearnRequest {
+        robot_id: "r".into(),
+        name: "cancelled".into(),
+        demonstration: Some(demonstration),
+        parameters: Some(v1::LearnParameters { n_basis: 300, ..Default::default() }),
+    };
+    let mut primitives = PrimitiveServiceClient::new(channel(&server).await);
+    let learn = tokio::spawn(async move { primitives.learn(request).await });
+    let running = || server.handle().state().compute.batch.counters().running.load(Ordering::Acquire);
+    until("the learn runs", || running() == 1).await;
+    // The client goes away mid-computation (its request future is dropped: HTTP/2 resets the stream).
+    learn.abort();
+    assert!(learn.await.unwrap_err().is_cancelled());
+    until("the learn finished computing", || idle(&server)).await;
+    let listed = within("list", client.list("r")).await.unwrap();
+    assert!(listed.is_empty(), "stored after the client left: {listed:?}");
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread")]
 async fn requests_beyond_the_budgets_are_refused_with_their_cost_and_others_go_on() {
     let server = TestServer::start_with(|c| {
         c.zenoh.disabled = true;

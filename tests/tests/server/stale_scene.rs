@@ -1,6 +1,6 @@
-//! A scene that goes stale or vanishes: obstacles published before the server started are queried on start (and
-//! again after a restart), `stale_after_s` with each policy, the scene service's health following the configured
-//! Zenoh router, and a damaged store file refused at start.
+//! A scene that goes stale or vanishes: `stale_after_s` with each policy, the scene service's health following the
+//! configured Zenoh router, and a damaged store file refused at start. (Catching up with obstacles published
+//! before a start: `catch_up.rs`.)
 
 use std::collections::BTreeMap;
 use std::future::IntoFuture;
@@ -8,7 +8,7 @@ use std::path::Path;
 
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
-use dmp_proto::zenoh_session::{SessionOptions, locators, session_config};
+use dmp_proto::zenoh_session::locators;
 use dmp_server::config::Config;
 use dmp_server::run::{ServerHandle, start};
 use dmp_server::staleness::{CellSceneConfig, StalePolicy};
@@ -20,48 +20,18 @@ use tonic_health::pb::health_client::HealthClient;
 
 use crate::{ellipse, line, spec, until};
 
-/// A perception node on a loopback port of its own (no scouting) that answers the server's queries.
-async fn perception_node() -> ObstaclePublisher {
-    let config = session_config(&SessionOptions::loopback_peer(Vec::new())).unwrap();
-    let mut p = within("perception open", ObstaclePublisher::open_with("default", config)).await.unwrap();
-    within("queryable", p.serve_latest()).await.unwrap();
-    p
-}
-
-fn has_obstacle(handle: &ServerHandle, cell: &str, id: &str) -> bool {
+pub(crate) fn has_obstacle(handle: &ServerHandle, cell: &str, id: &str) -> bool {
     handle.state().cells.get(cell).unwrap().snapshot().obstacles.contains_key(id)
 }
 
-async fn start_connected(dir: &Path, connect: Vec<String>) -> ServerHandle {
+pub(crate) async fn start_connected(dir: &Path, connect: Vec<String>) -> ServerHandle {
     let mut c = config(dir);
     c.zenoh.connect = connect;
     within("server start", start(c)).await.expect("server starts")
 }
 
-#[tokio::test(flavor = "multi_thread")]
-async fn an_obstacle_published_before_the_server_started_is_queried_on_start_and_after_a_restart() {
-    let perception = perception_node().await;
-    // Published before any server exists: as a put it reaches no one.
-    within("put", perception.put_proto(&ellipse("box", vec![0.5, 0.5], vec![0.1, 0.1]))).await.unwrap();
-    let connect = locators(perception.session()).await;
-    let dir = tempfile::tempdir().unwrap();
-
-    let handle = start_connected(dir.path(), connect.clone()).await;
-    until("the obstacle is queried on start", || has_obstacle(&handle, "default", "box")).await;
-    within("shutdown", handle.shutdown()).await.unwrap();
-
-    // Restarted on the same store: the scene is empty at start and gets it again.
-    let handle = start_connected(dir.path(), connect).await;
-    until("the obstacle is queried after the restart", || has_obstacle(&handle, "default", "box")).await;
-    // What the node deleted is not served any more, and the delete reaches the running server.
-    within("delete", perception.delete("box")).await.unwrap();
-    until("the delete is applied", || !has_obstacle(&handle, "default", "box")).await;
-    within("shutdown", handle.shutdown()).await.unwrap();
-    within("close", perception.close()).await.unwrap();
-}
-
 /// A Zenoh router in the test process on `endpoint` (multicast off).
-async fn router(endpoint: &str) -> zenoh::Session {
+pub(crate) async fn router(endpoint: &str) -> zenoh::Session {
     let mut c = zenoh::Config::default();
     c.insert_json5("mode", "\"router\"").unwrap();
     c.insert_json5("listen/endpoints", &format!("[\"{endpoint}\"]")).unwrap();
