@@ -164,6 +164,13 @@ impl Cell {
         self.robots.lock().unwrap_or_else(|p| p.into_inner()).len()
     }
 
+    /// How many robots the cell sees now besides `members` (a run's own robots).
+    pub fn robot_count_besides<'a>(&self, members: impl IntoIterator<Item = &'a str>) -> usize {
+        let robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());
+        let own = members.into_iter().filter(|id| robots.contains_key(*id)).count();
+        robots.len().saturating_sub(own)
+    }
+
     /// The current snapshot.
     pub fn snapshot(&self) -> Arc<ObstacleSet> {
         self.tx.borrow().clone()

@@ -29,6 +29,25 @@ pub struct Admission {
 pub struct Reservation {
     used: Arc<AtomicU64>,
     amount: u64,
+    /// The budget's limit.
+    limit: u64,
+}
+
+impl Reservation {
+    /// Changes the reservation to `amount` (a run's scene grew or shrank after it was admitted), beyond the limit if
+    /// need be: what runs is counted as it is, so that new requests see the true load. `false` when the budget is
+    /// now over its limit.
+    pub fn resize(&mut self, amount: f64) -> bool {
+        let amount = if amount.is_nan() { f64::MAX } else { amount };
+        let amount = amount.ceil().clamp(0.0, u64::MAX as f64 / 4.0) as u64;
+        if amount >= self.amount {
+            self.used.fetch_add(amount - self.amount, Ordering::AcqRel);
+        } else {
+            self.used.fetch_sub(self.amount - amount, Ordering::AcqRel);
+        }
+        self.amount = amount;
+        self.used.load(Ordering::Acquire) <= self.limit
+    }
 }
 
 impl Drop for Reservation {
@@ -47,7 +66,7 @@ fn reserve(used: &Arc<AtomicU64>, amount: f64, limit: f64) -> Result<Reservation
     used.fetch_update(Ordering::AcqRel, Ordering::Acquire, |now| {
         (now.saturating_add(amount) <= limit).then_some(now + amount)
     })
-    .map(|_| Reservation { used: used.clone(), amount })
+    .map(|_| Reservation { used: used.clone(), amount, limit })
 }
 
 /// Work units in words: `3.6e8`.
@@ -174,6 +193,24 @@ mod tests {
         assert_eq!(a.realtime_in_use(), 200);
         drop(r1);
         drop(r2);
+        assert_eq!(a.realtime_in_use(), 0);
+    }
+
+    #[test]
+    fn a_resized_reservation_counts_what_runs_even_beyond_the_budget() {
+        let a = admission();
+        let mut r = a.realtime(150.0, 10.0, "motion").unwrap();
+        assert!(!r.resize(250.0), "over the budget of 200");
+        assert_eq!(a.realtime_in_use(), 250);
+        assert!(a.realtime(1.0, 1.0, "motion").is_err(), "nothing is left");
+        assert!(r.resize(20.0));
+        assert_eq!(a.realtime_in_use(), 20);
+        assert!(!r.resize(f64::NAN));
+        assert!(r.resize(0.0));
+        let other = a.realtime(200.0, 10.0, "motion").unwrap();
+        drop(r);
+        assert_eq!(a.realtime_in_use(), 200);
+        drop(other);
         assert_eq!(a.realtime_in_use(), 0);
     }
 

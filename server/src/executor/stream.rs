@@ -84,10 +84,10 @@ pub async fn run_stream(
     let stale = StaleGuard::new(cell.staleness(), run.ignore_scene);
     let mut producer = Producer::new(&app, &cell, &cfg, &tx, control, run);
     producer.stale = stale;
+    producer.budget = budget;
     let result = producer.produce().await;
     let t = producer.time;
     drop(producer);
-    drop(budget);
     for id in &ids {
         app.robots.retire(&cell, id).await;
     }
@@ -142,6 +142,10 @@ struct Producer<'a> {
     warnings: Vec<v1::Warning>,
     /// Flags the segments computed with stale obstacles, and holds the robots under the `stop` policy.
     stale: StaleGuard,
+    /// Real time: the run's compute reservation, resized to its scene as it changes.
+    budget: Option<Reservation>,
+    /// The real-time budget was over its limit at the last resize (warned once per crossing).
+    over_budget: bool,
 }
 
 impl<'a> Producer<'a> {
@@ -173,6 +177,8 @@ impl<'a> Producer<'a> {
             finished: None,
             warnings: Vec::new(),
             stale: StaleGuard::new(cell.staleness(), false),
+            budget: None,
+            over_budget: false,
         }
     }
 
@@ -275,6 +281,7 @@ impl<'a> Producer<'a> {
         let scene = wake.scene_changed.then(|| self.scene_rx.borrow_and_update().clone());
         if let Some(s) = &scene {
             self.stale.observe(s, &mut self.warnings);
+            self.recost(s.obstacles.len());
             debug!(version = s.version, "scene applied");
         }
         self.stale.note_commands(&commands);
@@ -321,6 +328,35 @@ impl<'a> Producer<'a> {
             return self.send(stepped, false).await;
         }
         Ok(None)
+    }
+
+    /// Real time: resizes the run's reservation to the scene it now avoids (`obstacles` in the cell), so that new
+    /// runs are admitted against the true load. A run is never stopped for it (it must go on avoiding what is
+    /// there): when the reservations go over the real-time budget, the robot is warned once, and again after they
+    /// fit and go over once more.
+    fn recost(&mut self, obstacles: usize) {
+        let (Some(budget), Some(run)) = (self.budget.as_mut(), self.run.as_ref()) else { return };
+        let robots = self.cell.robot_count_besides(run.execution.members().iter().map(|m| m.id.as_str()));
+        let per_second = run.workload(obstacles, robots).per_second(self.cfg.stepping.dt);
+        let within = budget.resize(per_second);
+        if !within && !self.over_budget {
+            warn!(
+                cell = self.cell.name(),
+                obstacles, per_second, "real-time runs are over the compute budget"
+            );
+            self.warnings.push(v1::Warning {
+                kind: v1::warning::Kind::ComputeOverBudget as i32,
+                field: String::new(),
+                reason: format!(
+                    "the cell's scene grew to {obstacles} obstacles after this run was admitted: it now needs \
+                     {per_second:.2e} work units per second and the real-time runs reserve more than the budget \
+                     (`compute.realtime_work_per_thread_s`); it goes on avoiding every obstacle, new real-time runs \
+                     are refused until the reservations fit"
+                ),
+                obstacle_id: String::new(),
+            });
+        }
+        self.over_budget = !within;
     }
 
     /// Runs one wake-up's computation on the stream's pool.

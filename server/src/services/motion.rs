@@ -182,7 +182,8 @@ impl MotionServiceImpl {
         cell: &Cell,
         cfg: &StreamConfig,
     ) -> Result<Option<Reservation>, ServerError> {
-        let w = run.workload(cell.snapshot().obstacles.len(), cell.robot_count());
+        let robots = cell.robot_count_besides(run.execution.members().iter().map(|m| m.id.as_str()));
+        let w = run.workload(cell.snapshot().obstacles.len(), robots);
         let admission = &self.state.compute.admission;
         let dt = cfg.stepping.dt;
         let segment = cfg.segment_points as f64;

@@ -198,3 +198,61 @@ async fn requests_beyond_the_budgets_are_refused_with_their_cost_and_others_go_o
     until("budget returned", || server.handle().state().compute.admission.realtime_in_use() == 0).await;
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread")]
+async fn a_scene_that_grows_under_a_running_stream_is_counted_against_new_ones() {
+    let server = TestServer::start_with(|c| {
+        c.zenoh.disabled = true;
+        c.compute.realtime_threads = 1;
+        c.compute.realtime_work_per_thread_s = 5e7;
+    })
+    .await;
+    let client = server.client().await;
+    let admission = || &server.handle().state().compute.admission;
+    within("put", client.put_primitive("r", "line", &line(vec![0.0, 0.0], vec![1.0, 0.0], 10.0)))
+        .await
+        .unwrap();
+    within("put", client.put_primitive("r2", "line", &line(vec![0.0, 0.0], vec![1.0, 0.0], 1.0)))
+        .await
+        .unwrap();
+    let realtime = |robot: &str, ignore_scene: bool| {
+        let motion = v1::MotionSpec { ignore_scene, ..spec(robot, "line") };
+        v1::ExecuteRequest { motion: Some(motion), pacing: v1::Pacing::Realtime as i32, ..Default::default() }
+    };
+    let mut running = within("execute", client.execute(realtime("r", false))).await.unwrap();
+    within("first segment", running.next()).await.unwrap().unwrap();
+    let admitted = admission().realtime_in_use();
+    assert!(admitted > 0);
+    // Perception adds 300 obstacles to the robot's cell: far more than the budget it was admitted with.
+    for o in far_obstacles(300) {
+        within("put obstacle", client.put_obstacle(o)).await.unwrap();
+    }
+    // The robot is told, goes on avoiding them, and its reservation counts them.
+    within("the over-budget warning", async {
+        loop {
+            let segment = running.next().await.expect("the stream goes on").unwrap();
+            let over = v1::warning::Kind::ComputeOverBudget as i32;
+            if let Some(w) = segment.warnings.iter().find(|w| w.kind == over) {
+                assert!(w.reason.contains("obstacles after this run was admitted"), "{w:?}");
+                break;
+            }
+        }
+    })
+    .await;
+    assert!(admission().realtime_in_use() as f64 > admission().realtime_budget());
+    // A new real-time run is refused, even one that avoids no obstacle: the budget is taken.
+    let Err(e) = within("execute", client.execute(realtime("r2", true))).await else { panic!("admitted") };
+    assert_eq!(e.code(), Some(tonic::Code::ResourceExhausted), "{e}");
+    // The obstacles go: the reservation shrinks back, and the new run is admitted.
+    for o in far_obstacles(300) {
+        within("delete obstacle", client.delete_obstacle(&o.id)).await.unwrap();
+    }
+    until("the reservation shrank", || admission().realtime_in_use() == admitted).await;
+    let mut second = within("execute", client.execute(realtime("r2", true))).await.unwrap();
+    within("first segment", second.next()).await.unwrap().unwrap();
+    let segment = within("segment", running.next()).await.unwrap().unwrap();
+    assert_eq!(segment.status, v1::SegmentStatus::Running as i32);
+    drop((running, second));
+    until("budget returned", || admission().realtime_in_use() == 0).await;
+    server.stop().await;
+}
