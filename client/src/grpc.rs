@@ -29,16 +29,17 @@ use dmp_proto::v1::session_request::Message;
 use tokio::sync::mpsc;
 use tokio_stream::wrappers::ReceiverStream;
 use tokio_stream::{Stream, StreamExt};
-use tonic::transport::{Channel, Endpoint};
+use tonic::service::interceptor::InterceptedService;
+use tonic::transport::Channel;
+
+pub use crate::connect::CONNECT_TIMEOUT;
+use crate::connect::{ConnectOptions, Credentials, Transport};
 
 use crate::error::ClientError;
 use crate::setpoints::Setpoints;
 
 /// The server `dmpctl` talks to unless told otherwise.
 pub const DEFAULT_SERVER: &str = "http://127.0.0.1:50051";
-
-/// How long [`DmpClient::connect`] waits for the server.
-pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// Largest message sent or received (a 1,000,000-step 3-D plan is ~75 MB).
 pub const MAX_MESSAGE_BYTES: usize = 256 * 1024 * 1024;
@@ -62,17 +63,17 @@ pub type SceneStream = Pin<Box<dyn Stream<Item = Result<v1::SceneSnapshot, Clien
 #[derive(Debug, Clone)]
 pub struct DmpClient {
     url: String,
-    channel: Channel,
-    primitives: PrimitiveServiceClient<Channel>,
-    scene: SceneServiceClient<Channel>,
-    motion: MotionServiceClient<Channel>,
-    server: ServerServiceClient<Channel>,
+    channel: Transport,
+    primitives: PrimitiveServiceClient<Transport>,
+    scene: SceneServiceClient<Transport>,
+    motion: MotionServiceClient<Transport>,
+    server: ServerServiceClient<Transport>,
     /// The cell of the scene requests; empty means the server's default cell.
     cell: String,
 }
 
 /// Every error of an error's chain, `: `-separated (tonic's transport error says little on its own).
-fn chain(e: &dyn std::error::Error) -> String {
+pub(crate) fn chain(e: &dyn std::error::Error) -> String {
     let mut out = e.to_string();
     let mut source = e.source();
     while let Some(s) = source {
@@ -109,42 +110,38 @@ impl DmpClient {
         url: impl Into<String>,
         timeout: Duration,
     ) -> Result<Self, ClientError> {
-        let mut url = url.into();
-        if !url.contains("://") {
-            url = format!("http://{url}");
-        }
-        let endpoint = Endpoint::from_shared(url.clone())
-            .map_err(|e| {
-                ClientError::argument("server", format!("`{url}` is not a valid address: {}", chain(&e)))
-            })?
-            .connect_timeout(timeout)
-            .tcp_nodelay(true);
-        let channel = match tokio::time::timeout(timeout, endpoint.connect()).await {
-            Err(_) => {
-                return Err(ClientError::Connect { url, message: format!("no answer within {timeout:?}") });
-            }
-            Ok(Err(e)) => return Err(ClientError::Connect { url, message: chain(&e) }),
-            Ok(Ok(c)) => c,
-        };
-        Ok(Self::from_channel(channel, url))
+        Self::connect_with(&url.into(), &ConnectOptions { timeout, ..Default::default() }).await
     }
 
-    /// A client over an existing channel (`url` only names it in messages).
+    /// Connects to `url` with TLS and a token as `options` say (see [`crate::connect`]).
+    pub async fn connect_with(url: &str, options: &ConnectOptions) -> Result<Self, ClientError> {
+        let credentials = Credentials::token(options.token.as_deref())?;
+        let (channel, url) = crate::connect::open(url, options).await?;
+        Ok(Self::from_channel_with(channel, url, credentials))
+    }
+
+    /// A client over an existing channel (`url` only names it in messages), without credentials.
     pub fn from_channel(channel: Channel, url: impl Into<String>) -> Self {
+        Self::from_channel_with(channel, url, Credentials::default())
+    }
+
+    /// A client over an existing channel that sends `credentials` with every call.
+    pub fn from_channel_with(channel: Channel, url: impl Into<String>, credentials: Credentials) -> Self {
         let n = MAX_MESSAGE_BYTES;
+        let transport = InterceptedService::new(channel, credentials);
         Self {
             url: url.into(),
-            channel: channel.clone(),
-            primitives: PrimitiveServiceClient::new(channel.clone())
+            channel: transport.clone(),
+            primitives: PrimitiveServiceClient::new(transport.clone())
                 .max_decoding_message_size(n)
                 .max_encoding_message_size(n),
-            scene: SceneServiceClient::new(channel.clone())
+            scene: SceneServiceClient::new(transport.clone())
                 .max_decoding_message_size(n)
                 .max_encoding_message_size(n),
-            motion: MotionServiceClient::new(channel.clone())
+            motion: MotionServiceClient::new(transport.clone())
                 .max_decoding_message_size(n)
                 .max_encoding_message_size(n),
-            server: ServerServiceClient::new(channel),
+            server: ServerServiceClient::new(transport),
             cell: String::new(),
         }
     }
@@ -164,6 +161,11 @@ impl DmpClient {
     /// The server's resource use and traffic.
     pub async fn stats(&self) -> Result<v1::ServerStats, ClientError> {
         Ok(self.server.clone().get_stats(v1::GetStatsRequest {}).await?.into_inner())
+    }
+
+    /// How the server is set up (TLS, access control, what is exposed) and who this client is to it.
+    pub async fn info(&self) -> Result<v1::ServerInfo, ClientError> {
+        Ok(self.server.clone().get_info(v1::GetInfoRequest {}).await?.into_inner())
     }
 
     /// The server's address.

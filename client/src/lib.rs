@@ -3,6 +3,7 @@
 //! | concept | module |
 //! | --- | --- |
 //! | the gRPC client of the server's services | [`grpc`] |
+//! | TLS and tokens for a secured server | [`connect`] |
 //! | the setpoints in force after a stream of segments (supersession) | [`setpoints`] |
 //! | the JSON of a stored record (the wire's conversions are `dmp_proto`'s) | [`convert`] |
 //! | publishing obstacles over Zenoh (perception nodes; feature `zenoh`) | `zenoh_pub` |
@@ -11,6 +12,7 @@
 //! The `dmpctl` command line is the `dmpctl` crate; simulated robots and the load generator are `dmp-sim`; figures
 //! are `dmp-plot`.
 
+pub mod connect;
 pub mod convert;
 pub mod error;
 pub mod grpc;

@@ -68,6 +68,14 @@ impl Cells {
         &self.default
     }
 
+    /// The name of `cell` (empty: the default cell's), checked: what access rules are matched against, before any
+    /// cell is created.
+    pub fn resolve<'a>(&'a self, cell: &'a str) -> Result<&'a str, ServerError> {
+        let name = if cell.is_empty() { &*self.default } else { cell };
+        check_name("cell", name)?;
+        Ok(name)
+    }
+
     /// The scene of `cell` (empty: the default cell), created if it is new. Fails on a name that cannot be a
     /// Zenoh key chunk, or when `max_cells` cells exist already.
     pub fn get(&self, cell: &str) -> Result<Cell, ServerError> {

@@ -36,9 +36,29 @@ pub struct Args {
     /// Zenoh endpoint (router or peer) to connect to (repeatable; replaces the file's list).
     #[arg(long, value_name = "ENDPOINT")]
     pub zenoh_connect: Vec<String>,
-    /// Turn Zenoh's multicast scouting off (find peers only through the connect endpoints).
-    #[arg(long)]
+    /// Turn Zenoh's multicast scouting off (the default: peers are found only through the connect endpoints).
+    #[arg(long, conflicts_with = "zenoh_multicast")]
     pub zenoh_no_multicast: bool,
+    /// Turn Zenoh's multicast scouting on (any peer on the LAN can join: needs `--insecure`).
+    #[arg(long)]
+    pub zenoh_multicast: bool,
+    /// The access file: identities (token digests, certificate common names), roles, cells and robots. Reloaded on
+    /// SIGHUP.
+    #[arg(long, value_name = "FILE")]
+    pub access: Option<PathBuf>,
+    /// The server's TLS certificate chain (PEM); with `--tls-key`, gRPC is served over TLS.
+    #[arg(long, value_name = "FILE", requires = "tls_key")]
+    pub tls_cert: Option<PathBuf>,
+    /// The server's TLS private key (PEM).
+    #[arg(long, value_name = "FILE", requires = "tls_cert")]
+    pub tls_key: Option<PathBuf>,
+    /// The CA of client certificates (PEM): mutual TLS, a certificate's common name names an identity.
+    #[arg(long, value_name = "FILE", requires = "tls_cert")]
+    pub tls_client_ca: Option<PathBuf>,
+    /// Listen beyond loopback without TLS or an access file: anyone who reaches the server can steer every robot.
+    /// Repeated in the log and in GetInfo.
+    #[arg(long)]
+    pub insecure: bool,
     /// Run without Zenoh (gRPC only).
     #[arg(long)]
     pub no_zenoh: bool,
@@ -79,6 +99,23 @@ pub fn load_config(args: &Args) -> anyhow::Result<Config> {
     if args.zenoh_no_multicast {
         config.zenoh.multicast_scouting = false;
     }
+    if args.zenoh_multicast {
+        config.zenoh.multicast_scouting = true;
+    }
+    let security = &mut config.security;
+    for (flag, value) in [
+        (&mut security.access, &args.access),
+        (&mut security.tls_cert, &args.tls_cert),
+        (&mut security.tls_key, &args.tls_key),
+        (&mut security.tls_client_ca, &args.tls_client_ca),
+    ] {
+        if value.is_some() {
+            flag.clone_from(value);
+        }
+    }
+    if args.insecure {
+        security.insecure = true;
+    }
     if args.no_zenoh {
         config.zenoh.disabled = true;
     }
@@ -113,6 +150,7 @@ cell = "cell-a"
 mode = "client"
 connect = ["tcp/10.0.0.1:7447", "tcp/10.0.0.2:7447"]
 listen = ["tcp/0.0.0.0:7447"]
+multicast_scouting = true
 
 [limits]
 max_streams = 10

@@ -27,6 +27,25 @@ pub struct Config {
     pub compute: ComputeConfig,
     /// Obstacles that nobody updates any more ([`crate::staleness`]).
     pub scene: SceneConfig,
+    /// TLS, the access file, and what may listen beyond loopback ([`crate::exposure`]).
+    pub security: SecurityConfig,
+}
+
+/// TLS and access control. Without an access file and TLS the server listens on loopback only, unless `insecure`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SecurityConfig {
+    /// The access file: identities, roles, cells and robots (`--access`).
+    pub access: Option<PathBuf>,
+    /// The server's TLS certificate chain, PEM (`--tls-cert`).
+    pub tls_cert: Option<PathBuf>,
+    /// The server's TLS private key, PEM (`--tls-key`).
+    pub tls_key: Option<PathBuf>,
+    /// The CA that signs client certificates, PEM (`--tls-client-ca`): mutual TLS, the certificate's common name
+    /// naming an identity. Clients without a certificate may still present a token.
+    pub tls_client_ca: Option<PathBuf>,
+    /// Listen beyond loopback without TLS or an access file (`--insecure`): repeated in the log and in GetInfo.
+    pub insecure: bool,
 }
 
 impl Default for Config {
@@ -40,13 +59,14 @@ impl Default for Config {
             limits: Limits::default(),
             compute: ComputeConfig::default(),
             scene: SceneConfig::default(),
+            security: SecurityConfig::default(),
         }
     }
 }
 
-/// Where the embedded peer listens by default: Zenoh's well-known port, on every interface, so that perception
-/// nodes can connect to the cell's server (`tcp/<host>:7447`) or find it by multicast scouting.
-pub const DEFAULT_ZENOH_LISTEN: &str = "tcp/0.0.0.0:7447";
+/// Where the embedded peer listens by default: Zenoh's well-known port, on loopback (secure by default: other hosts
+/// reach it once it listens on another address, which takes TLS and an access file, or `--insecure`).
+pub const DEFAULT_ZENOH_LISTEN: &str = "tcp/127.0.0.1:7447";
 
 /// The embedded Zenoh peer (or client of a router network).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -60,7 +80,8 @@ pub struct ZenohConfig {
     pub listen: Vec<String>,
     /// Endpoints to connect to (routers or peers).
     pub connect: Vec<String>,
-    /// Multicast scouting (finding peers on the LAN). On by default, as Zenoh's own default.
+    /// Multicast scouting (finding peers on the LAN, and being found). Off by default: any peer on the LAN could
+    /// join; on, it takes `--insecure` until the Zenoh transport is secured.
     pub multicast_scouting: bool,
 }
 
@@ -84,7 +105,7 @@ impl Default for ZenohConfig {
             mode: "peer".into(),
             listen: vec![DEFAULT_ZENOH_LISTEN.into()],
             connect: Vec::new(),
-            multicast_scouting: true,
+            multicast_scouting: false,
         }
     }
 }

@@ -14,6 +14,12 @@ pub enum ServerError {
         /// The rule.
         reason: String,
     },
+    /// The caller could not be identified.
+    #[error("{0}")]
+    Unauthenticated(String),
+    /// The caller's identity may not do this.
+    #[error("{0}")]
+    PermissionDenied(String),
     /// The thing named does not exist.
     #[error("{0}")]
     NotFound(String),
@@ -88,6 +94,8 @@ impl From<ServerError> for Status {
         let msg = e.to_string();
         match e {
             ServerError::InvalidArgument { .. } => Status::invalid_argument(msg),
+            ServerError::Unauthenticated(_) => Status::unauthenticated(msg),
+            ServerError::PermissionDenied(_) => Status::permission_denied(msg),
             ServerError::NotFound(_) => Status::not_found(msg),
             ServerError::ResourceExhausted(_) => Status::resource_exhausted(msg),
             ServerError::AlreadyExists(_) => Status::already_exists(msg),

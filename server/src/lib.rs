@@ -23,6 +23,7 @@
 //! | who may open a stream: pools, per connection, per client | [`stream_permits`] |
 //! | the server's memory budget and its reservations | [`memory`] |
 
+pub mod access;
 pub mod cell;
 pub mod cells;
 pub mod cli;
@@ -34,6 +35,7 @@ pub mod convert;
 pub mod error;
 pub mod executing;
 pub mod executor;
+pub mod exposure;
 pub mod memory;
 pub mod robots;
 pub mod run;
@@ -43,6 +45,7 @@ pub mod state;
 pub mod state_admission;
 pub mod store;
 pub mod stream_permits;
+pub mod tls;
 pub mod write_batching;
 pub mod zenoh_bridge;
 pub mod zenoh_threads;

@@ -14,15 +14,17 @@ use tokio::net::TcpListener;
 use tokio::task::JoinHandle;
 use tokio_util::sync::CancellationToken;
 use tonic::transport::Server;
-use tonic::transport::server::TcpConnectInfo;
 use tracing::{info, warn};
 
+use crate::access::AccessControl;
+use crate::access::layer::AuthenticateLayer;
 use crate::cells::Cells;
 use crate::clock::Clock;
 use crate::compute::Compute;
 use crate::config::Config;
 use crate::error::ServerError;
 use crate::executing::Executing;
+use crate::exposure;
 use crate::memory::MemoryBudget;
 use crate::robots::RobotBus;
 use crate::services::motion::MotionServiceImpl;
@@ -33,7 +35,8 @@ use crate::state::AppState;
 use crate::state_admission::StateAdmission;
 use crate::store::Store;
 use crate::stream_permits::StreamPermits;
-use crate::write_batching::{BatchedConnectInfo, BatchedWrites};
+use crate::tls::server_tls;
+use crate::write_batching::BatchedWrites;
 use crate::zenoh_bridge::{ZenohBridge, open_session, reachability};
 
 /// How long a shutdown waits for connections to drain before closing them.
@@ -62,6 +65,12 @@ impl ServerHandle {
         self.bridge_malformed.as_ref().map(|c| c.load(std::sync::atomic::Ordering::Relaxed)).unwrap_or(0)
     }
 
+    /// Reads the access file again (what SIGHUP does): streams it no longer allows end with PERMISSION_DENIED; a
+    /// file that is refused changes nothing.
+    pub fn reload_access(&self) -> Result<usize, crate::access::AccessError> {
+        self.state.access.reload()
+    }
+
     /// Streams currently open (executions and watches).
     pub fn open_streams(&self) -> usize {
         self.state.streams.open_executions() + self.state.streams.open_watches()
@@ -81,6 +90,19 @@ pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
 
 /// Starts the server on `clock` (tests run real time on tokio's paused clock) and returns once it serves.
 pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHandle, ServerError> {
+    // Refused before anything listens: exposure without protection, a bad access file, bad TLS files.
+    let exposure = exposure::check(&config)?;
+    for reason in &exposure.warnings {
+        warn!(reason = %reason, "INSECURE (--insecure): anyone who reaches the server can steer every robot");
+    }
+    let access = match &config.security.access {
+        Some(path) => {
+            AccessControl::load(path).map_err(|e| ServerError::FailedPrecondition(e.to_string()))?
+        }
+        None => AccessControl::open(),
+    };
+    let access = Arc::new(access);
+    let tls = server_tls(&config.security)?;
     let listener = TcpListener::bind(config.grpc_addr).await.map_err(|e| {
         ServerError::FailedPrecondition(format!("cannot listen on {}: {e}", config.grpc_addr))
     })?;
@@ -131,6 +153,8 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         clock,
         executing: Executing::default(),
         state_admission,
+        access: access.clone(),
+        exposure,
     });
     let max = state.config.limits.max_message_bytes;
 
@@ -151,11 +175,18 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         .map_err(|e| ServerError::Internal(e.to_string()))?;
 
     let limits = &state.config.limits;
-    let router = Server::builder()
+    let mut server = Server::builder();
+    if let Some(tls) = tls {
+        server = server.tls_config(tls).map_err(|e| {
+            ServerError::FailedPrecondition(format!("security: invalid TLS certificate or key: {e}"))
+        })?;
+    }
+    let router = server
         .http2_keepalive_interval(seconds(limits.http2_keepalive_interval_s))
         .http2_keepalive_timeout(seconds(limits.http2_keepalive_timeout_s))
-        // Every request marks its connection active (the idle timeout counts from the last one).
-        .layer(tonic::service::InterceptorLayer::new(mark_active as fn(_) -> _))
+        // Every request is authenticated before any handler, and marks its connection active (the idle timeout
+        // counts from the last one).
+        .layer(AuthenticateLayer::new(access))
         .add_service(health_service)
         .add_service(reflection)
         .add_service(
@@ -217,17 +248,39 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         info!("server stopped");
         served
     });
-    info!(grpc = %grpc_addr, zenoh = ?zenoh_locators, cell = %state.config.cell, "serving");
+    let security = &state.config.security;
+    info!(
+        grpc = %grpc_addr,
+        zenoh = ?zenoh_locators,
+        cell = %state.config.cell,
+        tls = security.tls_cert.is_some(),
+        mutual_tls = security.tls_client_ca.is_some(),
+        access_control = state.access.enabled(),
+        insecure = state.exposure.insecure(),
+        "serving"
+    );
     Ok(ServerHandle { grpc_addr, zenoh_locators, state, bridge_malformed, task })
 }
 
-/// Runs the server until `shutdown` completes (the binary passes SIGINT or SIGTERM), then stops it cleanly.
+/// Runs the server until `shutdown` completes (the binary passes SIGINT or SIGTERM), then stops it cleanly. Each
+/// item of `hangups` (SIGHUP) reloads the access file.
 pub async fn run(
     config: Config,
     shutdown: impl Future<Output = ()> + Send + 'static,
+    mut hangups: impl tokio_stream::Stream<Item = ()> + Send + Unpin,
 ) -> Result<(), ServerError> {
     let handle = start(config).await?;
-    shutdown.await;
+    tokio::pin!(shutdown);
+    loop {
+        tokio::select! {
+            _ = &mut shutdown => break,
+            Some(()) = tokio_stream::StreamExt::next(&mut hangups) => {
+                info!("SIGHUP: reloading the access file");
+                // A refused file is logged and changes nothing.
+                let _ = handle.reload_access();
+            }
+        }
+    }
     info!("shutting down: draining streams, closing Zenoh");
     handle.shutdown().await
 }
@@ -235,12 +288,4 @@ pub async fn run(
 /// A duration of `s` seconds; None for 0 (or anything not a positive finite number): the feature is off.
 fn seconds(s: f64) -> Option<std::time::Duration> {
     (s.is_finite() && s > 0.0).then(|| std::time::Duration::from_secs_f64(s))
-}
-
-/// Marks the connection of a request active (see `connection`).
-fn mark_active(request: tonic::Request<()>) -> Result<tonic::Request<()>, tonic::Status> {
-    if let Some(info) = request.extensions().get::<BatchedConnectInfo<TcpConnectInfo>>() {
-        info.activity.touch();
-    }
-    Ok(request)
 }

@@ -1,6 +1,11 @@
 //! What every service shares.
 
+use std::sync::Arc;
+
 use tokio_util::sync::CancellationToken;
+
+use crate::access::{AccessControl, Caller};
+use crate::exposure::Exposure;
 
 use crate::cells::Cells;
 use crate::clock::Clock;
@@ -43,6 +48,10 @@ pub struct AppState {
     pub executing: Executing,
     /// Which robot states from outside the server the cells take, and how many were dropped.
     pub state_admission: StateAdmission,
+    /// The identities and what they may do (open without an access file).
+    pub access: Arc<AccessControl>,
+    /// What is exposed without protection (`--insecure`).
+    pub exposure: Exposure,
 }
 
 /// What the server has done so far.
@@ -61,6 +70,16 @@ impl Default for Counters {
 }
 
 impl AppState {
+    /// Who sent `request` (the authentication layer put it there). A request that did not pass the layer, as
+    /// handlers called directly, is the open server's caller when there is no access file, and refused otherwise.
+    pub fn caller<T>(&self, request: &tonic::Request<T>) -> Result<Caller, ServerError> {
+        match request.extensions().get::<Caller>() {
+            Some(c) => Ok(c.clone()),
+            None if !self.access.enabled() => Ok(Caller::open()),
+            None => Err(ServerError::Unauthenticated("the request was not authenticated".into())),
+        }
+    }
+
     /// Executions open now (what real-time pacing scales with).
     pub fn open_streams(&self) -> usize {
         self.streams.open_executions()
@@ -100,6 +119,8 @@ impl AppState {
             shutdown: CancellationToken::new(),
             counters: Default::default(),
             clock,
+            access: Arc::new(AccessControl::open()),
+            exposure: Exposure::default(),
         }
     }
 }

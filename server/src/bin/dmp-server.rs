@@ -1,4 +1,5 @@
-//! `dmp-server`: parses the flags, starts logging, and runs the server until SIGINT or SIGTERM.
+//! `dmp-server`: parses the flags, starts logging, and runs the server until SIGINT or SIGTERM (SIGHUP reloads the
+//! access file).
 
 use std::future::Future;
 use std::io::IsTerminal;
@@ -85,7 +86,10 @@ fn main() -> ExitCode {
     };
     let result = runtime.block_on(async {
         let shutdown = shutdown_signal().map_err(|e| format!("cannot install the signal handlers: {e}"))?;
-        dmp_server::run::run(config, shutdown).await.map_err(|e| e.to_string())
+        let hangups =
+            signal(SignalKind::hangup()).map_err(|e| format!("cannot install the SIGHUP handler: {e}"))?;
+        let hangups = tokio_stream::wrappers::SignalStream::new(hangups);
+        dmp_server::run::run(config, shutdown, hangups).await.map_err(|e| e.to_string())
     });
     match result {
         Ok(()) => {

@@ -40,7 +40,8 @@ async fn a_rejection_reaches_the_robot_within_a_refill_and_the_run_goes_on() {
     let run = super::tests::reach(&cfg);
     let (tx, mut rx) = mpsc::channel(64);
     let (ctl_tx, ctl_rx) = mpsc::channel(8);
-    let producer = tokio::spawn(run_stream(app.clone(), run, cell, cfg, tx, Some(ctl_rx), None));
+    let producer =
+        tokio::spawn(run_stream(app.clone(), run, cell, cfg, tx, Some(ctl_rx), Default::default()));
 
     // (field, sent at) of each rejection not yet received.
     let mut pending: Vec<(String, f64)> = Vec::new();

@@ -20,6 +20,7 @@ use super::pacing::{FIRST_POINT_DELAY, ROLLBACK_MARGIN, refill};
 use super::segments::Batch;
 use super::served_run::ServedRun;
 use super::step::{Step, Stepped, compute};
+use crate::access::Grant;
 use crate::cell::{Cell, ObstacleSet, SeenRobot};
 use crate::compute::admission::Reservation;
 use crate::compute::pool::Pool;
@@ -67,9 +68,17 @@ pub enum Control {
     Rejected(v1::Warning),
 }
 
+/// What a stream was admitted with, held until it ends.
+#[derive(Debug, Default)]
+pub struct Admitted {
+    /// Real time: its compute reservation.
+    pub budget: Option<Reservation>,
+    /// What the access file allows it (none: nothing to check again).
+    pub grant: Option<Grant>,
+}
+
 /// Runs `run` until the goal, a stop, `max_duration`, the client leaving or shutdown. Items go to `tx` (mapped by
-/// the caller's stream); errors end the stream with a status. `budget` is the run's compute reservation, held
-/// until it ends.
+/// the caller's stream); errors end the stream with a status.
 pub async fn run_stream(
     app: Arc<AppState>,
     mut run: ServedRun,
@@ -77,14 +86,15 @@ pub async fn run_stream(
     cfg: StreamConfig,
     tx: mpsc::Sender<Result<Batch, tonic::Status>>,
     control: Option<mpsc::Receiver<Control>>,
-    budget: Option<Reservation>,
+    admitted: Admitted,
 ) {
     run.execution.set_end_time(cfg.max_duration);
     let ids: Vec<String> = run.execution.members().iter().map(|m| m.id.clone()).collect();
     let stale = StaleGuard::new(cell.staleness(), run.ignore_scene);
     let mut producer = Producer::new(&app, &cell, &cfg, &tx, control, run);
     producer.stale = stale;
-    producer.budget = budget;
+    producer.budget = admitted.budget;
+    producer.grant = admitted.grant;
     let result = producer.produce().await;
     let t = producer.time;
     drop(producer);
@@ -146,6 +156,8 @@ struct Producer<'a> {
     budget: Option<Reservation>,
     /// The real-time budget was over its limit at the last resize (warned once per crossing).
     over_budget: bool,
+    /// What the access file allows the stream: it ends with PERMISSION_DENIED once a reload no longer does.
+    grant: Option<Grant>,
 }
 
 impl<'a> Producer<'a> {
@@ -179,6 +191,7 @@ impl<'a> Producer<'a> {
             stale: StaleGuard::new(cell.staleness(), false),
             budget: None,
             over_budget: false,
+            grant: None,
         }
     }
 
@@ -227,10 +240,14 @@ impl<'a> Producer<'a> {
                 },
                 _ = self.app.shutdown.cancelled() => return Err(ServerError::ShuttingDown),
                 _ = self.tx.closed() => return Ok(Err("client left")),
+                denied = revoked(&mut self.grant) => return Err(denied),
             }
         } else {
             if self.app.shutdown.is_cancelled() {
                 return Err(ServerError::ShuttingDown);
+            }
+            if let Some(g) = self.grant.as_mut() {
+                g.check_now()?;
             }
             wake.scene_changed = self.scene_rx.has_changed().unwrap_or(false);
         }
@@ -443,6 +460,13 @@ impl<'a> Producer<'a> {
         let now = if self.cfg.realtime { self.start_unix + t } else { self.app.clock.now_unix_s() };
         self.cell.other_robots_into(&first.id, now, REMOTE_MAX_AGE_S, &mut self.others);
         self.others.clone()
+    }
+}
+
+async fn revoked(grant: &mut Option<Grant>) -> ServerError {
+    match grant {
+        Some(g) => g.revoked().await,
+        None => std::future::pending().await,
     }
 }
 

@@ -48,7 +48,8 @@ async fn real_time_segments_arrive_before_they_are_due_and_a_goal_change_superse
     let (tx, mut rx) = mpsc::channel(64);
     let (ctl_tx, ctl_rx) = mpsc::channel(8);
     let started = clock.now_unix_s();
-    let producer = tokio::spawn(run_stream(app.clone(), run, cell, cfg, tx, Some(ctl_rx), None));
+    let producer =
+        tokio::spawn(run_stream(app.clone(), run, cell, cfg, tx, Some(ctl_rx), Default::default()));
 
     let mut goal_sent_at = None;
     let mut superseding = None;

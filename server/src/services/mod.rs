@@ -2,6 +2,7 @@
 //! commands checked (`session_commands.rs`).
 
 pub mod motion;
+mod motion_resolve;
 pub mod primitives;
 pub mod scene;
 pub mod server;

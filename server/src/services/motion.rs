@@ -4,13 +4,9 @@ use std::pin::Pin;
 use std::sync::Arc;
 use std::time::Duration;
 
+use dmp::Stepping;
 use dmp::execution::{GroupMember, join_group};
 use dmp::field::Agent;
-use dmp::{Motion, Primitive, Stepping};
-use dmp_proto::avoidance::avoidance_from_proto;
-use dmp_proto::check::{check_in_workspace, check_tau, check_vector};
-use dmp_proto::keys::check_name;
-use dmp_proto::shape::superquadric_to_shape;
 use dmp_proto::status::segment_status;
 use dmp_proto::v1;
 use dmp_proto::v1::motion_service_server::MotionService;
@@ -21,29 +17,31 @@ use tonic::transport::server::TcpConnectInfo;
 use tonic::{Request, Response, Status, Streaming};
 use tracing::{debug, info};
 
+use crate::access::{Action, Caller, Grant};
+use crate::audit;
 use crate::cell::Cell;
 use crate::compute::admission::Reservation;
-use crate::convert::{obstacle_from_proto, stored_primitive};
 use crate::error::ServerError;
 use crate::executing::Claim;
 use crate::executor::ignored::push_obstacle_warnings;
 use crate::executor::pacing::{MAX_REFILL, history_len, refill_segments};
 use crate::executor::plan::advance_cancellable;
 use crate::executor::segments::Batch;
-use crate::executor::served_run::{RunAvoidance, ServedRun};
-use crate::executor::stream::{Control, StreamConfig, run_stream};
+use crate::executor::served_run::ServedRun;
+use crate::executor::stream::{Admitted, Control, StreamConfig, run_stream};
 use crate::executor::stream_memory::StreamBytes;
 use crate::state::AppState;
 use crate::stream_permits::{Peer, StreamKind};
 use crate::write_batching::{BatchedConnectInfo, Urgency};
 
+use super::motion_resolve::{Intent, ResolvedMotion};
 use super::session_commands::SessionCommands;
 use super::stream_request::{DEFAULT_DT, StreamRequest};
 
 /// Implements `dmp.v1.MotionService`.
 #[derive(Debug, Clone)]
 pub struct MotionServiceImpl {
-    state: Arc<AppState>,
+    pub(super) state: Arc<AppState>,
 }
 
 impl MotionServiceImpl {
@@ -53,96 +51,16 @@ impl MotionServiceImpl {
     }
 }
 
+/// Whose a stream is: its robots, claimed until it ends, and what the access file allows it.
+struct Owner {
+    claim: Claim,
+    grant: Grant,
+}
+
 type SegmentStream = Pin<Box<dyn Stream<Item = Result<v1::Segment, Status>> + Send + 'static>>;
 type GroupStream = Pin<Box<dyn Stream<Item = Result<v1::GroupSegment, Status>> + Send + 'static>>;
 
-/// A motion request resolved against the store: the primitive, the motion, the avoidance.
-struct ResolvedMotion {
-    robot_id: String,
-    /// The robot's cell.
-    cell: Cell,
-    primitive: Primitive,
-    motion: Motion,
-    avoidance: RunAvoidance,
-    footprint: Option<dmp::Shape>,
-    footprint_proto: Option<v1::Superquadric>,
-}
-
 impl MotionServiceImpl {
-    async fn resolve(
-        &self,
-        spec: Option<&v1::MotionSpec>,
-        prefix: &str,
-    ) -> Result<ResolvedMotion, ServerError> {
-        let spec = spec.ok_or_else(|| ServerError::invalid(prefix, "is required"))?;
-        check_name(&format!("{prefix}.robot_id"), &spec.robot_id)?;
-        check_name(&format!("{prefix}.primitive"), &spec.primitive)?;
-        let cell = self.state.cells.get(&spec.cell).map_err(|e| e.within(prefix))?;
-        let store = self.state.store.clone();
-        let (robot, name, version) = (spec.robot_id.clone(), spec.primitive.clone(), spec.version);
-        let record = tokio::task::spawn_blocking(move || store.get(&robot, &name, version))
-            .await
-            .map_err(|e| ServerError::Internal(e.to_string()))??;
-        let proto = record
-            .primitive
-            .ok_or_else(|| ServerError::Internal("stored record without primitive".into()))?;
-        let what = format!("{}/{}", spec.robot_id, spec.primitive);
-        let limits = &self.state.config.limits;
-        let primitive = stored_primitive(&proto, limits, &what).map_err(|e| e.within(prefix))?;
-        let d = primitive.dim;
-        let given_or_default = |field: &str, v: &[f64], default: &[f64]| -> Result<Vec<f64>, ServerError> {
-            if v.is_empty() {
-                Ok(default.to_vec())
-            } else {
-                check_vector(&format!("{prefix}.{field}"), v, d)?;
-                Ok(v.to_vec())
-            }
-        };
-        let start = given_or_default("start", &spec.start, &primitive.start)?;
-        let goal = given_or_default("goal", &spec.goal, &primitive.goal)?;
-        check_in_workspace(&format!("{prefix}.start"), &start, limits.workspace_m)?;
-        check_in_workspace(&format!("{prefix}.goal"), &goal, limits.workspace_m)?;
-        let tau = if spec.tau == 0.0 { primitive.tau } else { spec.tau };
-        check_tau(&format!("{prefix}.tau"), tau)?;
-        let defaults = &self.state.config.defaults;
-        let obstacles = avoidance_from_proto(spec.avoidance.as_ref(), defaults.avoidance)
-            .map_err(|e| e.within(&format!("{prefix}.avoidance")))?;
-        let robots = avoidance_from_proto(spec.robot_avoidance.as_ref(), defaults.robot_avoidance)
-            .map_err(|e| e.within(&format!("{prefix}.robot_avoidance")))?;
-        if spec.extra_obstacles.len() > self.state.config.limits.max_obstacles {
-            return Err(ServerError::ResourceExhausted(format!(
-                "{prefix}.extra_obstacles: more than {} obstacles",
-                self.state.config.limits.max_obstacles
-            )));
-        }
-        let mut extra = Vec::with_capacity(spec.extra_obstacles.len());
-        for (i, o) in spec.extra_obstacles.iter().enumerate() {
-            check_name(&format!("{prefix}.extra_obstacles[{i}].id"), &o.id)?;
-            extra.push(
-                obstacle_from_proto(o, limits.workspace_m)
-                    .map_err(|e| e.within(&format!("{prefix}.extra_obstacles[{i}]")))?,
-            );
-        }
-        // Checked now, not when the first obstacle or robot appears (which would end a running stream).
-        obstacles.0.method.validate(&format!("{prefix}.avoidance"), d)?;
-        robots.0.method.validate(&format!("{prefix}.robot_avoidance"), d)?;
-        let footprint = spec
-            .footprint
-            .as_ref()
-            .map(superquadric_to_shape)
-            .transpose()
-            .map_err(|e| e.within(&format!("{prefix}.footprint")))?;
-        Ok(ResolvedMotion {
-            robot_id: spec.robot_id.clone(),
-            cell,
-            primitive,
-            motion: Motion { start, goal, tau },
-            avoidance: RunAvoidance { obstacles, robots, extra, ignore_scene: spec.ignore_scene },
-            footprint,
-            footprint_proto: spec.footprint.clone(),
-        })
-    }
-
     /// The run of one robot.
     fn single_robot_run(
         &self,
@@ -199,6 +117,16 @@ impl MotionServiceImpl {
         }
     }
 
+    /// The grant of a stream executing `robots` in `cell`: it ends when a reload of the access file no longer allows
+    /// it.
+    fn grant(&self, caller: Caller, cell: &Cell, robots: Vec<String>) -> Grant {
+        let cell = cell.name().to_owned();
+        self.state.access.grant(caller, move |c, access| {
+            let robots: Vec<&str> = robots.iter().map(String::as_str).collect();
+            c.check_again(access, &Action::Execute { cell: &cell, robots: &robots })
+        })
+    }
+
     /// Claims `robots` of `cell` for a new stream (see [`crate::executing`]).
     async fn claim(&self, cell: &Cell, robots: &[&str], take_over: bool) -> Result<Claim, ServerError> {
         self.state.executing.claim(cell.name(), robots, take_over).await
@@ -215,7 +143,7 @@ impl MotionServiceImpl {
         cfg: StreamConfig,
         control: Option<mpsc::Receiver<Control>>,
         peer: &Peer,
-        claim: Claim,
+        Owner { claim, grant }: Owner,
     ) -> Result<mpsc::Receiver<Result<Batch, Status>>, ServerError> {
         // Real time: room for every segment computed in one wake-up (see `stream::MAX_REFILL`).
         let buffer = self.state.config.limits.stream_buffer.max(1)
@@ -230,7 +158,7 @@ impl MotionServiceImpl {
             let taken_over = claim.taken_over();
             let shutdown = app.shutdown.clone();
             let ended = tokio::select! {
-                _ = run_stream(app, run, cell, cfg, tx.clone(), control, budget) => true,
+                _ = run_stream(app, run, cell, cfg, tx.clone(), control, Admitted { budget, grant: Some(grant) }) => true,
                 _ = taken_over => false,
             };
             // Let go first: the stream taking over waits for it.
@@ -259,8 +187,9 @@ fn one_robot_stream(rx: mpsc::Receiver<Result<Batch, Status>>) -> SegmentStream 
 #[tonic::async_trait]
 impl MotionService for MotionServiceImpl {
     async fn plan(&self, request: Request<v1::PlanRequest>) -> Result<Response<v1::PlanResponse>, Status> {
+        let caller = self.state.caller(&request)?;
         let req = request.into_inner();
-        let r = self.resolve(req.motion.as_ref(), "motion").await?;
+        let r = self.resolve(&caller, Intent::Plan, req.motion.as_ref(), "motion").await?;
         let dt = if req.dt == 0.0 { DEFAULT_DT } else { req.dt };
         if !(dt.is_finite() && dt > 0.0 && dt <= 0.1) {
             return Err(ServerError::invalid("dt", "must be greater than 0 and at most 0.1 s").into());
@@ -338,15 +267,25 @@ impl MotionService for MotionServiceImpl {
         request: Request<v1::ExecuteRequest>,
     ) -> Result<Response<Self::ExecuteStream>, Status> {
         let (urgency, peer) = (urgency_of(&request), Peer::of(&request));
+        let caller = self.state.caller(&request)?;
         let req = request.into_inner();
-        let r = self.resolve(req.motion.as_ref(), "motion").await?;
+        let r = self.resolve(&caller, Intent::Execute, req.motion.as_ref(), "motion").await?;
         let cfg = StreamRequest::of(&req).config(r.motion.tau, &self.state.config, urgency)?;
         info!(robot = %r.robot_id, cell = r.cell.name(), realtime = cfg.realtime, "execute");
         self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
         let cell = r.cell.clone();
         let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await?;
+        audit!(caller, "execute", cell = cell.name(), robot = %r.robot_id, take_over = req.take_over);
+        let grant = self.grant(caller, &cell, vec![r.robot_id.clone()]);
         let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
-        Ok(Response::new(one_robot_stream(self.spawn(run, cell, cfg, None, &peer, claim)?)))
+        Ok(Response::new(one_robot_stream(self.spawn(
+            run,
+            cell,
+            cfg,
+            None,
+            &peer,
+            Owner { claim, grant },
+        )?)))
     }
 
     type SessionStream = SegmentStream;
@@ -357,6 +296,7 @@ impl MotionService for MotionServiceImpl {
     ) -> Result<Response<Self::SessionStream>, Status> {
         use v1::session_request::Message as M;
         let (urgency, peer) = (urgency_of(&request), Peer::of(&request));
+        let caller = self.state.caller(&request)?;
         let mut inbound = request.into_inner();
         let first = tokio::time::timeout(Duration::from_secs(10), inbound.message())
             .await
@@ -366,7 +306,7 @@ impl MotionService for MotionServiceImpl {
                 ServerError::invalid("message", "the first message of a session must be `start`").into()
             );
         };
-        let r = self.resolve(req.motion.as_ref(), "start.motion").await?;
+        let r = self.resolve(&caller, Intent::Execute, req.motion.as_ref(), "start.motion").await?;
         let cfg = StreamRequest::of(&req)
             .config(r.motion.tau, &self.state.config, urgency)
             .map_err(|e| e.within("start"))?;
@@ -375,13 +315,15 @@ impl MotionService for MotionServiceImpl {
         self.check_message_size("start.segment_s", cfg.segment_points * dim)?;
         let cell = r.cell.clone();
         let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await.map_err(|e| e.within("start"))?;
+        audit!(caller, "session", cell = cell.name(), robot = %robot_id, take_over = req.take_over);
+        let grant = self.grant(caller.clone(), &cell, vec![robot_id.clone()]);
         let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
         let (ctl_tx, ctl_rx) = mpsc::channel(64);
-        let rx = self.spawn(run, cell, cfg, Some(ctl_rx), &peer, claim)?;
+        let rx = self.spawn(run, cell, cfg, Some(ctl_rx), &peer, Owner { claim, grant })?;
         let shutdown = self.state.shutdown.clone();
         let limits = &self.state.config.limits;
         let commands = SessionCommands::new(
-            robot_id,
+            robot_id.clone(),
             dim,
             limits.workspace_m,
             self.state.state_admission.clone(),
@@ -397,8 +339,16 @@ impl MotionService for MotionServiceImpl {
                 };
                 let Ok(Some(msg)) = msg else { break };
                 let control = commands.control(msg.message);
-                if let Control::Rejected(w) = &control {
-                    debug!(field = %w.field, reason = %w.reason, "session message rejected");
+                match &control {
+                    Control::Rejected(w) => {
+                        debug!(field = %w.field, reason = %w.reason, "session message rejected")
+                    }
+                    Control::SetGoal(goal) => audit!(caller, "set goal", robot = %robot_id, ?goal),
+                    Control::SetTau(tau) => audit!(caller, "set tau", robot = %robot_id, tau),
+                    Control::Pause => audit!(caller, "pause", robot = %robot_id),
+                    Control::Resume => audit!(caller, "resume", robot = %robot_id),
+                    Control::Stop => audit!(caller, "stop", robot = %robot_id),
+                    Control::State(_) => {}
                 }
                 if ctl_tx.send(control).await.is_err() {
                     break;
@@ -415,6 +365,7 @@ impl MotionService for MotionServiceImpl {
         request: Request<v1::ExecuteGroupRequest>,
     ) -> Result<Response<Self::ExecuteGroupStream>, Status> {
         let (urgency, peer) = (urgency_of(&request), Peer::of(&request));
+        let caller = self.state.caller(&request)?;
         let req = request.into_inner();
         if req.members.len() < 2 {
             return Err(ServerError::invalid("members", "a group needs at least two members").into());
@@ -424,7 +375,8 @@ impl MotionService for MotionServiceImpl {
         }
         let mut resolved = Vec::with_capacity(req.members.len());
         for (i, m) in req.members.iter().enumerate() {
-            let r = self.resolve(m.motion.as_ref(), &format!("members[{i}].motion")).await?;
+            let prefix = format!("members[{i}].motion");
+            let r = self.resolve(&caller, Intent::Execute, m.motion.as_ref(), &prefix).await?;
             if r.cell.name() != resolved.first().map_or(r.cell.name(), |f: &ResolvedMotion| f.cell.name()) {
                 return Err(ServerError::invalid(
                     format!("members[{i}].motion.cell"),
@@ -480,8 +432,10 @@ impl MotionService for MotionServiceImpl {
         self.check_message_size("segment_s", cfg.segment_points * primitive.dim)?;
         let ids: Vec<&str> = members.iter().map(|(agent, _)| agent.id.as_str()).collect();
         let claim = self.claim(&cell, &ids, req.take_over).await?;
+        audit!(caller, "execute group", cell = cell.name(), robots = ?ids, take_over = req.take_over);
+        let grant = self.grant(caller, &cell, ids.iter().map(|id| id.to_string()).collect());
         let run = ServedRun::new(primitive, motion, members, avoidance, cfg.stepping, history_len(&cfg))?;
-        let rx = self.spawn(run, cell, cfg, None, &peer, claim)?;
+        let rx = self.spawn(run, cell, cfg, None, &peer, Owner { claim, grant })?;
         let stream = ReceiverStream::new(rx).map(|r| {
             r.map(|segments| v1::GroupSegment {
                 sequence: segments.first().map(|s| s.sequence).unwrap_or(0),

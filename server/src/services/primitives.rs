@@ -13,6 +13,8 @@ use tracing::{debug, error, info};
 
 use dmp_proto::keys::check_name;
 
+use crate::access::{Action, Caller};
+use crate::audit;
 use crate::convert::{demonstration_from_proto, learn_config_from_proto, primitive_from_proto};
 use crate::error::ServerError;
 use crate::state::AppState;
@@ -90,9 +92,14 @@ fn prefix_field_once(prefix: &str, e: ServerError) -> ServerError {
 }
 
 impl PrimitiveServiceImpl {
-    async fn handle_learn(&self, req: v1::LearnRequest) -> Result<v1::LearnResponse, ServerError> {
+    async fn handle_learn(
+        &self,
+        caller: &Caller,
+        req: v1::LearnRequest,
+    ) -> Result<v1::LearnResponse, ServerError> {
         check_name("robot_id", &req.robot_id)?;
         check_name("name", &req.name)?;
+        caller.check(&Action::WritePrimitive { robot: &req.robot_id })?;
         let limits = &self.state.config.limits;
         let demo =
             req.demonstration.as_ref().ok_or_else(|| ServerError::invalid("demonstration", "is required"))?;
@@ -144,12 +151,18 @@ impl PrimitiveServiceImpl {
             .await
             .map_err(|e| ServerError::Internal(e.to_string()))??;
         info!(robot = %record.robot_id, name = %record.name, version = record.version, samples, dim, "learned");
+        audit!(caller, "learn", robot = %record.robot_id, name = %record.name, version = record.version);
         Ok(v1::LearnResponse { record: Some(record) })
     }
 
-    async fn handle_put(&self, req: v1::PutPrimitiveRequest) -> Result<v1::LearnResponse, ServerError> {
+    async fn handle_put(
+        &self,
+        caller: &Caller,
+        req: v1::PutPrimitiveRequest,
+    ) -> Result<v1::LearnResponse, ServerError> {
         check_name("robot_id", &req.robot_id)?;
         check_name("name", &req.name)?;
+        caller.check(&Action::WritePrimitive { robot: &req.robot_id })?;
         let proto = req.primitive.as_ref().ok_or_else(|| ServerError::invalid("primitive", "is required"))?;
         let primitive = primitive_from_proto(proto, &self.state.config.limits)
             .map_err(|e| prefix_field_once("primitive", e))?;
@@ -157,12 +170,18 @@ impl PrimitiveServiceImpl {
         let (robot_id, name) = (req.robot_id, req.name);
         let record = blocking(move || store.put(&robot_id, &name, &primitive, now_unix_ms())).await?;
         info!(robot = %record.robot_id, name = %record.name, version = record.version, "stored");
+        audit!(caller, "put", robot = %record.robot_id, name = %record.name, version = record.version);
         Ok(v1::LearnResponse { record: Some(record) })
     }
 
-    async fn handle_get(&self, req: v1::GetPrimitiveRequest) -> Result<v1::PrimitiveRecord, ServerError> {
+    async fn handle_get(
+        &self,
+        caller: &Caller,
+        req: v1::GetPrimitiveRequest,
+    ) -> Result<v1::PrimitiveRecord, ServerError> {
         check_name("robot_id", &req.robot_id)?;
         check_name("name", &req.name)?;
+        caller.check(&Action::ReadPrimitive { robot: &req.robot_id })?;
         let store = self.state.store.clone();
         let record = blocking(move || store.get(&req.robot_id, &req.name, req.version)).await?;
         debug!(robot = %record.robot_id, name = %record.name, version = record.version, "read");
@@ -171,9 +190,11 @@ impl PrimitiveServiceImpl {
 
     async fn handle_list(
         &self,
+        caller: &Caller,
         req: v1::ListPrimitivesRequest,
     ) -> Result<v1::ListPrimitivesResponse, ServerError> {
         check_name("robot_id", &req.robot_id)?;
+        caller.check(&Action::ReadPrimitive { robot: &req.robot_id })?;
         // The token is the last name of the previous page.
         let after = (!req.page_token.is_empty()).then_some(req.page_token);
         if let Some(token) = &after {
@@ -195,14 +216,17 @@ impl PrimitiveServiceImpl {
 
     async fn handle_delete(
         &self,
+        caller: &Caller,
         req: v1::DeletePrimitiveRequest,
     ) -> Result<v1::DeletePrimitiveResponse, ServerError> {
         check_name("robot_id", &req.robot_id)?;
         check_name("name", &req.name)?;
+        caller.check(&Action::DeletePrimitive { robot: &req.robot_id })?;
         let store = self.state.store.clone();
         let (robot_id, name) = (req.robot_id.clone(), req.name.clone());
         let versions_deleted = blocking(move || store.delete(&robot_id, &name)).await?;
         info!(robot = %req.robot_id, name = %req.name, versions = versions_deleted, "deleted");
+        audit!(caller, "delete", robot = %req.robot_id, name = %req.name, versions = versions_deleted);
         Ok(v1::DeletePrimitiveResponse { versions_deleted })
     }
 }
@@ -210,35 +234,49 @@ impl PrimitiveServiceImpl {
 #[tonic::async_trait]
 impl PrimitiveService for PrimitiveServiceImpl {
     async fn learn(&self, request: Request<v1::LearnRequest>) -> Result<Response<v1::LearnResponse>, Status> {
-        self.handle_learn(request.into_inner()).await.map(Response::new).map_err(|e| status("learn", e))
+        let caller = self.state.caller(&request).map_err(|e| status("learn", e))?;
+        self.handle_learn(&caller, request.into_inner())
+            .await
+            .map(Response::new)
+            .map_err(|e| status("learn", e))
     }
 
     async fn put(
         &self,
         request: Request<v1::PutPrimitiveRequest>,
     ) -> Result<Response<v1::LearnResponse>, Status> {
-        self.handle_put(request.into_inner()).await.map(Response::new).map_err(|e| status("put", e))
+        let caller = self.state.caller(&request).map_err(|e| status("put", e))?;
+        self.handle_put(&caller, request.into_inner()).await.map(Response::new).map_err(|e| status("put", e))
     }
 
     async fn get(
         &self,
         request: Request<v1::GetPrimitiveRequest>,
     ) -> Result<Response<v1::PrimitiveRecord>, Status> {
-        self.handle_get(request.into_inner()).await.map(Response::new).map_err(|e| status("get", e))
+        let caller = self.state.caller(&request).map_err(|e| status("get", e))?;
+        self.handle_get(&caller, request.into_inner()).await.map(Response::new).map_err(|e| status("get", e))
     }
 
     async fn list(
         &self,
         request: Request<v1::ListPrimitivesRequest>,
     ) -> Result<Response<v1::ListPrimitivesResponse>, Status> {
-        self.handle_list(request.into_inner()).await.map(Response::new).map_err(|e| status("list", e))
+        let caller = self.state.caller(&request).map_err(|e| status("list", e))?;
+        self.handle_list(&caller, request.into_inner())
+            .await
+            .map(Response::new)
+            .map_err(|e| status("list", e))
     }
 
     async fn delete(
         &self,
         request: Request<v1::DeletePrimitiveRequest>,
     ) -> Result<Response<v1::DeletePrimitiveResponse>, Status> {
-        self.handle_delete(request.into_inner()).await.map(Response::new).map_err(|e| status("delete", e))
+        let caller = self.state.caller(&request).map_err(|e| status("delete", e))?;
+        self.handle_delete(&caller, request.into_inner())
+            .await
+            .map(Response::new)
+            .map_err(|e| status("delete", e))
     }
 }
 

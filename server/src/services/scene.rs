@@ -12,6 +12,8 @@ use tokio_util::sync::CancellationToken;
 use tonic::{Request, Response, Status};
 use tracing::debug;
 
+use crate::access::{Action, Grant};
+use crate::audit;
 use crate::cell::{Cell, ObstacleSet};
 use crate::clock::Clock;
 use crate::error::ServerError;
@@ -42,7 +44,8 @@ pub fn snapshot_to_proto(snapshot: &ObstacleSet, now_unix_s: f64) -> v1::SceneSn
 
 /// Streams the current snapshot, then the snapshot after every change, into a channel of `buffer` events.
 ///
-/// One task per watch holds `permit` until it ends: when the client leaves (a send fails, or the channel closes
+/// One task per watch holds `permit` until it ends, or until its `grant` is revoked by a reload of the access file
+/// (a last PERMISSION_DENIED): when the client leaves (a send fails, or the channel closes
 /// while no change comes) or on `shutdown` (a last `Unavailable` status, if there is room). The bound is the
 /// backpressure: a slow reader is sent the latest snapshot when it catches up (versions in between are skipped; each
 /// event is a whole snapshot, so nothing is lost), never a growing queue.
@@ -52,11 +55,19 @@ pub fn watch_stream(
     buffer: usize,
     shutdown: CancellationToken,
     permit: impl Send + 'static,
+    mut grant: Option<Grant>,
 ) -> ReceiverStream<Result<v1::SceneEvent, Status>> {
     let (tx, rx) = mpsc::channel(buffer.max(1));
     let mut changes = scene.subscribe();
     tokio::spawn(async move {
         let _permit = permit;
+        let revoked = async {
+            match grant.as_mut() {
+                Some(g) => g.revoked().await,
+                None => std::future::pending().await,
+            }
+        };
+        tokio::pin!(revoked);
         loop {
             let snapshot = changes.borrow_and_update().clone();
             let event = v1::SceneEvent { snapshot: Some(snapshot_to_proto(&snapshot, clock.now_unix_s())) };
@@ -69,6 +80,11 @@ pub fn watch_stream(
                 biased;
                 _ = shutdown.cancelled() => break,
                 _ = tx.closed() => return,
+                denied = &mut revoked => {
+                    debug!(error = %denied, "scene watch revoked");
+                    let _ = tx.try_send(Err(denied.into()));
+                    return;
+                }
                 changed = changes.changed() => if changed.is_err() { break },
             }
         }
@@ -84,12 +100,16 @@ impl SceneService for SceneServiceImpl {
         &self,
         request: Request<v1::PutObstacleRequest>,
     ) -> Result<Response<v1::SceneChange>, Status> {
+        let caller = self.state.caller(&request)?;
         let request = request.into_inner();
-        let scene = self.state.cells.get(&request.cell)?;
+        let cell = self.state.cells.resolve(&request.cell)?;
+        caller.check(&Action::ChangeScene { cell })?;
+        let scene = self.state.cells.get(cell)?;
         let obstacle = request.obstacle.ok_or_else(|| ServerError::invalid("obstacle", "is required"))?;
         let id = obstacle.id.clone();
         let version = scene.put(obstacle, self.state.clock.now_unix_s())?;
         debug!(obstacle = %id, version, "obstacle put over gRPC");
+        audit!(caller, "put obstacle", cell, obstacle = %id, version);
         Ok(Response::new(v1::SceneChange { scene_version: version, changed: true }))
     }
 
@@ -97,14 +117,18 @@ impl SceneService for SceneServiceImpl {
         &self,
         request: Request<v1::DeleteObstacleRequest>,
     ) -> Result<Response<v1::SceneChange>, Status> {
+        let caller = self.state.caller(&request)?;
         let v1::DeleteObstacleRequest { id, cell } = request.into_inner();
         check_name("id", &id).map_err(ServerError::from)?;
+        let cell = self.state.cells.resolve(&cell)?;
+        caller.check(&Action::ChangeScene { cell })?;
         // A delete never creates a cell: in one that does not exist there is nothing to delete.
-        let Some(scene) = self.state.cells.find(&cell)? else {
+        let Some(scene) = self.state.cells.find(cell)? else {
             return Ok(Response::new(v1::SceneChange { scene_version: 0, changed: false }));
         };
         let (version, changed) = scene.delete(&id);
         debug!(obstacle = %id, version, changed, "obstacle deleted over gRPC");
+        audit!(caller, "delete obstacle", cell, obstacle = %id, version, changed);
         Ok(Response::new(v1::SceneChange { scene_version: version, changed }))
     }
 
@@ -112,8 +136,12 @@ impl SceneService for SceneServiceImpl {
         &self,
         request: Request<v1::ListObstaclesRequest>,
     ) -> Result<Response<v1::SceneSnapshot>, Status> {
+        let caller = self.state.caller(&request)?;
+        let request = request.into_inner();
+        let cell = self.state.cells.resolve(&request.cell)?;
+        caller.check(&Action::ReadScene { cell })?;
         // A read never creates a cell: one that does not exist is empty.
-        let Some(scene) = self.state.cells.find(&request.into_inner().cell)? else {
+        let Some(scene) = self.state.cells.find(cell)? else {
             return Ok(Response::new(v1::SceneSnapshot::default()));
         };
         Ok(Response::new(snapshot_to_proto(&scene.snapshot(), self.state.clock.now_unix_s())))
@@ -126,14 +154,19 @@ impl SceneService for SceneServiceImpl {
         request: Request<v1::WatchSceneRequest>,
     ) -> Result<Response<Self::WatchSceneStream>, Status> {
         let s = &self.state;
+        let caller = s.caller(&request)?;
+        let cell = s.cells.resolve(&request.get_ref().cell)?.to_owned();
+        caller.check(&Action::ReadScene { cell: &cell })?;
         let permit = s.stream_permit(StreamKind::Watch, &Peer::of(&request))?;
-        let scene = s.cells.get(&request.into_inner().cell)?;
+        let scene = s.cells.get(&cell)?;
+        let grant = s.access.grant(caller, move |c, a| c.check_again(a, &Action::ReadScene { cell: &cell }));
         Ok(Response::new(watch_stream(
             &scene,
             s.clock,
             s.config.limits.stream_buffer,
             s.shutdown.clone(),
             permit,
+            Some(grant),
         )))
     }
 }
@@ -186,7 +219,7 @@ mod tests {
         let permits = Arc::new(Semaphore::new(1));
         let shutdown = CancellationToken::new();
         let permit = permits.clone().try_acquire_owned().unwrap();
-        let mut stream = watch_stream(&scene, Clock::system(), 2, shutdown.clone(), permit);
+        let mut stream = watch_stream(&scene, Clock::system(), 2, shutdown.clone(), permit, None);
         let first = within("first", stream.next()).await.unwrap().unwrap();
         assert_eq!(ids(&first), ["a"]);
         scene.put(moving("b"), system_unix_s()).unwrap();
@@ -213,6 +246,7 @@ mod tests {
             1,
             shutdown.clone(),
             permits.clone().try_acquire_owned().unwrap(),
+            None,
         );
         assert!(ids(&within("first", stream.next()).await.unwrap().unwrap()).is_empty());
         shutdown.cancel();
@@ -232,6 +266,7 @@ mod tests {
             1,
             CancellationToken::new(),
             permits.clone().try_acquire_owned().unwrap(),
+            None,
         );
         for i in 0..50 {
             scene.put(moving(&format!("o{i:02}")), system_unix_s()).unwrap();

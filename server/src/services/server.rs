@@ -7,6 +7,7 @@ use dmp_proto::v1;
 use dmp_proto::v1::server_service_server::ServerService;
 use tonic::{Request, Response, Status};
 
+use crate::access::Action;
 use crate::state::AppState;
 
 /// The service.
@@ -43,7 +44,31 @@ impl ServerServiceImpl {
 
 #[tonic::async_trait]
 impl ServerService for ServerServiceImpl {
-    async fn get_stats(&self, _: Request<v1::GetStatsRequest>) -> Result<Response<v1::ServerStats>, Status> {
+    async fn get_stats(
+        &self,
+        request: Request<v1::GetStatsRequest>,
+    ) -> Result<Response<v1::ServerStats>, Status> {
+        self.state.caller(&request)?.check(&Action::Stats)?;
         Ok(Response::new(self.stats()))
+    }
+
+    async fn get_info(
+        &self,
+        request: Request<v1::GetInfoRequest>,
+    ) -> Result<Response<v1::ServerInfo>, Status> {
+        let caller = self.state.caller(&request)?;
+        let s = &self.state;
+        let security = &s.config.security;
+        Ok(Response::new(v1::ServerInfo {
+            version: env!("CARGO_PKG_VERSION").into(),
+            cell: s.cells.default_cell().into(),
+            tls: security.tls_cert.is_some(),
+            mutual_tls: security.tls_cert.is_some() && security.tls_client_ca.is_some(),
+            access_control: s.access.enabled(),
+            insecure: s.exposure.insecure(),
+            insecure_reasons: s.exposure.warnings.clone(),
+            identity: caller.name().into(),
+            role: caller.role().as_str().into(),
+        }))
     }
 }

@@ -1,0 +1,128 @@
+//! A motion request resolved against the access rules and the store: the primitive, the motion, the avoidance.
+
+use dmp::{Motion, Primitive};
+use dmp_proto::avoidance::avoidance_from_proto;
+use dmp_proto::check::{check_in_workspace, check_tau, check_vector};
+use dmp_proto::keys::check_name;
+use dmp_proto::shape::superquadric_to_shape;
+use dmp_proto::v1;
+
+use super::motion::MotionServiceImpl;
+use crate::access::{Action, Caller};
+use crate::cell::Cell;
+use crate::convert::{obstacle_from_proto, stored_primitive};
+use crate::error::ServerError;
+use crate::executor::served_run::RunAvoidance;
+
+/// What a motion request does with its robots.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Intent {
+    /// Plan: answers only.
+    Plan,
+    /// Execute: moves them.
+    Execute,
+}
+
+impl Intent {
+    /// The action of this intent on `robots` in `cell`.
+    pub(super) fn action<'a>(self, cell: &'a str, robots: &'a [&'a str]) -> Action<'a> {
+        match self {
+            Intent::Plan => Action::Plan { cell, robots },
+            Intent::Execute => Action::Execute { cell, robots },
+        }
+    }
+}
+
+/// A motion request resolved against the store: the primitive, the motion, the avoidance.
+pub(super) struct ResolvedMotion {
+    pub(super) robot_id: String,
+    /// The robot's cell.
+    pub(super) cell: Cell,
+    pub(super) primitive: Primitive,
+    pub(super) motion: Motion,
+    pub(super) avoidance: RunAvoidance,
+    pub(super) footprint: Option<dmp::Shape>,
+    pub(super) footprint_proto: Option<v1::Superquadric>,
+}
+
+impl MotionServiceImpl {
+    /// Resolves a motion of `caller`, who must be allowed to `intent` its robot in its cell (checked before the
+    /// cell is created or the store read).
+    pub(super) async fn resolve(
+        &self,
+        caller: &Caller,
+        intent: Intent,
+        spec: Option<&v1::MotionSpec>,
+        prefix: &str,
+    ) -> Result<ResolvedMotion, ServerError> {
+        let spec = spec.ok_or_else(|| ServerError::invalid(prefix, "is required"))?;
+        check_name(&format!("{prefix}.robot_id"), &spec.robot_id)?;
+        check_name(&format!("{prefix}.primitive"), &spec.primitive)?;
+        let cell = self.state.cells.resolve(&spec.cell).map_err(|e| e.within(prefix))?;
+        caller.check(&intent.action(cell, &[&spec.robot_id]))?;
+        let cell = self.state.cells.get(cell).map_err(|e| e.within(prefix))?;
+        let store = self.state.store.clone();
+        let (robot, name, version) = (spec.robot_id.clone(), spec.primitive.clone(), spec.version);
+        let record = tokio::task::spawn_blocking(move || store.get(&robot, &name, version))
+            .await
+            .map_err(|e| ServerError::Internal(e.to_string()))??;
+        let proto = record
+            .primitive
+            .ok_or_else(|| ServerError::Internal("stored record without primitive".into()))?;
+        let what = format!("{}/{}", spec.robot_id, spec.primitive);
+        let limits = &self.state.config.limits;
+        let primitive = stored_primitive(&proto, limits, &what).map_err(|e| e.within(prefix))?;
+        let d = primitive.dim;
+        let given_or_default = |field: &str, v: &[f64], default: &[f64]| -> Result<Vec<f64>, ServerError> {
+            if v.is_empty() {
+                Ok(default.to_vec())
+            } else {
+                check_vector(&format!("{prefix}.{field}"), v, d)?;
+                Ok(v.to_vec())
+            }
+        };
+        let start = given_or_default("start", &spec.start, &primitive.start)?;
+        let goal = given_or_default("goal", &spec.goal, &primitive.goal)?;
+        check_in_workspace(&format!("{prefix}.start"), &start, limits.workspace_m)?;
+        check_in_workspace(&format!("{prefix}.goal"), &goal, limits.workspace_m)?;
+        let tau = if spec.tau == 0.0 { primitive.tau } else { spec.tau };
+        check_tau(&format!("{prefix}.tau"), tau)?;
+        let defaults = &self.state.config.defaults;
+        let obstacles = avoidance_from_proto(spec.avoidance.as_ref(), defaults.avoidance)
+            .map_err(|e| e.within(&format!("{prefix}.avoidance")))?;
+        let robots = avoidance_from_proto(spec.robot_avoidance.as_ref(), defaults.robot_avoidance)
+            .map_err(|e| e.within(&format!("{prefix}.robot_avoidance")))?;
+        if spec.extra_obstacles.len() > self.state.config.limits.max_obstacles {
+            return Err(ServerError::ResourceExhausted(format!(
+                "{prefix}.extra_obstacles: more than {} obstacles",
+                self.state.config.limits.max_obstacles
+            )));
+        }
+        let mut extra = Vec::with_capacity(spec.extra_obstacles.len());
+        for (i, o) in spec.extra_obstacles.iter().enumerate() {
+            check_name(&format!("{prefix}.extra_obstacles[{i}].id"), &o.id)?;
+            extra.push(
+                obstacle_from_proto(o, limits.workspace_m)
+                    .map_err(|e| e.within(&format!("{prefix}.extra_obstacles[{i}]")))?,
+            );
+        }
+        // Checked now, not when the first obstacle or robot appears (which would end a running stream).
+        obstacles.0.method.validate(&format!("{prefix}.avoidance"), d)?;
+        robots.0.method.validate(&format!("{prefix}.robot_avoidance"), d)?;
+        let footprint = spec
+            .footprint
+            .as_ref()
+            .map(superquadric_to_shape)
+            .transpose()
+            .map_err(|e| e.within(&format!("{prefix}.footprint")))?;
+        Ok(ResolvedMotion {
+            robot_id: spec.robot_id.clone(),
+            cell,
+            primitive,
+            motion: Motion { start, goal, tau },
+            avoidance: RunAvoidance { obstacles, robots, extra, ignore_scene: spec.ignore_scene },
+            footprint,
+            footprint_proto: spec.footprint.clone(),
+        })
+    }
+}
