@@ -65,6 +65,38 @@ pub struct Args {
     /// Print the effective configuration as TOML and exit.
     #[arg(long)]
     pub print_config: bool,
+    /// Something else than serving.
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// What `dmp-server` does instead of serving.
+#[derive(Debug, Clone, clap::Subcommand)]
+pub enum Command {
+    /// Identities and certificates.
+    #[command(subcommand)]
+    Access(AccessCommand),
+}
+
+/// `dmp-server access ...`
+#[derive(Debug, Clone, clap::Subcommand)]
+pub enum AccessCommand {
+    /// Write a ready set into DIR: a private CA, the server's certificate, a certificate and a token per identity
+    /// (admin, planner, perception, observer, and one per --robot), and the access file. Keys and tokens are
+    /// written with mode 0600; nothing is overwritten.
+    Init {
+        /// The directory (created if missing; must not hold a set already).
+        dir: PathBuf,
+        /// A cell of the planner, perception, observer and robot identities (repeatable, at least one).
+        #[arg(long = "cell", value_name = "NAME", required = true)]
+        cells: Vec<String>,
+        /// A robot id: one robot identity, acting only as itself (repeatable).
+        #[arg(long = "robot", value_name = "ID")]
+        robots: Vec<String>,
+        /// A host name or address the server is reached at, besides loopback (repeatable).
+        #[arg(long = "host", value_name = "NAME")]
+        hosts: Vec<String>,
+    },
 }
 
 /// The effective configuration: the defaults, then the file of `--config`, then the flags.

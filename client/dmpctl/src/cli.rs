@@ -9,6 +9,7 @@ use std::str::FromStr;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use dmp_client::grpc::{DEFAULT_SERVER, DmpClient};
 
+use crate::connect_args::{ConnectArgs, TOKEN_ENV};
 use crate::error::DmpctlError;
 use crate::offline::{RunSummary, bench_scenario, run_scenario};
 use crate::outputs::to_json;
@@ -27,12 +28,16 @@ pub struct Cli {
     /// this is given.
     #[arg(long, global = true, value_name = "URL")]
     pub server: Option<String>,
-    /// The robot cell (Zenoh keys `dmp/<cell>/...`).
-    #[arg(long, global = true, default_value = "default")]
-    pub cell: String,
+    /// The robot cell: of the scene commands, and of the Zenoh keys `dmp/<cell>/...` [default: the server's own
+    /// over gRPC, `default` over Zenoh].
+    #[arg(long, global = true, value_name = "NAME")]
+    pub cell: Option<String>,
     /// Zenoh endpoint to connect to, e.g. `tcp/127.0.0.1:7447` (repeatable); none: multicast scouting.
     #[arg(long = "zenoh-connect", global = true, value_name = "ENDPOINT")]
     pub zenoh_connect: Vec<String>,
+    /// TLS and the bearer token.
+    #[command(flatten)]
+    pub connect: ConnectArgs,
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
@@ -48,6 +53,8 @@ pub enum Command {
     Learn(LearnArgs),
     /// A simulated robot against the server: writes report.json and figures into --out.
     Sim(dmp_sim::robots::SimArgs),
+    /// How the server is set up (TLS, access control, what it exposes) and who this client is to it, as JSON.
+    Info,
     /// The primitives of a robot (latest version of each).
     List {
         /// The robot.
@@ -326,9 +333,16 @@ pub fn run(cli: Cli) -> Result<String, DmpctlError> {
 
 /// Runs a parsed command line inside a multi-threaded tokio runtime.
 pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
-    let server = cli.server.clone().unwrap_or_else(|| DEFAULT_SERVER.to_string());
-    let zenoh = ZenohArgs { cell: cli.cell.clone(), connect: cli.zenoh_connect.clone() };
-    let connect = || DmpClient::connect(server.as_str());
+    let options =
+        cli.connect.options(std::env::var(TOKEN_ENV).ok(), |w| eprintln!("dmpctl: warning: {w}"))?;
+    let default_server = if options.tls.is_some() { "https://127.0.0.1:50051" } else { DEFAULT_SERVER };
+    let server = cli.server.clone().unwrap_or_else(|| default_server.to_string());
+    let zenoh_cell = cli.cell.clone().unwrap_or_else(|| "default".into());
+    let zenoh = ZenohArgs { cell: zenoh_cell.clone(), connect: cli.zenoh_connect.clone() };
+    let grpc_cell = cli.cell.clone().unwrap_or_default();
+    let connect = || async {
+        Ok::<_, DmpctlError>(DmpClient::connect_with(&server, &options).await?.with_cell(grpc_cell.as_str()))
+    };
     match &cli.command {
         Command::Scenario(ScenarioCommand::Run { file, out }) => match &cli.server {
             None => offline_run(file, out),
@@ -350,18 +364,19 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
         Command::Plan(a) => server_commands::plan(&connect().await?, a).await,
         Command::Stream(a) => server_commands::stream(&connect().await?, a).await,
         Command::Scene(SceneCommand::Put { file, via, ttl }) => {
-            server_commands::scene_put(&server, &zenoh, file, *via, *ttl).await
+            server_commands::scene_put(connect, &zenoh, file, *via, *ttl).await
         }
         Command::Scene(SceneCommand::Delete { id, via }) => {
-            server_commands::scene_delete(&server, &zenoh, id, *via).await
+            server_commands::scene_delete(connect, &zenoh, id, *via).await
         }
+        Command::Info => Ok(to_json(&server_commands::info_json(&connect().await?.info().await?))),
         Command::Scene(SceneCommand::List) => server_commands::scene_list(&connect().await?).await,
         Command::Load(a) => {
             let report = dmp_sim::load::run(a, &server, &cli.zenoh_connect).await?;
             Ok(to_json(&report))
         }
         Command::Sim(a) => {
-            let report = dmp_sim::robots::run_sim(a, &server, &cli.cell, &cli.zenoh_connect).await?;
+            let report = dmp_sim::robots::run_sim(a, &server, &zenoh_cell, &cli.zenoh_connect).await?;
             let problems = report.problems();
             Ok(format!(
                 "{}: {} robots, collision: {}, {}; wrote {}",

@@ -4,6 +4,7 @@
 //! | concept | module |
 //! | --- | --- |
 //! | the command line: flags and dispatch | [`cli`] |
+//! | TLS and token flags | [`connect_args`] |
 //! | reading scenario files, errors at the field | [`scenario_file`] |
 //! | offline runs and timing | [`offline`] |
 //! | output files | [`outputs`] |
@@ -13,6 +14,7 @@
 //! | errors and the exit code | [`error`] |
 
 pub mod cli;
+pub mod connect_args;
 pub mod demo_csv;
 pub mod error;
 pub mod offline;

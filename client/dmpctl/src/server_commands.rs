@@ -265,8 +265,8 @@ async fn publisher(z: &ZenohArgs) -> Result<ObstaclePublisher, DmpctlError> {
 }
 
 /// `scene put FILE`.
-pub async fn scene_put(
-    server: &str,
+pub async fn scene_put<F: Future<Output = Result<DmpClient, DmpctlError>>>(
+    connect: impl FnOnce() -> F,
     z: &ZenohArgs,
     file: &Path,
     via: Via,
@@ -276,7 +276,7 @@ pub async fn scene_put(
     let mut lines = Vec::with_capacity(obstacles.len());
     match via {
         Via::Grpc => {
-            let client = DmpClient::connect(server).await?;
+            let client = connect().await?;
             for o in &obstacles {
                 let c = client.put_obstacle(o.to_proto()).await?;
                 lines.push(format!("put `{}`: scene version {}", o.spec.id, c.scene_version));
@@ -295,10 +295,15 @@ pub async fn scene_put(
 }
 
 /// `scene delete ID`.
-pub async fn scene_delete(server: &str, z: &ZenohArgs, id: &str, via: Via) -> Result<String, DmpctlError> {
+pub async fn scene_delete<F: Future<Output = Result<DmpClient, DmpctlError>>>(
+    connect: impl FnOnce() -> F,
+    z: &ZenohArgs,
+    id: &str,
+    via: Via,
+) -> Result<String, DmpctlError> {
     match via {
         Via::Grpc => {
-            let c = DmpClient::connect(server).await?.delete_obstacle(id).await?;
+            let c = connect().await?.delete_obstacle(id).await?;
             Ok(if c.changed {
                 format!("deleted `{id}`: scene version {}", c.scene_version)
             } else {
@@ -319,6 +324,21 @@ pub async fn scene_list(client: &DmpClient) -> Result<String, DmpctlError> {
     let s = client.list_obstacles().await?;
     let obstacles: Vec<Value> = s.obstacles.iter().map(obstacle_to_json).collect();
     Ok(to_json(&json!({"scene_version": s.scene_version, "obstacles": obstacles})))
+}
+
+/// `info`: the server's set-up and the caller's identity, as JSON.
+pub fn info_json(info: &v1::ServerInfo) -> serde_json::Value {
+    serde_json::json!({
+        "version": info.version,
+        "cell": info.cell,
+        "tls": info.tls,
+        "mutual_tls": info.mutual_tls,
+        "access_control": info.access_control,
+        "insecure": info.insecure,
+        "insecure_reasons": info.insecure_reasons,
+        "identity": info.identity,
+        "role": info.role,
+    })
 }
 
 #[cfg(test)]

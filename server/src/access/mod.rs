@@ -9,6 +9,7 @@
 
 pub mod credential;
 pub mod file;
+pub mod init;
 pub mod layer;
 pub mod role;
 

@@ -6,7 +6,8 @@ use std::io::IsTerminal;
 use std::process::ExitCode;
 
 use clap::Parser;
-use dmp_server::cli::{Args, load_config};
+use dmp_server::access::init::{InitOptions, init};
+use dmp_server::cli::{AccessCommand, Args, Command, load_config};
 use dmp_server::zenoh_threads::{self, ZENOH_RUNTIME};
 use tokio::signal::unix::{SignalKind, signal};
 use tracing::{error, info, warn};
@@ -20,6 +21,30 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> ExitCode {
     let args = Args::parse();
+    if let Some(Command::Access(AccessCommand::Init { dir, cells, robots, hosts })) = &args.command {
+        let options = InitOptions { cells: cells.clone(), robots: robots.clone(), hosts: hosts.clone() };
+        return match init(dir, &options) {
+            Ok(set) => {
+                println!(
+                    "wrote a CA, the server's certificate and the access file into {}",
+                    set.dir.display()
+                );
+                for (name, _) in &set.tokens {
+                    println!("  identity `{name}`: {name}.pem, {name}.key, {name}.token");
+                }
+                println!(
+                    "serve with: dmp-server --access {d}/access.toml --tls-cert {d}/server.pem --tls-key {d}/server.key \
+                     --tls-client-ca {d}/ca.pem",
+                    d = set.dir.display()
+                );
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("dmp-server access init: {e}");
+                ExitCode::FAILURE
+            }
+        };
+    }
     let config = match load_config(&args) {
         Ok(c) => c,
         Err(e) => {

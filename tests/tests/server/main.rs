@@ -1,6 +1,7 @@
 //! The real server, in-process on 127.0.0.1:0 with Zenoh on loopback (multicast off), driven through the client
 //! library exactly as robots and perception nodes drive it. Every await is under a timeout.
 
+mod access;
 mod bad_input;
 mod catch_up;
 mod hostile_compute;

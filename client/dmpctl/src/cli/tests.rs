@@ -31,10 +31,10 @@ fn scenario_commands_stay_offline_without_server() {
 #[test]
 fn global_options_go_anywhere() {
     let c = parse(&["--server", "http://h:1", "--cell", "c1", "list", "--robot", "r"]);
-    assert_eq!((c.server.as_deref(), c.cell.as_str()), (Some("http://h:1"), "c1"));
+    assert_eq!((c.server.as_deref(), c.cell.as_deref()), (Some("http://h:1"), Some("c1")));
     let c = parse(&["list", "--robot", "r", "--zenoh-connect", "tcp/a:1", "--zenoh-connect", "tcp/b:2"]);
     assert_eq!(c.zenoh_connect, vec!["tcp/a:1", "tcp/b:2"]);
-    assert_eq!(c.cell, "default");
+    assert_eq!(c.cell, None, "the server's own cell over gRPC, `default` over Zenoh");
 }
 
 #[test]
