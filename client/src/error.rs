@@ -78,6 +78,14 @@ impl From<dmp_proto::WireError> for ClientError {
 
 impl From<tonic::Status> for ClientError {
     fn from(s: tonic::Status) -> Self {
-        ClientError::Status { code: s.code(), message: s.message().to_string() }
+        let mut message = s.message().to_string();
+        // A status made by the transport (TLS refused, plaintext against TLS) says why only in its source.
+        if let Some(source) = std::error::Error::source(&s) {
+            let why = crate::grpc::chain(source);
+            if !message.contains(&why) {
+                message = format!("{message}: {why}");
+            }
+        }
+        ClientError::Status { code: s.code(), message }
     }
 }

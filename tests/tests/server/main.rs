@@ -14,6 +14,7 @@ mod primitives;
 mod scene_over_zenoh;
 mod sessions_and_groups;
 mod stale_scene;
+mod tls;
 
 use std::path::Path;
 use std::time::Duration;
