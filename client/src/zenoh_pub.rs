@@ -54,6 +54,9 @@ pub fn publisher_options(connect: &[String], listen: &[String]) -> SessionOption
         listen: (!connect.is_empty() || !listen.is_empty()).then(|| listen.to_vec()),
         connect: connect.to_vec(),
         multicast_scouting: connect.is_empty(),
+        config_file: None,
+        tls: None,
+        access_control: None,
     }
 }
 

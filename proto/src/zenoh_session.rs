@@ -6,6 +6,8 @@
 //! reached, instead of retrying forever in the background; gossip scouting follows the multicast switch, so with
 //! it off the session talks only to the endpoints it is given (and to those that connect to it).
 
+use std::path::PathBuf;
+
 use zenoh::Session;
 use zenoh::config::EndPoint;
 
@@ -26,6 +28,27 @@ pub struct SessionOptions {
     pub connect: Vec<String>,
     /// Multicast scouting (finding peers on the LAN), and with it gossip scouting.
     pub multicast_scouting: bool,
+    /// A stock Zenoh configuration file (JSON5) to start from; the settings above are applied on top.
+    pub config_file: Option<PathBuf>,
+    /// TLS of the `tls/` endpoints.
+    pub tls: Option<ZenohTls>,
+    /// An `access_control` block to apply, unless the configuration file has one of its own.
+    pub access_control: Option<serde_json::Value>,
+}
+
+/// TLS of a session's `tls/` endpoints: its certificate and key serve both its listeners and its connections, and
+/// `root_ca` verifies the other side (with `mutual`, on listeners too: a peer without a certificate of that CA
+/// cannot connect, and its certificate's common name is its subject in the access control).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ZenohTls {
+    /// The CA (PEM file).
+    pub root_ca: PathBuf,
+    /// This session's certificate (PEM file).
+    pub cert: PathBuf,
+    /// This session's private key (PEM file).
+    pub key: PathBuf,
+    /// Verify the certificates of peers that connect.
+    pub mutual: bool,
 }
 
 impl SessionOptions {
@@ -37,6 +60,9 @@ impl SessionOptions {
             listen: Some(vec!["tcp/127.0.0.1:0".into()]),
             connect,
             multicast_scouting: false,
+            config_file: None,
+            tls: None,
+            access_control: None,
         }
     }
 }
@@ -57,7 +83,12 @@ pub fn session_config(options: &SessionOptions) -> Result<zenoh::Config, WireErr
         }
         Ok(serde_json::Value::from(list.to_vec()).to_string())
     };
-    let mut c = zenoh::Config::default();
+    let mut c = match &options.config_file {
+        Some(path) => zenoh::Config::from_file(path)
+            .map_err(|e| WireError::new("zenoh.config_file", format!("{}: {e}", path.display())))?,
+        None => zenoh::Config::default(),
+    };
+    let own_acl = c.get_json("access_control/enabled").is_ok_and(|v| v == "true");
     let mut set = |key: &str, value: String| -> Result<(), WireError> {
         c.insert_json5(key, &value).map_err(|e| WireError::new(format!("zenoh config {key}"), e.to_string()))
     };
@@ -72,7 +103,30 @@ pub fn session_config(options: &SessionOptions) -> Result<zenoh::Config, WireErr
     }
     set("scouting/multicast/enabled", options.multicast_scouting.to_string())?;
     set("scouting/gossip/enabled", options.multicast_scouting.to_string())?;
+    if let Some(tls) = &options.tls {
+        let path = |p: &PathBuf| serde_json::Value::from(p.display().to_string()).to_string();
+        set("transport/link/tls/root_ca_certificate", path(&tls.root_ca))?;
+        set("transport/link/tls/listen_certificate", path(&tls.cert))?;
+        set("transport/link/tls/listen_private_key", path(&tls.key))?;
+        set("transport/link/tls/connect_certificate", path(&tls.cert))?;
+        set("transport/link/tls/connect_private_key", path(&tls.key))?;
+        set("transport/link/tls/enable_mtls", tls.mutual.to_string())?;
+    }
+    if let Some(acl) = &options.access_control
+        && !own_acl
+    {
+        set("access_control", acl.to_string())?;
+    }
     Ok(c)
+}
+
+/// Whether the configuration file of `options` has an access control of its own (which then replaces the one
+/// `options` would apply).
+pub fn has_own_access_control(options: &SessionOptions) -> Result<bool, WireError> {
+    let Some(path) = &options.config_file else { return Ok(false) };
+    let c = zenoh::Config::from_file(path)
+        .map_err(|e| WireError::new("zenoh.config_file", format!("{}: {e}", path.display())))?;
+    Ok(c.get_json("access_control/enabled").is_ok_and(|v| v == "true"))
 }
 
 /// The endpoints a session really listens on (`tcp/127.0.0.1:0` resolved to its port), for peers to connect to.

@@ -59,6 +59,10 @@ pub struct Args {
     /// Repeated in the log and in GetInfo.
     #[arg(long)]
     pub insecure: bool,
+    /// A stock Zenoh configuration file (JSON5) to start from; the settings of dmp-server apply on top, and its own
+    /// `access_control` replaces the generated one.
+    #[arg(long, value_name = "FILE")]
+    pub zenoh_config: Option<PathBuf>,
     /// Run without Zenoh (gRPC only).
     #[arg(long)]
     pub no_zenoh: bool,
@@ -133,6 +137,9 @@ pub fn load_config(args: &Args) -> anyhow::Result<Config> {
     }
     if args.zenoh_multicast {
         config.zenoh.multicast_scouting = true;
+    }
+    if args.zenoh_config.is_some() {
+        config.zenoh.config_file.clone_from(&args.zenoh_config);
     }
     let security = &mut config.security;
     for (flag, value) in [

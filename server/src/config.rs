@@ -80,9 +80,12 @@ pub struct ZenohConfig {
     pub listen: Vec<String>,
     /// Endpoints to connect to (routers or peers).
     pub connect: Vec<String>,
-    /// Multicast scouting (finding peers on the LAN, and being found). Off by default: any peer on the LAN could
-    /// join; on, it takes `--insecure` until the Zenoh transport is secured.
+    /// Multicast scouting (finding peers on the LAN, and being found). Off by default; on, it takes TLS listeners
+    /// with an access file, or `--insecure`.
     pub multicast_scouting: bool,
+    /// A stock Zenoh configuration file (JSON5, `--zenoh-config`) to start from: the settings above are applied on
+    /// top of it, and its `access_control`, if enabled, replaces the one generated from the access file.
+    pub config_file: Option<PathBuf>,
 }
 
 impl ZenohConfig {
@@ -94,7 +97,15 @@ impl ZenohConfig {
             listen: (!self.listen.is_empty()).then(|| self.listen.clone()),
             connect: self.connect.clone(),
             multicast_scouting: self.multicast_scouting,
+            config_file: self.config_file.clone(),
+            tls: None,
+            access_control: None,
         }
+    }
+
+    /// Whether an endpoint of the session is a `tls/` one.
+    pub fn uses_tls(&self) -> bool {
+        self.listen.iter().chain(&self.connect).any(|e| e.starts_with("tls/"))
     }
 }
 
@@ -106,6 +117,7 @@ impl Default for ZenohConfig {
             listen: vec![DEFAULT_ZENOH_LISTEN.into()],
             connect: Vec::new(),
             multicast_scouting: false,
+            config_file: None,
         }
     }
 }

@@ -36,14 +36,19 @@ pub fn check(config: &Config) -> Result<Exposure, ServerError> {
         ));
     }
     if !config.zenoh.disabled {
-        // The Zenoh transport takes no credentials yet: beyond loopback, anyone may join it.
+        // Beyond loopback, Zenoh takes `tls/` endpoints with mutual TLS and the access control generated from the
+        // access file: a peer needs a certificate of the cell's CA, and its common name's role.
+        let zenoh_protected = s.tls_client_ca.is_some() && tls && access;
+        let secured = |e: &String| e.starts_with("tls/") && zenoh_protected;
         for endpoint in &config.zenoh.listen {
-            if !endpoint_is_loopback(endpoint) {
-                unprotected.push(format!("Zenoh listens on {endpoint} without TLS or access control"));
+            if !endpoint_is_loopback(endpoint) && !secured(endpoint) {
+                unprotected.push(format!(
+                    "Zenoh listens on {endpoint} without TLS (a `tls/` endpoint with --tls-client-ca) and an access file"
+                ));
             }
         }
-        if config.zenoh.multicast_scouting {
-            unprotected.push("Zenoh multicast scouting is on: any peer on the LAN can join".into());
+        if config.zenoh.multicast_scouting && !(config.zenoh.listen.iter().all(secured)) {
+            unprotected.push("Zenoh multicast scouting is on with listeners that are not secured: any peer on the LAN can join".into());
         }
     }
     if !unprotected.is_empty() && !s.insecure {
@@ -116,6 +121,11 @@ mod tests {
         c.zenoh.multicast_scouting = true;
         let e = check(&c).unwrap_err().to_string();
         assert!(e.contains("Zenoh listens on tcp/0.0.0.0:7447") && e.contains("multicast"), "{e}");
+        c.zenoh.listen = vec!["tls/0.0.0.0:7447".into()];
+        assert!(check(&c).is_err(), "mutual TLS is needed");
+        c.security.tls_client_ca = Some("ca.pem".into());
+        assert!(!check(&c).unwrap().insecure());
+        c.zenoh.listen = vec!["tcp/0.0.0.0:7447".into()];
         c.security.insecure = true;
         assert_eq!(check(&c).unwrap().warnings.len(), 2);
         c.zenoh.disabled = true;

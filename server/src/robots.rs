@@ -230,6 +230,7 @@ mod tests {
             listen: vec!["tcp/127.0.0.1:0".into()],
             connect,
             multicast_scouting: false,
+            config_file: None,
         };
         // b (with the bridge) listens; a (with the bus) connects to it and so knows b's subscribers on opening.
         let b = within("open b", open_session(&cfg(vec![]))).await.unwrap();

@@ -37,7 +37,7 @@ use crate::store::Store;
 use crate::stream_permits::StreamPermits;
 use crate::tls::server_tls;
 use crate::write_batching::BatchedWrites;
-use crate::zenoh_bridge::{ZenohBridge, open_session, reachability};
+use crate::zenoh_bridge::{Security, ZenohBridge, open_secured_session, reachability};
 
 /// How long a shutdown waits for connections to drain before closing them.
 const DRAIN_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(5);
@@ -123,7 +123,9 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         crate::zenoh_bridge::spawn_reaper(cells.clone(), clock, shutdown.clone());
         (None, None, RobotBus::new(None), Vec::new())
     } else {
-        let session = open_session(&config.zenoh).await?;
+        let access = access.current();
+        let security = Security { config: &config.security, access: access.as_deref() };
+        let session = open_secured_session(&config.zenoh, &security).await?;
         let bridge = ZenohBridge::start(
             session.clone(),
             cells.clone(),

@@ -32,7 +32,7 @@ use std::time::Duration;
 
 use dmp_proto::keys::{self, EVERY_CELL, check_name};
 use dmp_proto::payload::{decode_obstacle, decode_robot_state};
-use dmp_proto::zenoh_session::{locators, session_config};
+use dmp_proto::zenoh_session::{ZenohTls, has_own_access_control, locators, session_config};
 use tokio::task::JoinHandle;
 use tokio_util::sync::{CancellationToken, DropGuard};
 use tracing::{debug, info, warn};
@@ -49,10 +49,50 @@ use crate::state_admission::StateAdmission;
 /// Period of the reaper that removes obstacles whose time to live has passed.
 pub const REAP_PERIOD: Duration = Duration::from_millis(100);
 
-/// Opens the Zenoh session of [`ZenohConfig`] (built by `dmp_proto::zenoh_session::session_config`). Fails fast
-/// when a `connect` endpoint cannot be reached.
+/// What secures a session: TLS files and the access file.
+#[derive(Debug, Clone, Copy)]
+pub struct Security<'a> {
+    /// The TLS files.
+    pub config: &'a crate::config::SecurityConfig,
+    /// The access file in force, if any: its access control is generated into the session's configuration.
+    pub access: Option<&'a crate::access::Access>,
+}
+
+/// Opens the Zenoh session of [`ZenohConfig`], without TLS or access control (tests, tools).
 pub async fn open_session(cfg: &ZenohConfig) -> Result<Session, ServerError> {
-    let config = session_config(&cfg.session_options())?;
+    let none = crate::config::SecurityConfig::default();
+    open_secured_session(cfg, &Security { config: &none, access: None }).await
+}
+
+/// Opens the Zenoh session of [`ZenohConfig`] (built by `dmp_proto::zenoh_session::session_config`), its `tls/`
+/// endpoints with the server's certificate and mutual TLS, and the access control generated from the access file.
+/// Fails fast when a `connect` endpoint cannot be reached.
+pub async fn open_secured_session(
+    cfg: &ZenohConfig,
+    security: &Security<'_>,
+) -> Result<Session, ServerError> {
+    let mut options = cfg.session_options();
+    if cfg.uses_tls() {
+        let s = security.config;
+        let (Some(cert), Some(key), Some(ca)) = (&s.tls_cert, &s.tls_key, &s.tls_client_ca) else {
+            return Err(ServerError::FailedPrecondition(
+                "zenoh: `tls/` endpoints need security.tls_cert, tls_key and tls_client_ca".into(),
+            ));
+        };
+        options.tls =
+            Some(ZenohTls { root_ca: ca.clone(), cert: cert.clone(), key: key.clone(), mutual: true });
+    }
+    if let Some(access) = security.access {
+        options.access_control = Some(crate::access::zenoh_acl::access_control(access));
+        if has_own_access_control(&options)? {
+            warn!(
+                "zenoh: the access control of the Zenoh configuration file replaces the one generated from the access file"
+            );
+        } else {
+            info!("zenoh: access control generated from the access file (default deny)");
+        }
+    }
+    let config = session_config(&options)?;
     let session = zenoh::open(config)
         .await
         .map_err(|e| ServerError::FailedPrecondition(format!("zenoh: cannot open the session: {e}")))?;

@@ -3,8 +3,10 @@
 //! certificate (its common name is the identity's name) and a bearer token; the access file that names them.
 //! Private keys and tokens are written with mode 0600. Nothing is overwritten.
 //!
-//! The identities: `admin` (every cell), `planner`, `perception` and `observer` (the cells given), and one `robot`
-//! identity per robot id given, acting only as itself.
+//! The identities: `admin` (every cell), `planner`, `perception` and `observer` (the cells given), one `robot`
+//! identity per robot id given, acting only as itself, and two of role `server` known by their certificates only:
+//! `dmp-server` (the server's own certificate) and `zenoh-router`. With them, the Zenoh configurations of a
+//! perception node and of a router of the cell.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -92,14 +94,17 @@ pub fn init(dir: &Path, options: &InitOptions) -> Result<InitSet, InitError> {
     names.extend(options.hosts.iter().cloned());
     let server_key = KeyPair::generate()?;
     let mut server = CertificateParams::new(names)?;
-    server.distinguished_name.push(DnType::CommonName, "dmp-server");
-    server.extended_key_usages = vec![ExtendedKeyUsagePurpose::ServerAuth];
+    server.distinguished_name.push(DnType::CommonName, SERVER_NAME);
+    // A server also connects out over Zenoh (to routers and other servers) with this certificate.
+    server.extended_key_usages =
+        vec![ExtendedKeyUsagePurpose::ServerAuth, ExtendedKeyUsagePurpose::ClientAuth];
     writer.public("server.pem", &server.signed_by(&server_key, &issuer)?.pem())?;
     writer.secret("server.key", &server_key.serialize_pem())?;
 
     let cells = options.cells.clone();
     let mut identities = vec![
         (String::from("admin"), Role::Admin, vec!["*".to_owned()], Vec::new()),
+        ("zenoh-router".into(), Role::Server, vec!["*".to_owned()], Vec::new()),
         ("planner".into(), Role::Planner, cells.clone(), Vec::new()),
         ("perception".into(), Role::Perception, cells.clone(), Vec::new()),
         ("observer".into(), Role::Observer, cells.clone(), Vec::new()),
@@ -131,6 +136,18 @@ pub fn init(dir: &Path, options: &InitOptions) -> Result<InitSet, InitError> {
         });
         tokens.push((name, token));
     }
+    // The server's own certificate names it to the other servers and routers of the plant.
+    file.identity.push(IdentityEntry {
+        name: SERVER_NAME.into(),
+        role: Role::Server,
+        cells: vec!["*".into()],
+        robots: Vec::new(),
+        token_sha256: None,
+        cert_common_name: Some(SERVER_NAME.into()),
+    });
+    let host = options.hosts.first().map_or("127.0.0.1", String::as_str);
+    writer.public("zenoh-perception.json5", &zenoh_peer_config(dir, "perception", host))?;
+    writer.public("zenoh-router.json5", &zenoh_router_config(dir))?;
     let text = toml::to_string_pretty(&file).map_err(|e| InitError::Name(e.to_string()))?;
     writer.public(
         "access.toml",
@@ -141,6 +158,35 @@ pub fn init(dir: &Path, options: &InitOptions) -> Result<InitSet, InitError> {
         ),
     )?;
     Ok(InitSet { dir: dir.to_owned(), tokens })
+}
+
+/// The common name of the server's certificate (an identity of role `server`).
+pub const SERVER_NAME: &str = "dmp-server";
+
+/// The Zenoh configuration of a perception node of `name` connecting to the server at `host` over mutual TLS.
+fn zenoh_peer_config(dir: &Path, name: &str, host: &str) -> String {
+    let d = dir.display();
+    format!(
+        "// A perception node of the cell (zenoh::Config::from_file, or `--zenoh-config` of the tools).\n\
+         {{\n  mode: \"peer\",\n  connect: {{ endpoints: [\"tls/{host}:7447\"] }},\n  listen: {{ endpoints: [] }},\n  \
+         scouting: {{ multicast: {{ enabled: false }}, gossip: {{ enabled: false }} }},\n  transport: {{ link: {{ tls: {{\n    \
+         root_ca_certificate: \"{d}/ca.pem\",\n    connect_certificate: \"{d}/{name}.pem\",\n    \
+         connect_private_key: \"{d}/{name}.key\",\n    enable_mtls: true,\n  }} }} }},\n}}\n"
+    )
+}
+
+/// The Zenoh configuration of a router of the cell (zenohd -c): mutual TLS, its own certificate.
+fn zenoh_router_config(dir: &Path) -> String {
+    let d = dir.display();
+    format!(
+        "// A Zenoh router of the cell: zenohd -c zenoh-router.json5. Servers connect to it as its clients\n\
+         // (dmp-server --zenoh-mode client --zenoh-connect tls/HOST:7447).\n\
+         {{\n  mode: \"router\",\n  listen: {{ endpoints: [\"tls/0.0.0.0:7447\"] }},\n  \
+         scouting: {{ multicast: {{ enabled: false }} }},\n  transport: {{ link: {{ tls: {{\n    \
+         root_ca_certificate: \"{d}/ca.pem\",\n    listen_certificate: \"{d}/zenoh-router.pem\",\n    \
+         listen_private_key: \"{d}/zenoh-router.key\",\n    connect_certificate: \"{d}/zenoh-router.pem\",\n    \
+         connect_private_key: \"{d}/zenoh-router.key\",\n    enable_mtls: true,\n  }} }} }},\n}}\n"
+    )
 }
 
 /// A bearer token: 32 random bytes, hex.
@@ -194,7 +240,10 @@ mod tests {
         };
         let set = init(dir.path(), &options).unwrap();
         let access = Access::load(&dir.path().join("access.toml")).unwrap();
-        assert_eq!(access.identities().len(), 5);
+        assert_eq!(access.identities().len(), 7);
+        for file in ["zenoh-perception.json5", "zenoh-router.json5"] {
+            zenoh::Config::from_file(dir.path().join(file)).unwrap();
+        }
         for (name, token) in &set.tokens {
             let found = access.by_token(&credential::digest(token)).unwrap();
             assert_eq!(&found.name, name);

@@ -12,6 +12,7 @@ pub mod file;
 pub mod init;
 pub mod layer;
 pub mod role;
+pub mod zenoh_acl;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -17,6 +17,9 @@ pub enum Role {
     Observer,
     /// Everything.
     Admin,
+    /// Another server of the plant: over Zenoh, publishes its robots' states and reads the cells' keys; over gRPC,
+    /// reads as an observer.
+    Server,
 }
 
 impl Role {
@@ -28,6 +31,7 @@ impl Role {
             Role::Perception => "perception",
             Role::Observer => "observer",
             Role::Admin => "admin",
+            Role::Server => "server",
         }
     }
 }
@@ -135,7 +139,7 @@ pub fn allows(role: Role, scope: &Scope, action: &Action<'_>) -> bool {
             A::ChangeScene { cell } | A::ReadScene { cell } => scope.has_cell(cell),
             _ => false,
         },
-        Role::Observer => match action {
+        Role::Observer | Role::Server => match action {
             A::ReadPrimitive { robot } => scope.has_robot(robot),
             A::ReadScene { cell } => scope.has_cell(cell),
             A::Stats | A::Reflection => true,

@@ -23,6 +23,7 @@ fn loopback(connect: Vec<String>) -> ZenohConfig {
         listen: vec!["tcp/127.0.0.1:0".into()],
         connect,
         multicast_scouting: false,
+        config_file: None,
     }
 }
 

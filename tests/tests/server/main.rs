@@ -15,6 +15,7 @@ mod scene_over_zenoh;
 mod sessions_and_groups;
 mod stale_scene;
 mod tls;
+mod zenoh_access;
 
 use std::path::Path;
 use std::time::Duration;

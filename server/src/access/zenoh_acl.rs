@@ -1,0 +1,126 @@
+//! The Zenoh access control generated from the access file: default deny, and for each identity with a
+//! certificate common name (Zenoh knows a peer by its TLS certificate; bearer tokens are gRPC's) only the keys of
+//! its role and cells:
+//!
+//! | role | keys | messages |
+//! | --- | --- | --- |
+//! | perception | `dmp/<cell>/obstacles/**` of its cells | publish and delete obstacles, answer the server's catch-up queries, see its subscribers |
+//! | planner | `dmp/<cell>/obstacles/**` of its cells; `dmp/<cell>/**` read | the same, and subscribe to its cells |
+//! | observer | `dmp/<cell>/**` of its cells | subscribe and query only |
+//! | server, admin | `dmp/**` | everything: robot states are taken only from servers |
+//!
+//! Robots stream over gRPC and get nothing on Zenoh. A peer without a certificate of the cell's CA cannot connect
+//! to a `tls/` endpoint with mutual TLS; one that connects otherwise (a `tcp/` endpoint) matches no subject and is
+//! denied everything.
+
+use serde_json::{Value, json};
+
+use super::file::Access;
+use super::role::Role;
+
+/// What a publisher sends: samples, and answers to queries.
+const PUBLISH: &[&str] = &["put", "delete", "declare_queryable", "reply", "liveliness_token"];
+/// What a reader sends: its interests.
+const READ: &[&str] = &["declare_subscriber", "query", "declare_liveliness_subscriber", "liveliness_query"];
+/// What a reader is sent.
+const SAMPLES: &[&str] = &["put", "delete", "reply", "liveliness_token", "declare_queryable"];
+/// Every message.
+const ALL: &[&str] = &[
+    "put",
+    "delete",
+    "declare_queryable",
+    "reply",
+    "liveliness_token",
+    "declare_subscriber",
+    "query",
+    "declare_liveliness_subscriber",
+    "liveliness_query",
+];
+
+/// What an identity may send in (ingress) and be sent (egress), on which keys.
+struct Grant {
+    what: &'static str,
+    ingress: (&'static [&'static str], Vec<String>),
+    egress: (&'static [&'static str], Vec<String>),
+}
+
+/// The `access_control` block of a Zenoh configuration for `access`.
+pub fn access_control(access: &Access) -> Value {
+    let (mut rules, mut subjects, mut policies) = (Vec::new(), Vec::new(), Vec::new());
+    for identity in access.identities() {
+        let Some(cn) = &identity.cert_common_name else { continue };
+        let keys = |suffix: &str| -> Vec<String> {
+            identity.scope.cells.iter().map(|c| format!("dmp/{c}/{suffix}")).collect()
+        };
+        // The server declares its subscriber and sends its catch-up queries on every cell's obstacles
+        // (`dmp/*/obstacles/*`): a node must be told of them to publish (and to answer), whatever its cells. An
+        // access rule covers a message only when its keys include the message's key.
+        let obstacles = || Grant {
+            what: "obstacles",
+            ingress: (PUBLISH, keys("obstacles/**")),
+            egress: (READ, vec!["dmp/*/obstacles/**".into()]),
+        };
+        let read = || Grant { what: "read", ingress: (READ, keys("**")), egress: (SAMPLES, keys("**")) };
+        let all = || {
+            let every = vec!["dmp/**".to_owned()];
+            Grant { what: "all", ingress: (ALL, every.clone()), egress: (ALL, every) }
+        };
+        let grants: Vec<Grant> = match identity.role {
+            Role::Admin | Role::Server => vec![all()],
+            Role::Perception => vec![obstacles()],
+            Role::Planner => vec![obstacles(), read()],
+            Role::Observer => vec![read()],
+            Role::Robot => Vec::new(),
+        };
+        if grants.is_empty() {
+            continue;
+        }
+        let subject = format!("cn:{}", identity.name);
+        subjects.push(json!({ "id": subject, "cert_common_names": [cn] }));
+        let mut ids = Vec::new();
+        for g in grants {
+            for (flow, (messages, key_exprs)) in [("ingress", g.ingress), ("egress", g.egress)] {
+                let id = format!("{}:{}:{flow}", identity.name, g.what);
+                rules.push(json!({
+                    "id": id, "permission": "allow", "flows": [flow], "messages": messages, "key_exprs": key_exprs,
+                }));
+                ids.push(id);
+            }
+        }
+        policies
+            .push(json!({ "id": format!("policy:{}", identity.name), "rules": ids, "subjects": [subject] }));
+    }
+    json!({
+        "enabled": true,
+        "default_permission": "deny",
+        "rules": rules,
+        "subjects": subjects,
+        "policies": policies,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn perception_gets_only_its_cells_obstacles_and_robots_nothing() {
+        let text = "\
+[[identity]]\nname = \"eyes\"\nrole = \"perception\"\ncells = [\"a\"]\ncert_common_name = \"eyes\"\n\
+[[identity]]\nname = \"panda\"\nrole = \"robot\"\ncells = [\"a\"]\nrobots = [\"panda\"]\ncert_common_name = \"panda\"\n\
+[[identity]]\nname = \"peer\"\nrole = \"server\"\ncells = [\"*\"]\ncert_common_name = \"peer\"\n";
+        let acl = access_control(&Access::parse(text).unwrap());
+        assert_eq!(acl["default_permission"], "deny");
+        let rules = acl["rules"].as_array().unwrap();
+        let rule = |id: &str| rules.iter().find(|r| r["id"] == id).unwrap();
+        assert_eq!(rule("eyes:obstacles:ingress")["key_exprs"], json!(["dmp/a/obstacles/**"]));
+        assert_eq!(rule("eyes:obstacles:ingress")["messages"], json!(PUBLISH));
+        assert_eq!(rule("eyes:obstacles:egress")["messages"], json!(READ));
+        assert_eq!(rules.iter().filter(|r| r["id"].as_str().unwrap().starts_with("eyes:")).count(), 2);
+        assert!(!rules.iter().any(|r| r["id"].as_str().unwrap().starts_with("panda")));
+        assert_eq!(acl["subjects"].as_array().unwrap().len(), 2);
+        // Zenoh reads it.
+        let mut config = zenoh::Config::default();
+        config.insert_json5("access_control", &acl.to_string()).unwrap();
+    }
+}

@@ -1,0 +1,117 @@
+//! Zenoh under the access file: the server's `tls/` endpoint takes only peers with a certificate of the cell's CA,
+//! and the access control generated from the access file (default deny) lets each do only what its role may, on
+//! the server's own session, checked here with stock Zenoh sessions.
+
+use std::future::IntoFuture;
+use std::path::Path;
+
+use dmp_proto::keys::{obstacle_key, robot_state_key};
+use dmp_proto::zenoh_session::{SessionOptions, ZenohTls, session_config};
+use dmp_proto::{codec, v1};
+use dmp_server::access::init::{InitOptions, init};
+use dmp_server::run::{ServerHandle, start};
+use dmp_tests::within;
+
+use crate::until;
+
+/// A peer connecting to `locator` with the certificate of `identity` (none: no certificate).
+async fn peer(set: &Path, locator: &str, identity: Option<&str>) -> zenoh::Result<zenoh::Session> {
+    let mut options = SessionOptions::loopback_peer(vec![locator.to_owned()]);
+    options.listen = Some(Vec::new());
+    let mut config = if let Some(name) = identity {
+        options.tls = Some(ZenohTls {
+            root_ca: set.join("ca.pem"),
+            cert: set.join(format!("{name}.pem")),
+            key: set.join(format!("{name}.key")),
+            mutual: true,
+        });
+        session_config(&options).unwrap()
+    } else {
+        let mut c = session_config(&options).unwrap();
+        let ca = serde_json::Value::from(set.join("ca.pem").display().to_string()).to_string();
+        c.insert_json5("transport/link/tls/root_ca_certificate", &ca).unwrap();
+        c
+    };
+    config.insert_json5("connect/timeout_ms", "2000").unwrap();
+    zenoh::open(config).await
+}
+
+fn obstacle(id: &str) -> String {
+    format!(r#"{{"id": "{id}", "center": [5.0, 5.0], "semi_axes": [0.1, 0.1]}}"#)
+}
+
+fn in_scene(h: &ServerHandle, cell: &str, id: &str) -> bool {
+    h.state().cells.find(cell).unwrap().is_some_and(|c| c.snapshot().obstacles.contains_key(id))
+}
+
+fn now_unix_s() -> f64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs_f64()
+}
+
+fn state(id: &str) -> Vec<u8> {
+    codec::encode(&v1::RobotState {
+        robot_id: id.into(),
+        stamp_unix_s: now_unix_s(),
+        position: vec![0.5, 0.25],
+        velocity: vec![0.0, 0.0],
+        footprint: Some(v1::Superquadric { semi_axes: vec![0.2, 0.2], exponents: vec![] }),
+    })
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn each_zenoh_peer_does_only_what_its_role_may() {
+    let set = tempfile::tempdir().unwrap();
+    let s = set.path();
+    let options =
+        InitOptions { cells: vec!["cell-a".into()], robots: vec!["panda-1".into()], ..Default::default() };
+    init(s, &options).unwrap();
+    let data = tempfile::tempdir().unwrap();
+    let mut c = dmp_tests::config(data.path());
+    c.cell = "cell-a".into();
+    c.zenoh.listen = vec!["tls/127.0.0.1:0".into()];
+    c.security.access = Some(s.join("access.toml"));
+    c.security.tls_cert = Some(s.join("server.pem"));
+    c.security.tls_key = Some(s.join("server.key"));
+    c.security.tls_client_ca = Some(s.join("ca.pem"));
+    let h = within("server start", start(c)).await.expect("server starts");
+    let locator = h.zenoh_locators.iter().find(|l| l.starts_with("tls/")).expect("a tls/ locator").clone();
+
+    // A peer without a certificate cannot even connect.
+    assert!(within("open", peer(s, &locator, None)).await.is_err(), "connected without a certificate");
+
+    // Perception of cell-a: its obstacles go in; another cell's and a robot state do not.
+    let eyes = within("open", peer(s, &locator, Some("perception"))).await.unwrap();
+    let put = |session: &zenoh::Session, key: String, payload: Vec<u8>| {
+        let session = session.clone();
+        async move { within("put", session.put(key, payload).into_future()).await.unwrap() }
+    };
+    put(&eyes, obstacle_key("cell-b", "elsewhere"), obstacle("elsewhere").into_bytes()).await;
+    put(&eyes, robot_state_key("cell-a", "ghost"), state("ghost")).await;
+    // A robot's certificate (robots stream over gRPC) changes nothing either.
+    let robot = within("open", peer(s, &locator, Some("panda-1"))).await.unwrap();
+    put(&robot, obstacle_key("cell-a", "from-robot"), obstacle("from-robot").into_bytes()).await;
+    put(&robot, robot_state_key("cell-a", "ghost-2"), state("ghost-2")).await;
+    // Then an allowed put: it arrives after the others would have (one link, in order).
+    put(&eyes, obstacle_key("cell-a", "seen"), obstacle("seen").into_bytes()).await;
+    until("the allowed obstacle arrives", || in_scene(&h, "cell-a", "seen")).await;
+    put(&robot, obstacle_key("cell-a", "marker"), obstacle("marker").into_bytes()).await;
+    put(&eyes, obstacle_key("cell-a", "after-robot"), obstacle("after-robot").into_bytes()).await;
+    until("the second allowed obstacle arrives", || in_scene(&h, "cell-a", "after-robot")).await;
+    assert!(!in_scene(&h, "cell-b", "elsewhere"), "perception of cell-a changed cell-b");
+    assert!(
+        !in_scene(&h, "cell-a", "from-robot") && !in_scene(&h, "cell-a", "marker"),
+        "a robot changed the scene"
+    );
+    let cell = h.state().cells.find("cell-a").unwrap().unwrap();
+    assert_eq!(cell.robot_count(), 0, "a robot state was taken from a perception node or a robot");
+
+    // A server of the plant (the router's certificate, role `server`) may publish robot states.
+    let other_server = within("open", peer(s, &locator, Some("zenoh-router"))).await.unwrap();
+    put(&other_server, robot_state_key("cell-a", "remote"), state("remote")).await;
+    until("the other server's robot arrives", || cell.robot_count() == 1).await;
+
+    for session in [eyes, robot, other_server] {
+        within("close", session.close().into_future()).await.unwrap();
+    }
+    within("shutdown", h.shutdown()).await.unwrap();
+}
