@@ -126,6 +126,29 @@ impl ObstaclePublisher {
         Self::open_with(cell, session_config(&publisher_options(connect, listen))?).await
     }
 
+    /// Opens a session from a stock Zenoh configuration file (JSON5: endpoints, TLS, credentials), as
+    /// `access init` writes for a perception node; `connect` endpoints, when given, replace the file's.
+    pub async fn open_from_file(
+        cell: &str,
+        file: &std::path::Path,
+        connect: &[String],
+    ) -> Result<Self, ClientError> {
+        let mut config = zenoh::Config::from_file(file)
+            .map_err(|e| ClientError::argument("zenoh-config", format!("{}: {e}", file.display())))?;
+        if !connect.is_empty() {
+            let endpoints = SessionOptions { connect: connect.to_vec(), ..publisher_options(connect, &[]) };
+            // Checked and set as every session's are.
+            let checked = session_config(&endpoints)?;
+            let value = checked
+                .get_json("connect/endpoints")
+                .map_err(|e| ClientError::argument("zenoh-connect", e.to_string()))?;
+            config
+                .insert_json5("connect/endpoints", &value)
+                .map_err(|e| ClientError::argument("zenoh-connect", e.to_string()))?;
+        }
+        Self::open_with(cell, config).await
+    }
+
     /// Opens a session with a given configuration.
     pub async fn open_with(cell: &str, config: zenoh::Config) -> Result<Self, ClientError> {
         check_name("cell", cell)?;

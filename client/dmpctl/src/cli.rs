@@ -35,6 +35,10 @@ pub struct Cli {
     /// Zenoh endpoint to connect to, e.g. `tcp/127.0.0.1:7447` (repeatable); none: multicast scouting.
     #[arg(long = "zenoh-connect", global = true, value_name = "ENDPOINT")]
     pub zenoh_connect: Vec<String>,
+    /// A stock Zenoh configuration file (JSON5) for `--via zenoh`: TLS and credentials, as `dmp-server access init`
+    /// writes for a perception node; `--zenoh-connect` replaces its endpoints.
+    #[arg(long = "zenoh-config", global = true, value_name = "FILE")]
+    pub zenoh_config: Option<PathBuf>,
     /// TLS and the bearer token.
     #[command(flatten)]
     pub connect: ConnectArgs,
@@ -338,7 +342,11 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
     let default_server = if options.tls.is_some() { "https://127.0.0.1:50051" } else { DEFAULT_SERVER };
     let server = cli.server.clone().unwrap_or_else(|| default_server.to_string());
     let zenoh_cell = cli.cell.clone().unwrap_or_else(|| "default".into());
-    let zenoh = ZenohArgs { cell: zenoh_cell.clone(), connect: cli.zenoh_connect.clone() };
+    let zenoh = ZenohArgs {
+        cell: zenoh_cell.clone(),
+        connect: cli.zenoh_connect.clone(),
+        config_file: cli.zenoh_config.clone(),
+    };
     let grpc_cell = cli.cell.clone().unwrap_or_default();
     let connect = || async {
         Ok::<_, DmpctlError>(DmpClient::connect_with(&server, &options).await?.with_cell(grpc_cell.as_str()))

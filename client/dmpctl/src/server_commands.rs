@@ -256,10 +256,15 @@ pub struct ZenohArgs {
     pub cell: String,
     /// Endpoints to connect to.
     pub connect: Vec<String>,
+    /// A stock Zenoh configuration file to open the session with (TLS, credentials).
+    pub config_file: Option<std::path::PathBuf>,
 }
 
 async fn publisher(z: &ZenohArgs) -> Result<ObstaclePublisher, DmpctlError> {
-    let p = ObstaclePublisher::open(&z.cell, &z.connect, &[]).await?;
+    let p = match &z.config_file {
+        Some(file) => ObstaclePublisher::open_from_file(&z.cell, file, &z.connect).await?,
+        None => ObstaclePublisher::open(&z.cell, &z.connect, &[]).await?,
+    };
     p.wait_for_subscriber(ZENOH_SUBSCRIBER_WAIT).await?;
     Ok(p)
 }
