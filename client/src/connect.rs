@@ -72,7 +72,7 @@ impl TlsOptions {
 }
 
 /// How to connect.
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 pub struct ConnectOptions {
     /// How long to wait for the server.
     pub timeout: Duration,
@@ -80,6 +80,16 @@ pub struct ConnectOptions {
     pub token: Option<String>,
     /// TLS (the URL is then `https://`).
     pub tls: Option<TlsOptions>,
+}
+
+impl std::fmt::Debug for ConnectOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ConnectOptions")
+            .field("timeout", &self.timeout)
+            .field("token", &self.token.as_ref().map(|_| "<hidden>"))
+            .field("tls", &self.tls)
+            .finish()
+    }
 }
 
 impl Default for ConnectOptions {

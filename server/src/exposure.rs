@@ -47,8 +47,22 @@ pub fn check(config: &Config) -> Result<Exposure, ServerError> {
                 ));
             }
         }
-        if config.zenoh.multicast_scouting && !(config.zenoh.listen.iter().all(secured)) {
-            unprotected.push("Zenoh multicast scouting is on with listeners that are not secured: any peer on the LAN can join".into());
+        let peer = config.zenoh.mode == "peer";
+        if peer && config.zenoh.listen.is_empty() {
+            unprotected.push("Zenoh listens on its default for a peer, every interface, without TLS".into());
+        }
+        // What comes in through a connection counts as much as what comes in through a listener.
+        for endpoint in &config.zenoh.connect {
+            if !endpoint_is_loopback(endpoint) && !secured(endpoint) {
+                unprotected.push(format!("Zenoh connects to {endpoint} without TLS and an access file"));
+            }
+        }
+        let all_secured = !config.zenoh.listen.is_empty() && config.zenoh.listen.iter().all(secured);
+        if config.zenoh.multicast_scouting && !all_secured {
+            unprotected.push(
+                "Zenoh multicast scouting is on with listeners that are not secured: any peer on the LAN can join"
+                    .into(),
+            );
         }
     }
     if !unprotected.is_empty() && !s.insecure {
@@ -128,6 +142,16 @@ mod tests {
         c.zenoh.listen = vec!["tcp/0.0.0.0:7447".into()];
         c.security.insecure = true;
         assert_eq!(check(&c).unwrap().warnings.len(), 2);
+        c.security.insecure = false;
+        c.zenoh.multicast_scouting = false;
+        c.zenoh.listen = Vec::new();
+        assert!(check(&c).unwrap_err().to_string().contains("every interface"));
+        c.zenoh.listen = vec!["tcp/127.0.0.1:7447".into()];
+        c.zenoh.connect = vec!["tcp/10.1.2.3:7447".into()];
+        assert!(check(&c).unwrap_err().to_string().contains("connects to tcp/10.1.2.3:7447"));
+        c.zenoh.connect = vec!["tls/10.1.2.3:7447".into()];
+        assert!(!check(&c).unwrap().insecure());
+        c.security.insecure = true;
         c.zenoh.disabled = true;
         assert!(!check(&c).unwrap().insecure());
     }

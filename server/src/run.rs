@@ -68,7 +68,13 @@ impl ServerHandle {
     /// Reads the access file again (what SIGHUP does): streams it no longer allows end with PERMISSION_DENIED; a
     /// file that is refused changes nothing.
     pub fn reload_access(&self) -> Result<usize, crate::access::AccessError> {
-        self.state.access.reload()
+        let n = self.state.access.reload()?;
+        if !self.zenoh_locators.is_empty() && self.state.access.enabled() {
+            warn!(
+                "the Zenoh access control changes only at a restart: Zenoh reads it once, when the session opens"
+            );
+        }
+        Ok(n)
     }
 
     /// Streams currently open (executions and watches).

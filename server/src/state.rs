@@ -70,11 +70,12 @@ impl Default for Counters {
 }
 
 impl AppState {
-    /// Who sent `request` (the authentication layer put it there). A request that did not pass the layer, as
+    /// Who sent `request` (the authentication layer put it there), as the access file in force now knows it. A
+    /// request that did not pass the layer, as
     /// handlers called directly, is the open server's caller when there is no access file, and refused otherwise.
     pub fn caller<T>(&self, request: &tonic::Request<T>) -> Result<Caller, ServerError> {
         match request.extensions().get::<Caller>() {
-            Some(c) => Ok(c.clone()),
+            Some(c) => self.access.refresh(c),
             None if !self.access.enabled() => Ok(Caller::open()),
             None => Err(ServerError::Unauthenticated("the request was not authenticated".into())),
         }

@@ -11,7 +11,7 @@ use dmp_client::connect::{ConnectOptions, TlsOptions};
 pub const TOKEN_ENV: &str = "DMP_TOKEN";
 
 /// See the module.
-#[derive(Debug, Clone, Default, Args)]
+#[derive(Clone, Default, Args)]
 pub struct ConnectArgs {
     /// The CA that signed the server's certificate (PEM): connect over TLS (`https://`).
     #[arg(long, global = true, value_name = "FILE")]
@@ -28,6 +28,18 @@ pub struct ConnectArgs {
     /// The bearer token. Prefer `DMP_TOKEN` or `--token-file`: a token on the command line shows in `ps`.
     #[arg(long, global = true, value_name = "TOKEN")]
     pub token: Option<String>,
+}
+
+impl std::fmt::Debug for ConnectArgs {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ConnectArgs")
+            .field("tls_ca", &self.tls_ca)
+            .field("tls_cert", &self.tls_cert)
+            .field("tls_key", &self.tls_key)
+            .field("token_file", &self.token_file)
+            .field("token", &self.token.as_ref().map(|_| "<hidden>"))
+            .finish()
+    }
 }
 
 impl ConnectArgs {

@@ -114,7 +114,14 @@ impl Access {
 
     /// Checks the text of an access file.
     pub fn parse(text: &str) -> Result<Self, AccessError> {
-        let file: AccessFile = toml::from_str(text).map_err(|e| AccessError::Syntax(e.to_string()))?;
+        // The message and the line, never the line's text: a secret written under a wrong key would be logged.
+        let file: AccessFile = toml::from_str(text).map_err(|e| {
+            let line = e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+            AccessError::Syntax(match line {
+                Some(l) => format!("line {l}: {}", e.message()),
+                None => e.message().to_owned(),
+            })
+        })?;
         Self::from_file(&file)
     }
 
@@ -253,7 +260,10 @@ mod tests {
             let e = Access::parse(text).unwrap_err().to_string();
             assert!(e.contains(needle), "{e} should mention {needle}");
         };
-        refused(&file("colour = \"red\""), "unknown field `colour`");
+        refused(&file("colour = \"red\""), "line 7: unknown field `colour`");
+        let leaked =
+            Access::parse("[[identity]]\nname = \"x\"\ntoken = \"s3cret\"\n").unwrap_err().to_string();
+        assert!(!leaked.contains("s3cret"), "{leaked}");
         refused(&file("").replace("robot\"", "pilot\""), "unknown variant `pilot`");
         refused(&file("").replace("robots = [\"panda-1\"]", "robots = []"), "identity 1 (`panda-1`): robots");
         refused(&file("").replace(&digest_hex("secret-1"), "9f86d08"), "token_sha256: must be the 64 hex");

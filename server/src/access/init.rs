@@ -90,10 +90,10 @@ pub fn init(dir: &Path, options: &InitOptions) -> Result<InitSet, InitError> {
     writer.secret("ca.key", &ca_key.serialize_pem())?;
     let issuer = Issuer::new(ca, ca_key);
 
-    let mut names = vec!["localhost".to_owned(), "127.0.0.1".to_owned(), "::1".to_owned()];
-    names.extend(options.hosts.iter().cloned());
+    let mut server_names = vec!["localhost".to_owned(), "127.0.0.1".to_owned(), "::1".to_owned()];
+    server_names.extend(options.hosts.iter().cloned());
     let server_key = KeyPair::generate()?;
-    let mut server = CertificateParams::new(names)?;
+    let mut server = CertificateParams::new(server_names.clone())?;
     server.distinguished_name.push(DnType::CommonName, SERVER_NAME);
     // A server also connects out over Zenoh (to routers and other servers) with this certificate.
     server.extended_key_usages =
@@ -105,9 +105,10 @@ pub fn init(dir: &Path, options: &InitOptions) -> Result<InitSet, InitError> {
     let mut identities = vec![
         (String::from("admin"), Role::Admin, vec!["*".to_owned()], Vec::new()),
         ("zenoh-router".into(), Role::Server, vec!["*".to_owned()], Vec::new()),
-        ("planner".into(), Role::Planner, cells.clone(), Vec::new()),
+        // Primitives belong to robots, not cells: the planner and the observer get the robots given.
+        ("planner".into(), Role::Planner, cells.clone(), options.robots.clone()),
         ("perception".into(), Role::Perception, cells.clone(), Vec::new()),
-        ("observer".into(), Role::Observer, cells.clone(), Vec::new()),
+        ("observer".into(), Role::Observer, cells.clone(), options.robots.clone()),
     ];
     for robot in &options.robots {
         if identities.iter().any(|(n, ..)| n == robot) {
@@ -119,9 +120,18 @@ pub fn init(dir: &Path, options: &InitOptions) -> Result<InitSet, InitError> {
     let mut tokens = Vec::new();
     for (name, role, cells, robots) in identities {
         let key = KeyPair::generate()?;
-        let mut params = CertificateParams::new(Vec::<String>::new())?;
+        // A router also serves TLS: the server's names, both usages.
+        let (names, usages) = if role == Role::Server {
+            (
+                server_names.clone(),
+                vec![ExtendedKeyUsagePurpose::ServerAuth, ExtendedKeyUsagePurpose::ClientAuth],
+            )
+        } else {
+            (Vec::new(), vec![ExtendedKeyUsagePurpose::ClientAuth])
+        };
+        let mut params = CertificateParams::new(names)?;
         params.distinguished_name.push(DnType::CommonName, name.clone());
-        params.extended_key_usages = vec![ExtendedKeyUsagePurpose::ClientAuth];
+        params.extended_key_usages = usages;
         writer.public(&format!("{name}.pem"), &params.signed_by(&key, &issuer)?.pem())?;
         writer.secret(&format!("{name}.key"), &key.serialize_pem())?;
         let token = new_token()?;
@@ -147,7 +157,9 @@ pub fn init(dir: &Path, options: &InitOptions) -> Result<InitSet, InitError> {
     });
     let host = options.hosts.first().map_or("127.0.0.1", String::as_str);
     writer.public("zenoh-perception.json5", &zenoh_peer_config(dir, "perception", host))?;
-    writer.public("zenoh-router.json5", &zenoh_router_config(dir))?;
+    let access = crate::access::Access::from_file(&file).map_err(|e| InitError::Name(e.to_string()))?;
+    let acl = super::zenoh_acl::access_control(&access);
+    writer.public("zenoh-router.json5", &zenoh_router_config(dir, &acl))?;
     let text = toml::to_string_pretty(&file).map_err(|e| InitError::Name(e.to_string()))?;
     writer.public(
         "access.toml",
@@ -175,9 +187,11 @@ fn zenoh_peer_config(dir: &Path, name: &str, host: &str) -> String {
     )
 }
 
-/// The Zenoh configuration of a router of the cell (zenohd -c): mutual TLS, its own certificate.
-fn zenoh_router_config(dir: &Path) -> String {
+/// The Zenoh configuration of a router of the cell (zenohd -c): mutual TLS, its own certificate, and the access
+/// control of the access file (so that it, too, takes from each peer only what its role may send).
+fn zenoh_router_config(dir: &Path, acl: &serde_json::Value) -> String {
     let d = dir.display();
+    let acl = serde_json::to_string_pretty(acl).unwrap_or_default().replace('\n', "\n  ");
     format!(
         "// A Zenoh router of the cell: zenohd -c zenoh-router.json5. Servers connect to it as its clients\n\
          // (dmp-server --zenoh-mode client --zenoh-connect tls/HOST:7447).\n\
@@ -185,7 +199,9 @@ fn zenoh_router_config(dir: &Path) -> String {
          scouting: {{ multicast: {{ enabled: false }} }},\n  transport: {{ link: {{ tls: {{\n    \
          root_ca_certificate: \"{d}/ca.pem\",\n    listen_certificate: \"{d}/zenoh-router.pem\",\n    \
          listen_private_key: \"{d}/zenoh-router.key\",\n    connect_certificate: \"{d}/zenoh-router.pem\",\n    \
-         connect_private_key: \"{d}/zenoh-router.key\",\n    enable_mtls: true,\n  }} }} }},\n}}\n"
+         connect_private_key: \"{d}/zenoh-router.key\",\n    enable_mtls: true,\n  }} }} }},\n  \
+         // Generated from access.toml: regenerate the set (or edit both) when identities change.\n  \
+         access_control: {acl},\n}}\n"
     )
 }
 

@@ -80,9 +80,6 @@ where
             let connection = tls.get_ref().clone();
             ext.insert(connection);
         }
-        if let Some(connection) = ext.get::<Connection>() {
-            connection.activity.touch();
-        }
         let path = request.uri().path();
         if !OPEN_PREFIXES.iter().any(|p| path.starts_with(p)) {
             let reflection = REFLECTION_PREFIXES.iter().any(|p| path.starts_with(p));
@@ -107,11 +104,15 @@ where
                 Ok(c) => {
                     request.extensions_mut().insert(c);
                 }
+                // A refused request does not keep its connection from its idle timeout.
                 Err(e) => {
                     let status: tonic::Status = e.into();
                     return Box::pin(std::future::ready(Ok(status.into_http())));
                 }
             }
+        }
+        if let Some(connection) = request.extensions().get::<Connection>() {
+            connection.activity.touch();
         }
         // The service that was made ready is the one called (tower's rule); a clone takes its place.
         let clone = self.inner.clone();

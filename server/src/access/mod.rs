@@ -221,16 +221,35 @@ impl Grant {
 }
 
 impl AccessControl {
-    /// The grant of `caller` for a long request, checked again at every reload with `recheck` (which calls
-    /// [`Caller::check_again`] with the request's action).
+    /// The grant of `caller` for a long request, checked now against the file in force and again at every
+    /// reload with `recheck` (which calls [`Caller::check_again`] with the request's action).
     pub fn grant(
         &self,
         caller: Caller,
         recheck: impl Fn(&Caller, Option<&Access>) -> Result<(), ServerError> + Send + Sync + 'static,
-    ) -> Grant {
+    ) -> Result<Grant, ServerError> {
         let mut reloads = self.current.subscribe();
-        reloads.borrow_and_update();
-        Grant { caller, reloads, recheck: Box::new(recheck) }
+        // Checked against what is in force now: a reload between the request's authentication and here counts.
+        let access = reloads.borrow_and_update().clone();
+        recheck(&caller, access.as_deref())?;
+        Ok(Grant { caller, reloads, recheck: Box::new(recheck) })
+    }
+
+    /// `caller` as the file in force now knows it: the request was authenticated when its headers arrived, and a
+    /// reload may have come before its handler runs. UNAUTHENTICATED when its credential is gone.
+    pub fn refresh(&self, caller: &Caller) -> Result<Caller, ServerError> {
+        let Some(access) = self.current() else { return Ok(caller.clone()) };
+        let identity = match &caller.credential {
+            Credential::Open => return Ok(caller.clone()),
+            Credential::Token(d) => access.by_token(d),
+            Credential::CommonName(cn) => access.by_common_name(cn),
+        };
+        match identity {
+            Some(i) => Ok(Caller { identity: Some(i.clone()), credential: caller.credential.clone() }),
+            None => Err(ServerError::Unauthenticated(
+                "the credential is no longer in the access file (it was reloaded)".into(),
+            )),
+        }
     }
 }
 
@@ -275,6 +294,14 @@ mod tests {
         // The file changes: the robot is another one now.
         access_file(dir.path(), "\"panda-9\"");
         control.reload().unwrap();
+        // A request authenticated before the reload, handled after it: its caller is seen as the file says now,
+        // and a stream it starts is refused at once.
+        let now = control.refresh(&caller).unwrap();
+        assert!(now.check(&own).is_err());
+        let recheck = |c: &Caller, a: Option<&Access>| {
+            c.check_again(a, &Action::Execute { cell: "a", robots: &["panda-1"] })
+        };
+        assert!(control.grant(caller.clone(), recheck).is_err());
         let e = caller.check_again(control.current().as_deref(), &own).unwrap_err();
         assert!(matches!(e, ServerError::PermissionDenied(_)), "{e}");
         // A broken file keeps the one in force.

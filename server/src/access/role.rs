@@ -108,6 +108,17 @@ impl Scope {
         self.robots.is_empty() || self.robots.iter().any(|r| r == robot)
     }
 
+    /// Whether the primitives of `robot` are its own. Primitives belong to a robot, not to a cell: an identity that
+    /// lists its robots has theirs; one that lists none has every robot's only when its cells are `*` (listing
+    /// none in some cells does not give other cells' robots' primitives).
+    pub fn has_primitives_of(&self, robot: &str) -> bool {
+        if self.robots.is_empty() {
+            self.cells.iter().any(|c| c == "*")
+        } else {
+            self.robots.iter().any(|r| r == robot)
+        }
+    }
+
     fn has_robots(&self, robots: &[&str]) -> bool {
         robots.iter().all(|r| self.has_robot(r))
     }
@@ -120,7 +131,7 @@ pub fn allows(role: Role, scope: &Scope, action: &Action<'_>) -> bool {
         Role::Admin => true,
         Role::Planner => match action {
             A::WritePrimitive { robot } | A::DeletePrimitive { robot } | A::ReadPrimitive { robot } => {
-                scope.has_robot(robot)
+                scope.has_primitives_of(robot)
             }
             A::Plan { cell, robots } | A::Execute { cell, robots } => {
                 scope.has_cell(cell) && scope.has_robots(robots)
@@ -129,7 +140,7 @@ pub fn allows(role: Role, scope: &Scope, action: &Action<'_>) -> bool {
             A::Stats | A::Reflection => true,
         },
         Role::Robot => match action {
-            A::ReadPrimitive { robot } => scope.has_robot(robot),
+            A::ReadPrimitive { robot } => scope.has_primitives_of(robot),
             A::Plan { cell, robots } | A::Execute { cell, robots } => {
                 scope.has_cell(cell) && scope.has_robots(robots)
             }
@@ -140,7 +151,7 @@ pub fn allows(role: Role, scope: &Scope, action: &Action<'_>) -> bool {
             _ => false,
         },
         Role::Observer | Role::Server => match action {
-            A::ReadPrimitive { robot } => scope.has_robot(robot),
+            A::ReadPrimitive { robot } => scope.has_primitives_of(robot),
             A::ReadScene { cell } => scope.has_cell(cell),
             A::Stats | A::Reflection => true,
             _ => false,
@@ -176,7 +187,10 @@ mod tests {
         let s = scope(&["a"], &[]);
         assert!(allows(Role::Planner, &s, &Action::Execute { cell: "a", robots: &["x", "y"] }));
         assert!(!allows(Role::Planner, &s, &Action::Execute { cell: "b", robots: &["x"] }));
-        assert!(allows(Role::Planner, &s, &Action::DeletePrimitive { robot: "anyone" }));
+        // Primitives have no cell: a planner of cell a that lists no robot may not write any robot's.
+        assert!(!allows(Role::Planner, &s, &Action::DeletePrimitive { robot: "anyone" }));
+        assert!(!allows(Role::Observer, &s, &Action::ReadPrimitive { robot: "anyone" }));
+        assert!(allows(Role::Planner, &scope(&["*"], &[]), &Action::DeletePrimitive { robot: "anyone" }));
         let limited = scope(&["*"], &["x"]);
         assert!(allows(Role::Planner, &limited, &Action::Plan { cell: "z", robots: &["x"] }));
         assert!(!allows(Role::Planner, &limited, &Action::Plan { cell: "z", robots: &["y"] }));

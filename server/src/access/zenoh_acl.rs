@@ -7,7 +7,8 @@
 //! | perception | `dmp/<cell>/obstacles/**` of its cells | publish and delete obstacles, answer the server's catch-up queries, see its subscribers |
 //! | planner | `dmp/<cell>/obstacles/**` of its cells; `dmp/<cell>/**` read | the same, and subscribe to its cells |
 //! | observer | `dmp/<cell>/**` of its cells | subscribe and query only |
-//! | server, admin | `dmp/**` | everything: robot states are taken only from servers |
+//! | server | `dmp/<cell>/**` of its cells | everything: robot states are taken only from servers |
+//! | admin | `dmp/**` | everything |
 //!
 //! Robots stream over gRPC and get nothing on Zenoh. A peer without a certificate of the cell's CA cannot connect
 //! to a `tls/` endpoint with mutual TLS; one that connects otherwise (a `tcp/` endpoint) matches no subject and is
@@ -61,12 +62,12 @@ pub fn access_control(access: &Access) -> Value {
             egress: (READ, vec!["dmp/*/obstacles/**".into()]),
         };
         let read = || Grant { what: "read", ingress: (READ, keys("**")), egress: (SAMPLES, keys("**")) };
-        let all = || {
-            let every = vec!["dmp/**".to_owned()];
-            Grant { what: "all", ingress: (ALL, every.clone()), egress: (ALL, every) }
-        };
+        let all =
+            |keys: Vec<String>| Grant { what: "all", ingress: (ALL, keys.clone()), egress: (ALL, keys) };
         let grants: Vec<Grant> = match identity.role {
-            Role::Admin | Role::Server => vec![all()],
+            Role::Admin => vec![all(vec!["dmp/**".to_owned()])],
+            // A server of some cells publishes and reads those cells only; `*` gives `dmp/*/**`.
+            Role::Server => vec![all(keys("**"))],
             Role::Perception => vec![obstacles()],
             Role::Planner => vec![obstacles(), read()],
             Role::Observer => vec![read()],

@@ -119,7 +119,7 @@ impl MotionServiceImpl {
 
     /// The grant of a stream executing `robots` in `cell`: it ends when a reload of the access file no longer allows
     /// it.
-    fn grant(&self, caller: Caller, cell: &Cell, robots: Vec<String>) -> Grant {
+    fn grant(&self, caller: Caller, cell: &Cell, robots: Vec<String>) -> Result<Grant, ServerError> {
         let cell = cell.name().to_owned();
         self.state.access.grant(caller, move |c, access| {
             let robots: Vec<&str> = robots.iter().map(String::as_str).collect();
@@ -276,7 +276,7 @@ impl MotionService for MotionServiceImpl {
         let cell = r.cell.clone();
         let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await?;
         audit!(caller, "execute", cell = cell.name(), robot = %r.robot_id, take_over = req.take_over);
-        let grant = self.grant(caller, &cell, vec![r.robot_id.clone()]);
+        let grant = self.grant(caller, &cell, vec![r.robot_id.clone()])?;
         let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
         Ok(Response::new(one_robot_stream(self.spawn(
             run,
@@ -316,7 +316,7 @@ impl MotionService for MotionServiceImpl {
         let cell = r.cell.clone();
         let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await.map_err(|e| e.within("start"))?;
         audit!(caller, "session", cell = cell.name(), robot = %robot_id, take_over = req.take_over);
-        let grant = self.grant(caller.clone(), &cell, vec![robot_id.clone()]);
+        let grant = self.grant(caller.clone(), &cell, vec![robot_id.clone()])?;
         let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
         let (ctl_tx, ctl_rx) = mpsc::channel(64);
         let rx = self.spawn(run, cell, cfg, Some(ctl_rx), &peer, Owner { claim, grant })?;
@@ -433,7 +433,7 @@ impl MotionService for MotionServiceImpl {
         let ids: Vec<&str> = members.iter().map(|(agent, _)| agent.id.as_str()).collect();
         let claim = self.claim(&cell, &ids, req.take_over).await?;
         audit!(caller, "execute group", cell = cell.name(), robots = ?ids, take_over = req.take_over);
-        let grant = self.grant(caller, &cell, ids.iter().map(|id| id.to_string()).collect());
+        let grant = self.grant(caller, &cell, ids.iter().map(|id| id.to_string()).collect())?;
         let run = ServedRun::new(primitive, motion, members, avoidance, cfg.stepping, history_len(&cfg))?;
         let rx = self.spawn(run, cell, cfg, None, &peer, Owner { claim, grant })?;
         let stream = ReceiverStream::new(rx).map(|r| {

@@ -159,7 +159,8 @@ impl SceneService for SceneServiceImpl {
         caller.check(&Action::ReadScene { cell: &cell })?;
         let permit = s.stream_permit(StreamKind::Watch, &Peer::of(&request))?;
         let scene = s.cells.get(&cell)?;
-        let grant = s.access.grant(caller, move |c, a| c.check_again(a, &Action::ReadScene { cell: &cell }));
+        let grant =
+            s.access.grant(caller, move |c, a| c.check_again(a, &Action::ReadScene { cell: &cell }))?;
         Ok(Response::new(watch_stream(
             &scene,
             s.clock,

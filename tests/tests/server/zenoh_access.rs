@@ -97,6 +97,19 @@ async fn each_zenoh_peer_does_only_what_its_role_may() {
     put(&robot, obstacle_key("cell-a", "marker"), obstacle("marker").into_bytes()).await;
     put(&eyes, obstacle_key("cell-a", "after-robot"), obstacle("after-robot").into_bytes()).await;
     until("the second allowed obstacle arrives", || in_scene(&h, "cell-a", "after-robot")).await;
+    // An observer reads only; a planner of cell-a may change its scene.
+    let observer = within("open", peer(s, &locator, Some("observer"))).await.unwrap();
+    let planner = within("open", peer(s, &locator, Some("planner"))).await.unwrap();
+    put(&observer, obstacle_key("cell-a", "by-observer"), obstacle("by-observer").into_bytes()).await;
+    put(&planner, obstacle_key("cell-a", "by-planner"), obstacle("by-planner").into_bytes()).await;
+    until("the planner's obstacle arrives", || in_scene(&h, "cell-a", "by-planner")).await;
+    put(&observer, obstacle_key("cell-a", "by-observer-2"), obstacle("by-observer-2").into_bytes()).await;
+    put(&eyes, obstacle_key("cell-a", "after-observer"), obstacle("after-observer").into_bytes()).await;
+    until("the last allowed obstacle arrives", || in_scene(&h, "cell-a", "after-observer")).await;
+    assert!(
+        !in_scene(&h, "cell-a", "by-observer") && !in_scene(&h, "cell-a", "by-observer-2"),
+        "an observer changed the scene"
+    );
     assert!(!in_scene(&h, "cell-b", "elsewhere"), "perception of cell-a changed cell-b");
     assert!(
         !in_scene(&h, "cell-a", "from-robot") && !in_scene(&h, "cell-a", "marker"),
@@ -110,7 +123,7 @@ async fn each_zenoh_peer_does_only_what_its_role_may() {
     put(&other_server, robot_state_key("cell-a", "remote"), state("remote")).await;
     until("the other server's robot arrives", || cell.robot_count() == 1).await;
 
-    for session in [eyes, robot, other_server] {
+    for session in [eyes, robot, other_server, observer, planner] {
         within("close", session.close().into_future()).await.unwrap();
     }
     within("shutdown", h.shutdown()).await.unwrap();
