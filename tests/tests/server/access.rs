@@ -37,6 +37,15 @@ pub(crate) async fn as_identity(server: &TestServer, token: Option<&str>) -> Dmp
     within("connect", DmpClient::connect_with(&server.url(), &options)).await.unwrap()
 }
 
+/// Puts a straight line of `tau` seconds for panda-1 and panda-2, as the admin.
+async fn put_lines(server: &TestServer, tokens: &HashMap<String, String>, tau: f64) {
+    let admin = as_identity(server, Some(&tokens["admin"])).await;
+    for robot in ["panda-1", "panda-2"] {
+        let p = line(vec![0.0, 0.0], vec![1.0, 0.0], tau);
+        within("put", admin.put_primitive(robot, "line", &p)).await.unwrap();
+    }
+}
+
 /// One request of the matrix.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 enum Rpc {
@@ -189,11 +198,7 @@ fn allowed(identity: &str) -> Vec<Rpc> {
 async fn every_role_against_every_rpc() {
     let set = tempfile::tempdir().unwrap();
     let (server, tokens) = secured(set.path()).await;
-    let admin = as_identity(&server, Some(&tokens["admin"])).await;
-    for robot in ["panda-1", "panda-2"] {
-        let p = line(vec![0.0, 0.0], vec![1.0, 0.0], 1.0);
-        within("put", admin.put_primitive(robot, "line", &p)).await.unwrap();
-    }
+    put_lines(&server, &tokens, 1.0).await;
     let mut failures = Vec::new();
     for identity in ["admin", "planner", "perception", "observer", "panda-1"] {
         let token = &tokens[identity];
@@ -252,11 +257,7 @@ async fn without_a_known_identity_nothing_but_health_answers() {
 async fn a_reload_that_removes_a_robot_ends_its_stream_and_leaves_the_others() {
     let set = tempfile::tempdir().unwrap();
     let (server, tokens) = secured(set.path()).await;
-    let admin = as_identity(&server, Some(&tokens["admin"])).await;
-    for robot in ["panda-1", "panda-2"] {
-        let p = line(vec![0.0, 0.0], vec![1.0, 0.0], 20.0);
-        within("put", admin.put_primitive(robot, "line", &p)).await.unwrap();
-    }
+    put_lines(&server, &tokens, 20.0).await;
     let realtime =
         |robot: &str| v1::ExecuteRequest { pacing: v1::Pacing::Realtime as i32, ..execute(robot, "cell-a") };
     let panda1 = as_identity(&server, Some(&tokens["panda-1"])).await;
