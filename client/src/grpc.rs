@@ -63,6 +63,8 @@ pub type SceneStream = Pin<Box<dyn Stream<Item = Result<v1::SceneSnapshot, Clien
 #[derive(Debug, Clone)]
 pub struct DmpClient {
     url: String,
+    /// The channel without credentials (clients of other identities share it).
+    raw: Channel,
     channel: Transport,
     primitives: PrimitiveServiceClient<Transport>,
     scene: SceneServiceClient<Transport>,
@@ -128,8 +130,9 @@ impl DmpClient {
     /// A client over an existing channel that sends `credentials` with every call.
     pub fn from_channel_with(channel: Channel, url: impl Into<String>, credentials: Credentials) -> Self {
         let n = MAX_MESSAGE_BYTES;
-        let transport = InterceptedService::new(channel, credentials);
+        let transport = InterceptedService::new(channel.clone(), credentials);
         Self {
+            raw: channel,
             url: url.into(),
             channel: transport.clone(),
             primitives: PrimitiveServiceClient::new(transport.clone())
@@ -144,6 +147,14 @@ impl DmpClient {
             server: ServerServiceClient::new(transport),
             cell: String::new(),
         }
+    }
+
+    /// A client on the same connection that sends `token` instead (none: no credentials): each robot of a
+    /// fleet can call as its own identity without a connection of its own.
+    pub fn with_token(&self, token: Option<&str>) -> Result<Self, ClientError> {
+        let credentials = Credentials::token(token)?;
+        Ok(Self::from_channel_with(self.raw.clone(), self.url.clone(), credentials)
+            .with_cell(self.cell.clone()))
     }
 
     /// The same client, with its scene requests (put, delete, list, watch) in `cell` (empty: the server's

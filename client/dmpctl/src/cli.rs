@@ -380,7 +380,7 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
         Command::Info => Ok(to_json(&server_commands::info_json(&connect().await?.info().await?))),
         Command::Scene(SceneCommand::List) => server_commands::scene_list(&connect().await?).await,
         Command::Load(a) => {
-            let report = dmp_sim::load::run(a, &server, &cli.zenoh_connect).await?;
+            let report = dmp_sim::load::run_with(a, &server, &cli.zenoh_connect, &options).await?;
             Ok(to_json(&report))
         }
         Command::Sim(a) => {

@@ -123,3 +123,55 @@ async fn a_smoke_load_streams_twenty_robots_in_two_cells() {
     assert_eq!(report.server_open_streams_max, Some(20));
     within("shutdown", handle.shutdown()).await.unwrap();
 }
+
+/// The load against a secured server: each robot streams with its own token (`--tokens`), set-up and monitoring
+/// with the admin's; a robot holding another robot's token is refused.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_load_against_a_secured_server_streams_each_robot_as_itself() {
+    use dmp_client::connect::ConnectOptions;
+    use dmp_server::access::init::{InitOptions, init};
+    use dmp_sim::load::layout;
+
+    let set = tempfile::tempdir().unwrap();
+    let args = dmp_sim::load::LoadArgs {
+        robots: 6,
+        cell_size: 3,
+        rate: 1000.0,
+        segment_ms: 10.0,
+        duration: 1.0,
+        tokens: Some(set.path().to_path_buf()),
+        ..Default::default()
+    };
+    let robots = layout::robots(args.robots, args.cell_size, args.dim, &args.prefix);
+    let cells = (0..2).map(|c| layout::cell_name(&args.prefix, c)).collect();
+    let options =
+        InitOptions { cells, robots: robots.iter().map(|r| r.id.clone()).collect(), ..Default::default() };
+    init(set.path(), &options).unwrap();
+    let access = set.path().join("access.toml");
+    let server = dmp_tests::TestServer::start_with(|c| {
+        c.zenoh.disabled = true;
+        c.security.access = Some(access);
+    })
+    .await;
+    let admin = std::fs::read_to_string(set.path().join("admin.token")).unwrap();
+    let options = ConnectOptions { token: Some(admin.trim().to_owned()), ..Default::default() };
+    let url = server.url();
+    let load = || dmp_sim::load::run_with(&args, &url, &[], &options);
+    let report = within("the load", load()).await.expect("the load runs");
+    assert!(report.errors.is_empty(), "{:#?}", report.errors);
+    assert_eq!((report.streams_started, report.streams_failed), (6, 0));
+    assert!(report.setpoints_on_time > 0);
+
+    // Two robots swap their tokens: each is refused as the other.
+    let (a, b) = (
+        set.path().join(format!("{}.token", robots[0].id)),
+        set.path().join(format!("{}.token", robots[1].id)),
+    );
+    let (ta, tb) = (std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    std::fs::write(&a, tb).unwrap();
+    std::fs::write(&b, ta).unwrap();
+    let report = within("the load", load()).await.expect("the load runs");
+    assert_eq!(report.streams_failed, 2, "{:#?}", report.errors);
+    assert!(report.errors.iter().any(|e| e.message.contains("may not execute")), "{:#?}", report.errors);
+    server.stop().await;
+}

@@ -89,6 +89,10 @@ pub struct LoadArgs {
     /// Also write the JSON report to this file.
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
+    /// A secured server: each robot streams as its own identity, with the token in `DIR/<robot-id>.token` (as
+    /// `dmp-server access init` writes them); set-up and monitoring use the command's own credentials.
+    #[arg(long, value_name = "DIR")]
+    pub tokens: Option<PathBuf>,
 }
 
 impl Default for LoadArgs {
@@ -108,6 +112,7 @@ impl Default for LoadArgs {
             threads: DEFAULT_THREADS,
             prefix: DEFAULT_PREFIX.into(),
             out: None,
+            tokens: None,
         }
     }
 }

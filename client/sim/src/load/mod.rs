@@ -46,6 +46,7 @@ use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use dmp_client::connect::ConnectOptions;
 use dmp_client::grpc::DmpClient;
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use tokio::task::JoinSet;
@@ -107,6 +108,19 @@ impl Errors {
     }
 }
 
+/// Each robot's token, read from `DIR/<robot-id>.token`.
+fn robot_tokens(dir: &std::path::Path, robots: &[layout::RobotPlan]) -> Result<Vec<String>, SimError> {
+    robots
+        .iter()
+        .map(|r| {
+            let path = dir.join(format!("{}.token", r.id));
+            std::fs::read_to_string(&path)
+                .map(|t| t.trim().to_owned())
+                .map_err(|e| SimError::argument("--tokens", format!("{}: {e}", path.display())))
+        })
+        .collect()
+}
+
 /// Wall clock, Unix seconds.
 pub fn unix_now() -> f64 {
     std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64())
@@ -121,15 +135,29 @@ pub fn unix_now_ns() -> u64 {
 /// [`DEFAULT_ZENOH`]). Fails on bad flags, when the server cannot be reached, or when nothing could be set up;
 /// failed streams are in the report.
 pub async fn run(args: &LoadArgs, server: &str, zenoh_connect: &[String]) -> Result<LoadReport, SimError> {
+    run_with(args, server, zenoh_connect, &ConnectOptions::default()).await
+}
+
+/// [`run`] with TLS and credentials (`options`); with `--tokens`, each robot streams as its own identity.
+pub async fn run_with(
+    args: &LoadArgs,
+    server: &str,
+    zenoh_connect: &[String],
+    options: &ConnectOptions,
+) -> Result<LoadReport, SimError> {
     let p = args.validate()?;
     let a = &p.args;
     let setup_started = Instant::now();
     let mut clients = Vec::with_capacity(p.connections);
     for _ in 0..p.connections {
-        clients.push(DmpClient::connect(server).await?);
+        clients.push(DmpClient::connect_with(server, options).await?);
     }
     let cells: Vec<String> = (0..p.cells).map(|c| layout::cell_name(&a.prefix, c)).collect();
     let robots = layout::robots(a.robots, a.cell_size, a.dim, &a.prefix);
+    let tokens = match &a.tokens {
+        Some(dir) => Some(robot_tokens(dir, &robots)?),
+        None => None,
+    };
     eprintln!(
         "dmpctl load: {} robots in {} cells over {} connections, {} Hz, {} ms segments, {} s",
         a.robots, p.cells, p.connections, a.rate, a.segment_ms, a.duration
@@ -186,7 +214,11 @@ pub async fn run(args: &LoadArgs, server: &str, zenoh_connect: &[String]) -> Res
             });
             continue;
         }
-        let client = clients[r.cell % clients.len()].clone();
+        let shared_client = &clients[r.cell % clients.len()];
+        let client = match &tokens {
+            Some(t) => shared_client.with_token(Some(&t[i]))?,
+            None => shared_client.clone(),
+        };
         let (probe, shared) = (probes[r.cell].clone(), shared.clone());
         tasks.spawn(robot::run_robot(client, task, probe, shared));
     }
