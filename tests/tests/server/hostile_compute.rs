@@ -76,42 +76,44 @@ async fn a_learn_whose_client_left_is_not_stored() {
     })
     .await;
     let client = server.client().await;
-    // The one batch thread is busy with a long plan (cancelled by its own deadline later).
+    // The one batch thread is busy with a long plan (its client leaves once the learns are done with).
     within("put", client.put_primitive("busy", "line", &line(vec![0.0, 0.0], vec![1.0, 0.0], 1.0)))
         .await
         .unwrap();
     let mut motion = spec("busy", "line");
     motion.extra_obstacles = far_obstacles(1000);
-    let mut plan = tonic::Request::new(v1::PlanRequest { motion: Some(motion), duration: 30.0, dt: 1e-3 });
-    plan.set_timeout(Duration::from_secs(3));
+    let plan = v1::PlanRequest { motion: Some(motion), duration: 30.0, dt: 1e-3 };
     let mut motion_client = MotionServiceClient::new(channel(&server).await);
     let busy = tokio::spawn(async move { motion_client.plan(plan).await });
-    let running = || server.handle().state().compute.batch.counters().running.load(Ordering::Acquire);
-    until("the plan runs", || running() == 1).await;
+    let batch = server.handle().state().compute.batch.clone();
+    until("the plan runs", || batch.counters().running.load(Ordering::Acquire) == 1).await;
     let samples = 5_000;
     let t: Vec<f64> = (0..samples).map(|i| i as f64 * 1e-3).collect();
     let demonstration =
         v1::Demonstration { positions: t.iter().flat_map(|t| [t.sin(), t.cos()]).collect(), t, dim: 2 };
-    let learn = |name: &str| {
-        let mut r = tonic::Request::new(v1::LearnRequest {
-            robot_id: "r".into(),
-            name: name.into(),
-            demonstration: Some(demonstration.clone()),
-            parameters: Some(v1::LearnParameters { n_basis: 50, ..Default::default() }),
-        });
-        r.set_timeout(Duration::from_millis(300));
-        r
+    let learn = |name: &str| v1::LearnRequest {
+        robot_id: "r".into(),
+        name: name.into(),
+        demonstration: Some(demonstration.clone()),
+        parameters: Some(v1::LearnParameters { n_basis: 50, ..Default::default() }),
     };
     let mut primitives = PrimitiveServiceClient::new(channel(&server).await);
     let mut other = primitives.clone();
-    // Both wait in the queue behind the plan past their deadline: skipped, never run, nothing stored.
-    let (first, second) = tokio::join!(primitives.learn(learn("first")), other.learn(learn("second")));
-    for r in [first, second] {
-        let err = r.unwrap_err();
-        assert!(matches!(err.code(), tonic::Code::DeadlineExceeded | tonic::Code::Cancelled), "{err:?}");
-    }
-    assert!(within("plan", busy).await.unwrap().is_err(), "the plan outlived its deadline");
-    until("the plan and the learns stopped", || idle(&server)).await;
+    // One learn with a deadline, one whose client goes away: both wait in the queue behind the plan.
+    let mut timed = tonic::Request::new(learn("timed"));
+    timed.set_timeout(Duration::from_secs(3));
+    let timed = tokio::spawn(async move { primitives.learn(timed).await });
+    let left_request = learn("left");
+    let left = tokio::spawn(async move { other.learn(left_request).await });
+    until("both learns are queued", || batch.queued() == 2).await;
+    left.abort();
+    assert!(left.await.unwrap_err().is_cancelled());
+    let err = within("the timed learn", timed).await.unwrap().unwrap_err();
+    assert!(matches!(err.code(), tonic::Code::DeadlineExceeded | tonic::Code::Cancelled), "{err:?}");
+    // The plan's client leaves too: the plan stops at its next chunk and the queued learns are skipped, never run.
+    busy.abort();
+    let _ = busy.await;
+    until("the plan and the learns stopped", || idle(&server) && batch.queued() == 0).await;
     let listed = within("list", client.list("r")).await.unwrap();
     assert!(listed.is_empty(), "stored after the client left: {listed:?}");
     let stats = within("stats", client.stats()).await.unwrap();
