@@ -133,8 +133,9 @@ struct Producer<'a> {
     cfg: &'a StreamConfig,
     tx: &'a mpsc::Sender<Result<Batch, tonic::Status>>,
     control: Option<mpsc::Receiver<Control>>,
-    /// The run; on a compute thread while a wake-up computes (`None` only if that computation failed).
-    run: Option<ServedRun>,
+    /// The run; on a compute thread while a wake-up computes (`None` only if that computation failed). Boxed: it
+    /// goes to a compute thread and back at every wake-up, and a pointer is cheaper to move than the run.
+    run: Option<Box<ServedRun>>,
     /// Where the run is computed: the real-time pool or the batch pool.
     pool: &'a Pool,
     /// The run's current time (its next point).
@@ -179,7 +180,7 @@ impl<'a> Producer<'a> {
             tx,
             control,
             time: run.execution.time(),
-            run: Some(run),
+            run: Some(Box::new(run)),
             pool: if cfg.realtime { &app.compute.realtime } else { &app.compute.batch },
             scene_rx: cell.subscribe(),
             others: Vec::new(),

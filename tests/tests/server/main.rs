@@ -11,6 +11,7 @@ mod limits;
 mod load;
 mod matches_the_engine;
 mod primitives;
+mod python_clients;
 mod scene_over_zenoh;
 mod sessions_and_groups;
 mod stale_scene;
