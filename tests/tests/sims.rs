@@ -2,7 +2,7 @@
 //! loopback (multicast off). Each asserts what the issue asks of every simulation: goals reached, no contact with
 //! any true shape or other robot, nothing non-finite, continuous setpoints. Every await is under a timeout.
 
-use dmp_sim::robots::{SimName, SimOptions, SimReport, run};
+use dmp_sim::robots::{SimName, SimOptions, SimReport, run, run_with};
 use dmp_tests::{TestServer, within};
 
 /// Starts a server, runs `name` against it (simulated clock), shuts the server down; returns the report and
@@ -16,6 +16,8 @@ async fn simulate(name: SimName) -> SimReport {
         out: out.clone(),
         zenoh_connect: server.handle().zenoh_locators.clone(),
         cell: "default".into(),
+        zenoh_config: None,
+        tokens: None,
     };
     let report = within("simulation", run(&server.url(), name, &options)).await.expect("the simulation runs");
     server.stop().await;
@@ -181,4 +183,59 @@ async fn youbots_avoid_each_other_and_the_cubes_on_one_phase() {
         // The simulated runs take under a minute.
         assert!(report.robots[&format!("youbot1/{run}")].duration_s < 60.0, "{run}");
     }
+}
+
+/// A secured cell (`access init`: TLS, an access file, mutual TLS on Zenoh): the set-up runs as the planner, each
+/// robot streams with its own token, and the perception node publishes with the cell's perception config.
+#[tokio::test(flavor = "multi_thread")]
+async fn sims_run_against_a_secured_server_each_robot_with_its_own_token() {
+    use dmp_client::connect::{ConnectOptions, TlsOptions};
+    use dmp_server::access::init::{InitOptions, init};
+    let set = tempfile::tempdir().unwrap();
+    let s = set.path();
+    let robots = ["panda", "youbot-static", "youbot-dynamic"].map(String::from).to_vec();
+    let tokens =
+        init(s, &InitOptions { cells: vec!["default".into()], robots, ..Default::default() }).unwrap().tokens;
+    let server = TestServer::start_with(|c| {
+        c.zenoh.listen = vec!["tls/127.0.0.1:0".into()];
+        c.security.access = Some(s.join("access.toml"));
+        c.security.tls_cert = Some(s.join("server.pem"));
+        c.security.tls_key = Some(s.join("server.key"));
+        c.security.tls_client_ca = Some(s.join("ca.pem"));
+    })
+    .await;
+    let url = format!("https://{}", server.handle().grpc_addr);
+    let planner = tokens.iter().find(|(n, _)| n == "planner").unwrap().1.clone();
+    let tls = TlsOptions::from_files(&s.join("ca.pem"), None, None).unwrap();
+    let connect = ConnectOptions { tls: Some(tls), token: Some(planner), ..Default::default() };
+    let locators: Vec<String> =
+        server.handle().zenoh_locators.iter().filter(|l| l.starts_with("tls/")).cloned().collect();
+    let dir = tempfile::tempdir().unwrap();
+    let options = |tokens: &std::path::Path| SimOptions {
+        realtime: false,
+        out: dir.path().join("out"),
+        zenoh_connect: locators.clone(),
+        cell: "default".into(),
+        zenoh_config: Some(s.join("zenoh-perception.json5")),
+        tokens: Some(tokens.to_owned()),
+    };
+
+    // With another robot's token, the Panda's stream is refused: each robot streams as itself.
+    let swapped = tempfile::tempdir().unwrap();
+    std::fs::copy(s.join("youbot-static.token"), swapped.path().join("panda.token")).unwrap();
+    let refused = within("simulation", run_with(&url, &connect, SimName::Panda, &options(swapped.path())))
+        .await
+        .expect_err("streamed with another robot's token");
+    assert!(refused.to_string().contains("(robot) may not execute robot `panda`"), "{refused}");
+
+    let report = within("simulation", run_with(&url, &connect, SimName::YoubotPerception, &options(s)))
+        .await
+        .expect("the simulation runs");
+    assert_clean(&report);
+    assert_eq!(report.robots.len(), 4);
+    for key in ["youbot/added-static", "youbot/added-dynamic"] {
+        let d = report.robots[key].min_clearance_m["box"];
+        assert!(d > 0.0 && d < 0.5, "{key}: clearance to the box {d}");
+    }
+    server.stop().await;
 }

@@ -384,7 +384,10 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
             Ok(to_json(&report))
         }
         Command::Sim(a) => {
-            let report = dmp_sim::robots::run_sim(a, &server, &zenoh_cell, &cli.zenoh_connect).await?;
+            let zenoh_config = cli.zenoh_config.as_deref();
+            let report =
+                dmp_sim::robots::run_sim(a, &server, &options, &zenoh_cell, &cli.zenoh_connect, zenoh_config)
+                    .await?;
             let problems = report.problems();
             Ok(format!(
                 "{}: {} robots, collision: {}, {}; wrote {}",

@@ -29,10 +29,11 @@ pub mod world;
 pub mod youbots;
 
 use std::future::Future;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use dmp::Trajectory;
+use dmp_client::connect::ConnectOptions;
 use dmp_client::grpc::DmpClient;
 use dmp_proto::v1;
 use tokio_stream::StreamExt;
@@ -84,7 +85,7 @@ pub enum SimName {
     Psm,
 }
 
-/// `dmpctl sim NAME [--server URL] [--realtime] --out DIR`.
+/// `dmpctl sim NAME [--server URL] [--realtime] [--tokens DIR] --out DIR`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SimArgs {
     /// Which simulation.
@@ -96,6 +97,11 @@ pub struct SimArgs {
     /// Folder of `report.json` and the figures.
     #[arg(long)]
     pub out: PathBuf,
+    /// A secured server: each robot streams its own run with its own token, `DIR/<robot>.token` (as `access init
+    /// --robot` writes them). The set-up (learning, plans, the scene) and the group runs (one stream moves several
+    /// robots) use the command's own credentials (`--token`, `DMP_TOKEN` or a certificate), a planner's.
+    #[arg(long, value_name = "DIR")]
+    pub tokens: Option<PathBuf>,
 }
 
 /// How a simulation runs.
@@ -109,6 +115,22 @@ pub struct SimOptions {
     pub zenoh_connect: Vec<String>,
     /// The server's cell.
     pub cell: String,
+    /// A stock Zenoh configuration for the perception node (`--zenoh-config`; `zenoh_connect` still overrides its
+    /// endpoints).
+    pub zenoh_config: Option<PathBuf>,
+    /// Each robot's token, `<dir>/<robot>.token`, for its own stream (none: the client's credentials).
+    pub tokens: Option<PathBuf>,
+}
+
+impl SimOptions {
+    /// The client robot `id` streams with: `client` with the robot's own token under [`SimOptions::tokens`].
+    pub fn robot_client(&self, client: &DmpClient, id: &str) -> Result<DmpClient, SimError> {
+        let Some(dir) = &self.tokens else { return Ok(client.clone()) };
+        let path = dir.join(format!("{id}.token"));
+        let token = std::fs::read_to_string(&path)
+            .map_err(|e| SimError::argument("--tokens", format!("{}: {e}", path.display())))?;
+        Ok(client.with_token(Some(token.trim()))?)
+    }
 }
 
 /// Runs the simulation of `args` (the `dmpctl sim` command) and writes its report; fails when the simulation
@@ -116,21 +138,35 @@ pub struct SimOptions {
 pub async fn run_sim(
     args: &SimArgs,
     server: &str,
+    connect: &ConnectOptions,
     cell: &str,
     zenoh_connect: &[String],
+    zenoh_config: Option<&Path>,
 ) -> Result<SimReport, SimError> {
     let options = SimOptions {
         realtime: args.realtime,
         out: args.out.clone(),
         zenoh_connect: zenoh_connect.to_vec(),
         cell: cell.to_string(),
+        zenoh_config: zenoh_config.map(Path::to_owned),
+        tokens: args.tokens.clone(),
     };
-    run(server, args.name, &options).await
+    run_with(server, connect, args.name, &options).await
 }
 
 /// Runs one simulation against the server at `url`.
 pub async fn run(url: &str, name: SimName, options: &SimOptions) -> Result<SimReport, SimError> {
-    let client = DmpClient::connect(url).await?;
+    run_with(url, &ConnectOptions::default(), name, options).await
+}
+
+/// [`run`] with TLS and credentials (`connect`).
+pub async fn run_with(
+    url: &str,
+    connect: &ConnectOptions,
+    name: SimName,
+    options: &SimOptions,
+) -> Result<SimReport, SimError> {
+    let client = DmpClient::connect_with(url, connect).await?;
     std::fs::create_dir_all(&options.out)
         .map_err(|source| SimError::Io { path: options.out.clone(), source })?;
     let report = match name {

@@ -140,7 +140,7 @@ impl Motion {
             max_duration_s: 4.0 * self.tau,
             ..Default::default()
         };
-        execute(client, request, options.realtime, |_| {}).await
+        execute(&options.robot_client(client, ROBOT)?, request, options.realtime, |_| {}).await
     }
 
     async fn record(

@@ -229,6 +229,15 @@ async fn wait_absent(client: &DmpClient, id: &str) -> Result<(), SimError> {
     .await?
 }
 
+/// The perception node's Zenoh session: from `--zenoh-config` when given (a secured cell's perception config),
+/// else a peer connecting to the server's endpoints.
+async fn open_publisher(options: &SimOptions) -> Result<ObstaclePublisher, dmp_client::ClientError> {
+    match &options.zenoh_config {
+        Some(file) => ObstaclePublisher::open_from_file(&options.cell, file, &options.zenoh_connect).await,
+        None => ObstaclePublisher::open(&options.cell, &options.zenoh_connect, &[]).await,
+    }
+}
+
 /// Runs both scenarios, each with both potentials.
 pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     let (t, rows) = ramped_line(&START, &GOAL, TAU, RAMP_S, DT);
@@ -237,8 +246,8 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     for robot in robots {
         within("learn", client.learn(robot, "corridor", &t, &rows, parameters.clone())).await??;
     }
-    let mut publisher =
-        within("zenoh open", ObstaclePublisher::open(&options.cell, &options.zenoh_connect, &[])).await??;
+    let as_robot = [options.robot_client(client, robots[0])?, options.robot_client(client, robots[1])?];
+    let mut publisher = within("zenoh open", open_publisher(options)).await??;
     // A server that restarts or reconnects mid-run asks for the boxes it missed.
     within("zenoh queryable", publisher.serve_latest()).await??;
     within("zenoh subscriber", publisher.wait_for_subscriber(super::STEP_TIMEOUT)).await??;
@@ -259,8 +268,14 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
                     }
                 };
                 tokio::join!(
-                    execute(client, request(robots[0], methods[0].1), true, |c| set(&tx0, c.origin_unix())),
-                    execute(client, request(robots[1], methods[1].1), true, |c| set(&tx1, c.origin_unix())),
+                    execute(&as_robot[0], request(robots[0], methods[0].1), true, |c| set(
+                        &tx0,
+                        c.origin_unix()
+                    )),
+                    execute(&as_robot[1], request(robots[1], methods[1].1), true, |c| set(
+                        &tx1,
+                        c.origin_unix()
+                    )),
                 )
             };
             let (robots, seen) = tokio::join!(robots, perceive(&publisher, event, rx));
