@@ -72,6 +72,7 @@ async fn stock_python_clients_work_as_a_robot_and_as_perception() {
         .unwrap();
 
     let mut child = Command::new(&python)
+        .env("GRPC_VERBOSITY", "ERROR")
         .arg(workspace().join("tests/python/stock_clients.py"))
         .arg(workspace().join("proto"))
         .arg(s)

@@ -128,3 +128,141 @@ async fn each_zenoh_peer_does_only_what_its_role_may() {
     }
     within("shutdown", h.shutdown()).await.unwrap();
 }
+
+/// Every Zenoh key class × every role with a certificate: obstacles of its cell (put and delete), obstacles of
+/// another cell, robot states (put), and reading the robot states the server publishes.
+#[tokio::test(flavor = "multi_thread")]
+async fn the_zenoh_denial_matrix_holds_for_every_key_class_and_role() {
+    use dmp_client::DmpClient;
+    use dmp_client::connect::{ConnectOptions, TlsOptions};
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use tokio_stream::StreamExt;
+
+    let set = tempfile::tempdir().unwrap();
+    let s = set.path();
+    let options =
+        InitOptions { cells: vec!["cell-a".into()], robots: vec!["panda-1".into()], ..Default::default() };
+    let tokens = init(s, &options).unwrap().tokens;
+    let data = tempfile::tempdir().unwrap();
+    let mut c = dmp_tests::config(data.path());
+    c.cell = "cell-a".into();
+    c.zenoh.listen = vec!["tls/127.0.0.1:0".into()];
+    c.security.access = Some(s.join("access.toml"));
+    c.security.tls_cert = Some(s.join("server.pem"));
+    c.security.tls_key = Some(s.join("server.key"));
+    c.security.tls_client_ca = Some(s.join("ca.pem"));
+    let h = within("server start", start(c)).await.expect("server starts");
+    let locator = h.zenoh_locators.iter().find(|l| l.starts_with("tls/")).expect("a tls/ locator").clone();
+
+    // role: (obstacles of its cell, obstacles of another cell, robot states, reads the cell)
+    let matrix = [
+        ("perception", (true, false, false, false)),
+        ("planner", (true, false, false, true)),
+        ("observer", (false, false, false, true)),
+        ("panda-1", (false, false, false, false)),
+        ("zenoh-router", (true, true, true, true)),
+        ("admin", (true, true, true, true)),
+    ];
+    let admin = within("open", peer(s, &locator, Some("admin"))).await.unwrap();
+    let put = |session: &zenoh::Session, key: String, payload: Vec<u8>| {
+        let session = session.clone();
+        async move { within("put", session.put(key, payload).into_future()).await.unwrap() }
+    };
+    let mut marker = 0;
+    let mut sessions = Vec::new();
+    let mut received = Vec::new();
+    for (role, (obstacles, elsewhere, states, reads)) in matrix {
+        let session = within("open", peer(s, &locator, Some(role))).await.unwrap();
+        // Put, and delete what the admin put.
+        let (mine, gone, far) = (format!("by-{role}"), format!("delete-by-{role}"), format!("far-by-{role}"));
+        put(&admin, obstacle_key("cell-a", &gone), obstacle(&gone).into_bytes()).await;
+        until("the admin's obstacle arrives", || in_scene(&h, "cell-a", &gone)).await;
+        put(&session, obstacle_key("cell-a", &mine), obstacle(&mine).into_bytes()).await;
+        within("delete", session.delete(obstacle_key("cell-a", &gone)).into_future()).await.unwrap();
+        put(&session, obstacle_key("cell-b", &far), obstacle(&far).into_bytes()).await;
+        put(&session, robot_state_key("cell-a", &format!("ghost-{role}")), state(&format!("ghost-{role}")))
+            .await;
+        // A marker after them: once it is in, everything before it on the same link was handled. A role that may
+        // put obstacles sends it on its own link; for the others (observer, robot) it comes from the admin, on
+        // another link, so their denials are checked after a round trip rather than in order.
+        marker += 1;
+        let m = format!("marker-{marker}");
+        let by = if obstacles { &session } else { &admin };
+        put(by, obstacle_key("cell-a", &m), obstacle(&m).into_bytes()).await;
+        until("the marker arrives", || in_scene(&h, "cell-a", &m)).await;
+        if obstacles {
+            until("an allowed put arrives", || in_scene(&h, "cell-a", &mine)).await;
+            until("an allowed delete arrives", || !in_scene(&h, "cell-a", &gone)).await;
+        } else {
+            assert!(!in_scene(&h, "cell-a", &mine), "{role} put an obstacle");
+            assert!(in_scene(&h, "cell-a", &gone), "{role} deleted an obstacle");
+        }
+        if elsewhere {
+            until("an allowed put in another cell arrives", || in_scene(&h, "cell-b", &far)).await;
+        } else {
+            assert!(!in_scene(&h, "cell-b", &far), "{role} put an obstacle in another cell");
+        }
+        let ghost = format!("ghost-{role}");
+        let cell = h.state().cells.find("cell-a").unwrap().unwrap();
+        let seen =
+            || cell.other_robots("", f64::MAX / 4.0, f64::MAX).iter().any(|r| r.state.robot_id == ghost);
+        if states {
+            until("an allowed robot state arrives", seen).await;
+        } else {
+            assert!(!seen(), "{role} published a robot state");
+        }
+        // Reading: count the robot states the server publishes while a robot streams (below).
+        let count = Arc::new(AtomicUsize::new(0));
+        let counter = count.clone();
+        let subscriber = within(
+            "subscribe",
+            session
+                .declare_subscriber(robot_state_key("cell-a", "panda-1"))
+                .callback(move |_| {
+                    counter.fetch_add(1, Ordering::Relaxed);
+                })
+                .into_future(),
+        )
+        .await
+        .unwrap();
+        received.push((role, reads, count));
+        sessions.push((session, subscriber));
+    }
+
+    // A robot streams in real time: the server publishes its states to the readers that may see them.
+    let admin_token = tokens.iter().find(|(n, _)| n == "admin").unwrap().1.clone();
+    let tls = TlsOptions::from_files(&s.join("ca.pem"), None, None).unwrap();
+    let connect = ConnectOptions { tls: Some(tls), token: Some(admin_token), ..Default::default() };
+    let client = within("connect", DmpClient::connect_with(&format!("https://{}", h.grpc_addr), &connect))
+        .await
+        .unwrap();
+    within("put", client.put_primitive("panda-1", "line", &crate::line(vec![0.0, 0.0], vec![1.0, 0.0], 0.5)))
+        .await
+        .unwrap();
+    let request = dmp_proto::v1::ExecuteRequest {
+        motion: Some(crate::spec("panda-1", "line")),
+        pacing: dmp_proto::v1::Pacing::Realtime as i32,
+        ..Default::default()
+    };
+    let mut stream = within("execute", client.execute(request)).await.unwrap();
+    while let Some(segment) = within("segment", stream.next()).await {
+        segment.unwrap();
+    }
+    let readers: Vec<_> = received.iter().filter(|(_, reads, _)| *reads).collect();
+    until("every allowed reader got robot states", || {
+        readers.iter().all(|(_, _, n)| n.load(Ordering::Relaxed) >= 3)
+    })
+    .await;
+    for (role, reads, count) in &received {
+        if !reads {
+            assert_eq!(count.load(Ordering::Relaxed), 0, "{role} read the robot states");
+        }
+    }
+    for (session, subscriber) in sessions {
+        within("undeclare", subscriber.undeclare().into_future()).await.unwrap();
+        within("close", session.close().into_future()).await.unwrap();
+    }
+    within("close", admin.close().into_future()).await.unwrap();
+    within("shutdown", h.shutdown()).await.unwrap();
+}
