@@ -67,6 +67,11 @@ impl ClientError {
             _ => None,
         }
     }
+
+    /// The server does not offer the call (it is older than this client).
+    pub fn is_unimplemented(&self) -> bool {
+        self.code() == Some(tonic::Code::Unimplemented)
+    }
 }
 
 /// A value that breaks a rule of the wire (a field, a name in a key, a Zenoh setting) is bad input.

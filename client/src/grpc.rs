@@ -157,16 +157,25 @@ impl DmpClient {
             .with_cell(self.cell.clone()))
     }
 
-    /// The same client, with its scene requests (put, delete, list, watch) in `cell` (empty: the server's
-    /// default cell). Motions name their cell in `MotionSpec::cell`.
+    /// The same client, with its scene requests (put, delete, list, watch) and its motions in `cell` (empty: the
+    /// server's default cell). A motion whose `MotionSpec::cell` is set keeps its own; an empty one gets this cell.
     pub fn with_cell(mut self, cell: impl Into<String>) -> Self {
         self.cell = cell.into();
         self
     }
 
-    /// The cell of the scene requests (empty: the server's default).
+    /// The cell of the scene requests and motions (empty: the server's default).
     pub fn cell(&self) -> &str {
         &self.cell
+    }
+
+    /// Puts a motion that names no cell in this client's.
+    fn in_cell(&self, motion: Option<&mut v1::MotionSpec>) {
+        if let Some(m) = motion
+            && m.cell.is_empty()
+        {
+            m.cell.clone_from(&self.cell);
+        }
     }
 
     /// The server's resource use and traffic.
@@ -271,12 +280,14 @@ impl DmpClient {
     // --- Motion -----------------------------------------------------------------------------------------------
 
     /// The whole trajectory at once.
-    pub async fn plan(&self, request: v1::PlanRequest) -> Result<v1::PlanResponse, ClientError> {
+    pub async fn plan(&self, mut request: v1::PlanRequest) -> Result<v1::PlanResponse, ClientError> {
+        self.in_cell(request.motion.as_mut());
         Ok(self.motion.clone().plan(request).await?.into_inner())
     }
 
     /// Streams a primitive's execution in segments (see [`Setpoints`] for which points are current).
-    pub async fn execute(&self, request: v1::ExecuteRequest) -> Result<SegmentStream, ClientError> {
+    pub async fn execute(&self, mut request: v1::ExecuteRequest) -> Result<SegmentStream, ClientError> {
+        self.in_cell(request.motion.as_mut());
         Ok(boxed(self.motion.clone().execute(request).await?.into_inner()))
     }
 
@@ -292,11 +303,12 @@ impl DmpClient {
     /// decode 90 numbers a segment). Otherwise the same call as [`DmpClient::session`].
     pub async fn session_decoded<T>(
         &self,
-        start: v1::ExecuteRequest,
+        mut start: v1::ExecuteRequest,
     ) -> Result<(SessionSender, DecodedStream<T>), ClientError>
     where
         T: prost::Message + Default + Send + 'static,
     {
+        self.in_cell(start.motion.as_mut());
         let (tx, rx) = mpsc::channel(SESSION_QUEUE);
         // The start message is queued before the call, so the server has it as soon as the stream opens.
         tx.try_send(v1::SessionRequest { message: Some(Message::Start(start)) })
@@ -312,7 +324,13 @@ impl DmpClient {
     }
 
     /// Executes several robots on one shared phase.
-    pub async fn execute_group(&self, request: v1::ExecuteGroupRequest) -> Result<GroupStream, ClientError> {
+    pub async fn execute_group(
+        &self,
+        mut request: v1::ExecuteGroupRequest,
+    ) -> Result<GroupStream, ClientError> {
+        for member in &mut request.members {
+            self.in_cell(member.motion.as_mut());
+        }
         Ok(boxed(self.motion.clone().execute_group(request).await?.into_inner()))
     }
 

@@ -149,6 +149,7 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
     let compute = Compute::start(&config.compute)
         .map_err(|e| ServerError::Internal(format!("cannot start the compute threads: {e}")))?;
     let state = Arc::new(AppState {
+        zenoh_locators: zenoh_locators.clone(),
         compute,
         streams: StreamPermits::new(&config.limits),
         memory,

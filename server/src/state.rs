@@ -23,6 +23,8 @@ use crate::stream_permits::{Peer, StreamKind, StreamPermit, StreamPermits};
 /// signal.
 #[derive(Debug)]
 pub struct AppState {
+    /// The Zenoh locators the embedded session listens on (empty without Zenoh), for GetInfo.
+    pub zenoh_locators: Vec<String>,
     /// The effective configuration.
     pub config: Config,
     /// The primitives.
@@ -102,6 +104,7 @@ impl AppState {
         let config = Config::default();
         let memory = MemoryBudget::new(config.limits.max_server_bytes);
         Self {
+            zenoh_locators: Vec::new(),
             streams: StreamPermits::new(&config.limits),
             store: Store::open(dir).expect("a store in a fresh directory"),
             robots: RobotBus::new(None),

@@ -239,3 +239,21 @@ async fn sims_run_against_a_secured_server_each_robot_with_its_own_token() {
     }
     server.stop().await;
 }
+
+/// `dmpctl sim` given neither `--cell` nor `--zenoh-connect` asks the server (GetInfo): its robots stream in the
+/// server's default cell and its perception node publishes there, through the server's own Zenoh locators.
+#[tokio::test(flavor = "multi_thread")]
+async fn dmpctl_sim_acts_in_the_servers_cell_without_flags() {
+    use clap::Parser;
+    let server = TestServer::start_with(|c| c.cell = "bar".into()).await;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let url = server.url();
+    let args = ["dmpctl", "--server", &url, "sim", "youbot-perception", "--out", out.to_str().unwrap()];
+    let cli = dmpctl::cli::Cli::try_parse_from(args).unwrap();
+    let said = within("dmpctl sim", dmpctl::cli::run_async(cli)).await.expect("the simulation runs");
+    assert!(said.contains("collision: false, no problem"), "{said}");
+    let bar = server.handle().state().cells.find("bar").unwrap().expect("cell bar");
+    assert!(bar.snapshot().version > 0, "the perception node's boxes went elsewhere");
+    server.stop().await;
+}

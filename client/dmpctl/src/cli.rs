@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use dmp_client::connect::ConnectOptions;
 use dmp_client::grpc::{DEFAULT_SERVER, DmpClient};
 
 use crate::connect_args::{ConnectArgs, TOKEN_ENV};
@@ -28,11 +29,12 @@ pub struct Cli {
     /// this is given.
     #[arg(long, global = true, value_name = "URL")]
     pub server: Option<String>,
-    /// The robot cell: of the scene commands, and of the Zenoh keys `dmp/<cell>/...` [default: the server's own
-    /// over gRPC, `default` over Zenoh].
+    /// The robot cell of every command: its scene, its motions and its Zenoh keys `dmp/<cell>/...` [default: the
+    /// server's own default cell, from GetInfo]. Letters, digits, `_`, `-` and `.`.
     #[arg(long, global = true, value_name = "NAME")]
     pub cell: Option<String>,
-    /// Zenoh endpoint to connect to, e.g. `tcp/127.0.0.1:7447` (repeatable); none: multicast scouting.
+    /// Zenoh endpoint to connect to, e.g. `tcp/127.0.0.1:7447` (repeatable) [default: the server's own Zenoh
+    /// locators, from GetInfo, unless `--zenoh-config` is given].
     #[arg(long = "zenoh-connect", global = true, value_name = "ENDPOINT")]
     pub zenoh_connect: Vec<String>,
     /// A stock Zenoh configuration file (JSON5) for `--via zenoh`: TLS and credentials, as `dmp-server access init`
@@ -341,15 +343,19 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
         cli.connect.options(std::env::var(TOKEN_ENV).ok(), |w| eprintln!("dmpctl: warning: {w}"))?;
     let default_server = if options.tls.is_some() { "https://127.0.0.1:50051" } else { DEFAULT_SERVER };
     let server = cli.server.clone().unwrap_or_else(|| default_server.to_string());
-    let zenoh_cell = cli.cell.clone().unwrap_or_else(|| "default".into());
+    // Local inputs first: a bad file is refused before the server is asked anything.
+    let obstacles = match &cli.command {
+        Command::Scene(SceneCommand::Put { file, ttl, .. }) => server_commands::read_obstacles(file, *ttl)?,
+        _ => Vec::new(),
+    };
+    let place = resolve_place(&cli, &server, &options).await?;
     let zenoh = ZenohArgs {
-        cell: zenoh_cell.clone(),
-        connect: cli.zenoh_connect.clone(),
+        cell: place.cell.clone(),
+        connect: place.zenoh_connect.clone(),
         config_file: cli.zenoh_config.clone(),
     };
-    let grpc_cell = cli.cell.clone().unwrap_or_default();
     let connect = || async {
-        Ok::<_, DmpctlError>(DmpClient::connect_with(&server, &options).await?.with_cell(grpc_cell.as_str()))
+        Ok::<_, DmpctlError>(DmpClient::connect_with(&server, &options).await?.with_cell(place.cell.as_str()))
     };
     match &cli.command {
         Command::Scenario(ScenarioCommand::Run { file, out }) => match &cli.server {
@@ -371,8 +377,8 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
         Command::Delete { robot, name } => server_commands::delete(&connect().await?, robot, name).await,
         Command::Plan(a) => server_commands::plan(&connect().await?, a).await,
         Command::Stream(a) => server_commands::stream(&connect().await?, a).await,
-        Command::Scene(SceneCommand::Put { file, via, ttl }) => {
-            server_commands::scene_put(connect, &zenoh, file, *via, *ttl).await
+        Command::Scene(SceneCommand::Put { via, .. }) => {
+            server_commands::scene_put(connect, &zenoh, &obstacles, *via).await
         }
         Command::Scene(SceneCommand::Delete { id, via }) => {
             server_commands::scene_delete(connect, &zenoh, id, *via).await
@@ -380,14 +386,20 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
         Command::Info => Ok(to_json(&server_commands::info_json(&connect().await?.info().await?))),
         Command::Scene(SceneCommand::List) => server_commands::scene_list(&connect().await?).await,
         Command::Load(a) => {
-            let report = dmp_sim::load::run_with(a, &server, &cli.zenoh_connect, &options).await?;
+            let report = dmp_sim::load::run_with(a, &server, &place.zenoh_connect, &options).await?;
             Ok(to_json(&report))
         }
         Command::Sim(a) => {
             let zenoh_config = cli.zenoh_config.as_deref();
-            let report =
-                dmp_sim::robots::run_sim(a, &server, &options, &zenoh_cell, &cli.zenoh_connect, zenoh_config)
-                    .await?;
+            let report = dmp_sim::robots::run_sim(
+                a,
+                &server,
+                &options,
+                &place.cell,
+                &place.zenoh_connect,
+                zenoh_config,
+            )
+            .await?;
             let problems = report.problems();
             Ok(format!(
                 "{}: {} robots, collision: {}, {}; wrote {}",
@@ -399,6 +411,50 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
             ))
         }
     }
+}
+
+/// Where a command acts: its one cell, for gRPC and Zenoh alike, and the Zenoh endpoints it connects to.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Place {
+    /// `--cell`, else the server's default cell (GetInfo), else `default` (commands that need no server).
+    pub cell: String,
+    /// `--zenoh-connect`, else the server's Zenoh locators (GetInfo) when no `--zenoh-config` names endpoints.
+    pub zenoh_connect: Vec<String>,
+}
+
+/// Resolves the command's [`Place`]: a `--cell` is checked against the naming rule; what is not given is asked
+/// of the server (GetInfo) by the commands that talk to it.
+async fn resolve_place(cli: &Cli, server: &str, options: &ConnectOptions) -> Result<Place, DmpctlError> {
+    if let Some(cell) = &cli.cell {
+        dmp_proto::keys::check_name("--cell", cell).map_err(|e| DmpctlError::argument("--cell", e.rule))?;
+    }
+    let offline = match &cli.command {
+        Command::Scenario(ScenarioCommand::Run { .. }) => cli.server.is_none(),
+        Command::Scenario(ScenarioCommand::Bench { .. }) => true,
+        _ => false,
+    };
+    let need_cell = cli.cell.is_none();
+    let need_zenoh = cli.zenoh_connect.is_empty() && cli.zenoh_config.is_none();
+    let info = if offline || !(need_cell || need_zenoh) {
+        None
+    } else {
+        match DmpClient::connect_with(server, options).await?.info().await {
+            Ok(info) => Some(info),
+            // A server without GetInfo (older than this dmpctl): its defaults are unknown.
+            Err(e) if e.is_unimplemented() => None,
+            Err(e) => return Err(e.into()),
+        }
+    };
+    let cell = match (&cli.cell, &info) {
+        (Some(cell), _) => cell.clone(),
+        (None, Some(info)) if !info.cell.is_empty() => info.cell.clone(),
+        _ => "default".into(),
+    };
+    let zenoh_connect = match &info {
+        Some(info) if need_zenoh => info.zenoh_locators.clone(),
+        _ => cli.zenoh_connect.clone(),
+    };
+    Ok(Place { cell, zenoh_connect })
 }
 
 fn summary_line(file: &Path, summary: &RunSummary, out: &Path) -> String {

@@ -269,27 +269,25 @@ async fn publisher(z: &ZenohArgs) -> Result<ObstaclePublisher, DmpctlError> {
     Ok(p)
 }
 
-/// `scene put FILE`.
+/// `scene put FILE`, with the file's obstacles read and checked ([`read_obstacles`]).
 pub async fn scene_put<F: Future<Output = Result<DmpClient, DmpctlError>>>(
     connect: impl FnOnce() -> F,
     z: &ZenohArgs,
-    file: &Path,
+    obstacles: &[JsonObstacle],
     via: Via,
-    ttl_s: Option<f64>,
 ) -> Result<String, DmpctlError> {
-    let obstacles = read_obstacles(file, ttl_s)?;
     let mut lines = Vec::with_capacity(obstacles.len());
     match via {
         Via::Grpc => {
             let client = connect().await?;
-            for o in &obstacles {
+            for o in obstacles {
                 let c = client.put_obstacle(o.to_proto()).await?;
                 lines.push(format!("put `{}`: scene version {}", o.spec.id, c.scene_version));
             }
         }
         Via::Zenoh => {
             let p = publisher(z).await?;
-            for o in &obstacles {
+            for o in obstacles {
                 p.put_obstacle(o).await?;
                 lines.push(format!("published `{}` on {}", o.spec.id, obstacle_key(&z.cell, &o.spec.id)));
             }
@@ -343,6 +341,17 @@ pub fn info_json(info: &v1::ServerInfo) -> serde_json::Value {
         "insecure_reasons": info.insecure_reasons,
         "identity": info.identity,
         "role": info.role,
+        "zenoh_locators": info.zenoh_locators,
+        "limits": info.limits.as_ref().map(|l| serde_json::json!({
+            "max_message_bytes": l.max_message_bytes,
+            "max_samples": l.max_samples,
+            "max_dim": l.max_dim,
+            "max_obstacles": l.max_obstacles,
+            "max_streams_per_client": l.max_streams_per_client,
+            "max_steps": l.max_steps,
+            "workspace_m": l.workspace_m,
+            "max_request_work": l.max_request_work,
+        })),
     })
 }
 

@@ -69,6 +69,23 @@ impl ServerService for ServerServiceImpl {
             insecure_reasons: s.exposure.warnings.clone(),
             identity: caller.name().into(),
             role: caller.role().as_str().into(),
+            zenoh_locators: s.zenoh_locators.clone(),
+            limits: Some(limits(&s.config)),
         }))
+    }
+}
+
+/// The limits of `config` that bound a client's requests.
+fn limits(config: &crate::config::Config) -> v1::ServerLimits {
+    let l = &config.limits;
+    v1::ServerLimits {
+        max_message_bytes: l.max_message_bytes as u64,
+        max_samples: l.max_samples as u64,
+        max_dim: l.max_dim as u64,
+        max_obstacles: l.max_obstacles as u64,
+        max_streams_per_client: l.max_streams_per_client as u64,
+        max_steps: l.max_steps as u64,
+        workspace_m: l.workspace_m,
+        max_request_work: config.compute.max_request_work,
     }
 }

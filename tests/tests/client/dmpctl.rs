@@ -111,3 +111,81 @@ async fn server_commands_against_the_server() {
     assert!(!e.is_bad_input() && e.to_string().contains("missing.csv"), "{e}");
     server.stop().await;
 }
+
+/// One cell per command, for the scene and the motions alike: `--cell`, checked against the naming rule, else the
+/// server's own default cell (GetInfo).
+#[tokio::test(flavor = "multi_thread")]
+async fn every_command_acts_in_its_one_cell() {
+    let server = TestServer::start_with(|c| {
+        c.zenoh.disabled = true;
+        c.cell = "bar".into();
+    })
+    .await;
+    let url = server.url();
+    let dir = tempfile::tempdir().unwrap();
+    let box_file = dir.path().join("box.json");
+    std::fs::write(&box_file, r#"{"id": "crate", "center": [0.5, 0.12], "semi_axes": [0.1, 0.1]}"#).unwrap();
+    let file = box_file.to_str().unwrap();
+
+    let info: serde_json::Value = serde_json::from_str(&run_at(&url, &["info"]).await.unwrap()).unwrap();
+    assert_eq!(info["cell"], "bar");
+    let limits = &server.handle().state().config.limits;
+    assert_eq!(info["limits"]["max_obstacles"], limits.max_obstacles as u64);
+    assert_eq!(info["zenoh_locators"], serde_json::json!([]), "no Zenoh here");
+
+    run_at(&url, &["--cell", "lab2", "scene", "put", file]).await.unwrap();
+    let lab2 = run_at(&url, &["--cell", "lab2", "scene", "list"]).await.unwrap();
+    assert!(lab2.contains("crate"), "{lab2}");
+    // Without --cell, the server's default cell (bar), which is empty.
+    let default = run_at(&url, &["scene", "list"]).await.unwrap();
+    assert!(!default.contains("crate"), "{default}");
+    let bar = server.handle().state().cells.find("bar").unwrap().unwrap();
+    assert!(bar.snapshot().obstacles.is_empty());
+
+    // A bad name is refused before anything is sent, with the rule.
+    let e = run_at(&url, &["--cell", "bad cell!", "scene", "put", file]).await.unwrap_err();
+    assert!(e.is_bad_input(), "{e}");
+    assert!(e.to_string().contains("--cell") && e.to_string().contains("only letters, digits"), "{e}");
+    assert!(!matches!(server.handle().state().cells.find("bad cell!"), Ok(Some(_))));
+
+    // Motions go to the command's cell: the box in lab2 bends a plan there, not one in the default cell.
+    let csv: String = std::iter::once("t,x1,x2".to_string())
+        .chain((0..=100).map(|k| format!("{},{},0", k as f64 / 100.0, k as f64 / 100.0)))
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(dir.path().join("line.csv"), csv).unwrap();
+    let line_csv = dir.path().join("line.csv");
+    run_at(&url, &["learn", "--robot", "r", "--name", "line", "--csv", line_csv.to_str().unwrap()])
+        .await
+        .unwrap();
+    let deviation = |out: &str| {
+        let plan = std::fs::read_to_string(dir.path().join(out).join("trajectory.csv")).unwrap();
+        plan.lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(2).unwrap().parse::<f64>().unwrap().abs())
+            .fold(0.0, f64::max)
+    };
+    for (cell, out) in [(None, "plan-default"), (Some("lab2"), "plan-lab2")] {
+        let mut args = Vec::new();
+        if let Some(c) = cell {
+            args.extend(["--cell", c]);
+        }
+        let out_dir = dir.path().join(out);
+        args.extend([
+            "plan",
+            "--robot",
+            "r",
+            "--name",
+            "line",
+            "--duration",
+            "2",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        run_at(&url, &args).await.unwrap();
+    }
+    assert!(deviation("plan-default") < 1e-9, "the default cell has no obstacle");
+    let bent = deviation("plan-lab2");
+    assert!(bent > 1e-3, "the plan in lab2 did not go round its box: {bent}");
+    server.stop().await;
+}

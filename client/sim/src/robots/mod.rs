@@ -166,7 +166,7 @@ pub async fn run_with(
     name: SimName,
     options: &SimOptions,
 ) -> Result<SimReport, SimError> {
-    let client = DmpClient::connect_with(url, connect).await?;
+    let client = DmpClient::connect_with(url, connect).await?.with_cell(options.cell.as_str());
     std::fs::create_dir_all(&options.out)
         .map_err(|source| SimError::Io { path: options.out.clone(), source })?;
     let report = match name {
