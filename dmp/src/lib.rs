@@ -35,8 +35,6 @@ pub mod learn;
 #[cfg(feature = "learn")]
 pub mod metrics;
 pub mod obstacle;
-/// Orientation DMPs on unit quaternions (Koutras and Doulgeri's formulation): learning from one pose
-/// demonstration, replay with a new start, goal and `tau`, angular velocity and acceleration in the world frame.
 #[cfg(feature = "orientation")]
 pub mod orientation;
 pub mod primitive;

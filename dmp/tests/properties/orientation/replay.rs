@@ -133,3 +133,28 @@ fn the_output_starts_at_the_start_as_given() {
     assert!((q0.coords - start.coords).norm() < 1e-15, "{q0:?} vs {start:?}");
     assert!(tr.angular_velocity(0).norm() == 0.0);
 }
+
+/// The largest amount by which a distance rises above its running minimum once it has fallen to half its first
+/// value: 0 for a monotone approach, the size of the overshoot or oscillation otherwise.
+fn rise_after_halfway(distances: &[f64]) -> f64 {
+    let half = distances.iter().position(|d| *d <= 0.5 * distances[0]).expect("never halfway");
+    let (mut low, mut rise) = (f64::INFINITY, 0.0f64);
+    for d in &distances[half..] {
+        low = low.min(*d);
+        rise = rise.max(d - low);
+    }
+    rise
+}
+
+#[test]
+fn a_new_goal_is_approached_without_oscillation() {
+    for (name, p) in [("single axis", &*SINGLE), ("changing axis", &*CHANGING)] {
+        for (what, m) in [("own goal", OrientationMotion::of(p).unwrap()), ("new goal", new_motion(p))] {
+            let tr = run(p, &m, 2.5 * m.tau);
+            let d: Vec<f64> = (0..tr.len()).map(|k| angle_between(&tr.orientation(k), &m.goal)).collect();
+            let rise = rise_after_halfway(&d).to_degrees();
+            eprintln!("{name}, {what}: past halfway, the distance to the goal rises by at most {rise:.1e}°");
+            assert!(rise <= 0.01, "{name}, {what}: {rise}°");
+        }
+    }
+}
