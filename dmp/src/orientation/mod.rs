@@ -14,11 +14,11 @@
 //! `q(t + dt) = exp(dt ω / 2) ⊗ q(t)`, with `f` learned from the demonstration's `ω` and `ω̇`. The spring acts on
 //! `2 log(q_g ⊗ q̄)` but the damper and the forcing term act on `ω`, which is not (up to sign) the time derivative
 //! of that logarithm: they differ by the Jacobian of the logarithm, the identity only while `ω` is parallel to the
-//! axis of the error. Koutras and Doulgeri show that this
-//! is not the exact counterpart of the position DMP: with a new start or goal the motion can oscillate and depart
-//! far from the demonstrated shape. Their remedy, implemented here, puts position, velocity and acceleration in
-//! the same tangent coordinates, so the position DMP's properties (convergence to the goal, time scaling, the
-//! spatial generalisation of [`crate::Integrator`]) carry over unchanged.
+//! axis of the error. Koutras and Doulgeri show that this is not the exact counterpart of the position DMP: with a
+//! new start or goal the motion can oscillate and depart far from the demonstrated shape. Their remedy,
+//! implemented here, puts position, velocity and acceleration in the same tangent coordinates, so the position
+//! DMP's properties (convergence to the goal, time scaling, the spatial generalisation of [`crate::Integrator`])
+//! carry over unchanged.
 //!
 //! Equation numbers are left out until they are checked against the full texts (only the abstracts were at hand).
 //!
