@@ -36,16 +36,7 @@ impl Demonstration {
             )
             .into());
         }
-        for (i, ti) in t.iter().enumerate() {
-            ensure_finite(|| format!("demonstration.t[{i}]"), *ti)?;
-            if i > 0 && *ti <= t[i - 1] {
-                return Err(InvalidInput::new(
-                    format!("demonstration.t[{i}]"),
-                    "sample times must be strictly increasing",
-                )
-                .into());
-            }
-        }
+        check_times(&t)?;
         let d = x[0].len();
         if d == 0 {
             return Err(InvalidInput::new("demonstration.x[0]", "must have at least one coordinate").into());
@@ -84,6 +75,20 @@ impl Demonstration {
     pub fn duration(&self) -> f64 {
         self.t[self.t.len() - 1] - self.t[0]
     }
+}
+
+/// Checks the sample times of a demonstration: finite and strictly increasing (`demonstration.t[i]` at fault).
+pub(crate) fn check_times(t: &[f64]) -> Result<(), InvalidInput> {
+    for (i, ti) in t.iter().enumerate() {
+        ensure_finite(|| format!("demonstration.t[{i}]"), *ti)?;
+        if i > 0 && *ti <= t[i - 1] {
+            return Err(InvalidInput::new(
+                format!("demonstration.t[{i}]"),
+                "sample times must be strictly increasing",
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// How to learn: the paper's `N`, the gains and the canonical decay.

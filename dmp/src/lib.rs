@@ -17,6 +17,7 @@
 //! | a whole scene, robots as moving obstacles | [`field`] |
 //! | rollouts, stalls | [`mod@rollout`], [`stall`] |
 //! | the ranges that keep every term finite | [`ranges`] |
+//! | orientation DMPs on unit quaternions (feature `orientation`) | [`orientation`] |
 
 pub mod avoidance;
 pub mod basis;
@@ -34,6 +35,8 @@ pub mod learn;
 #[cfg(feature = "learn")]
 pub mod metrics;
 pub mod obstacle;
+#[cfg(feature = "orientation")]
+pub mod orientation;
 pub mod primitive;
 pub mod ranges;
 pub mod rollout;
@@ -50,5 +53,12 @@ pub use isopotential::{Isopotential, NestedSuperquadric, Shape, Superquadric};
 pub use learn::learn;
 pub use learn::{Demonstration, LearnConfig};
 pub use obstacle::Obstacle;
+#[cfg(all(feature = "orientation", feature = "learn"))]
+pub use orientation::learn_orientation;
+#[cfg(feature = "orientation")]
+pub use orientation::{
+    OrientationDemonstration, OrientationMotion, OrientationPrimitive, OrientationRun, OrientationSample,
+    OrientationTrajectory, rollout_orientation,
+};
 pub use primitive::Primitive;
 pub use rollout::{Rollout, Trajectory, rollout};
