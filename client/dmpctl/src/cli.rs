@@ -114,6 +114,9 @@ pub enum ScenarioCommand {
         /// Output directory (created).
         #[arg(long)]
         out: PathBuf,
+        /// A collision is expected (the paper's run without avoidance): it does not make the exit code 3.
+        #[arg(long)]
+        allow_collision: bool,
     },
     /// Time the avoidance rollout and print one JSON object.
     Bench {
@@ -320,7 +323,9 @@ fn parse_avoidance(s: &str) -> Result<dmp::Avoidance, String> {
 /// the others on a multi-threaded tokio runtime (Zenoh needs one).
 pub fn run(cli: Cli) -> Result<String, DmpctlError> {
     match (&cli.command, &cli.server) {
-        (Command::Scenario(ScenarioCommand::Run { file, out }), None) => offline_run(file, out),
+        (Command::Scenario(ScenarioCommand::Run { file, out, allow_collision }), None) => {
+            offline_run(file, out, *allow_collision)
+        }
         (Command::Scenario(ScenarioCommand::Bench { file, repeat }), _) => bench(file, *repeat),
         (command, _) => {
             let mut builder = tokio::runtime::Builder::new_multi_thread();
@@ -358,14 +363,15 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
         Ok::<_, DmpctlError>(DmpClient::connect_with(&server, &options).await?.with_cell(place.cell.as_str()))
     };
     match &cli.command {
-        Command::Scenario(ScenarioCommand::Run { file, out }) => match &cli.server {
-            None => offline_run(file, out),
+        Command::Scenario(ScenarioCommand::Run { file, out, allow_collision }) => match &cli.server {
+            None => offline_run(file, out, *allow_collision),
             Some(url) => {
                 let summary = run_scenario_through_server(&connect().await?, file, out).await?;
                 for n in &summary.notes {
                     eprintln!("dmpctl: note: {n}");
                 }
-                Ok(format!("{} (through {url})", summary_line(file, &summary, out)))
+                let line = format!("{} (through {url})", summary_line(file, &summary, out));
+                gate(line, scenario_problems(&summary, *allow_collision))
             }
         },
         Command::Scenario(ScenarioCommand::Bench { file, repeat }) => bench(file, *repeat),
@@ -400,15 +406,22 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
                 zenoh_config,
             )
             .await?;
-            let problems = report.problems();
-            Ok(format!(
+            let mut problems = report.problems_allowing(a.allow_collision);
+            // Late setpoints fail the run too (a real robot would have executed stale ones).
+            for (id, r) in &report.robots {
+                if r.late_setpoints > 0 {
+                    problems.push(format!("{id}: {} late setpoints", r.late_setpoints));
+                }
+            }
+            let line = format!(
                 "{}: {} robots, collision: {}, {}; wrote {}",
                 report.sim,
                 report.robots.len(),
                 report.collision,
                 if problems.is_empty() { "no problem".to_string() } else { problems.join("; ") },
                 a.out.display()
-            ))
+            );
+            gate(line, problems)
         }
     }
 }
@@ -471,8 +484,35 @@ fn summary_line(file: &Path, summary: &RunSummary, out: &Path) -> String {
     )
 }
 
-fn offline_run(file: &Path, out: &Path) -> Result<String, DmpctlError> {
-    Ok(summary_line(file, &run_scenario(file, out)?, out))
+fn offline_run(file: &Path, out: &Path, allow_collision: bool) -> Result<String, DmpctlError> {
+    let summary = run_scenario(file, out)?;
+    gate(summary_line(file, &summary, out), scenario_problems(&summary, allow_collision))
+}
+
+/// What went wrong in a scenario run that completed: a collision (unless allowed), a stall, non-finite values, or
+/// a goal not reached (within 1 cm, `time_to_goal`).
+fn scenario_problems(summary: &RunSummary, allow_collision: bool) -> Vec<String> {
+    let m = &summary.metrics;
+    let mut problems = Vec::new();
+    if m.collision && !allow_collision {
+        problems.push("collision (--allow-collision if it is meant to)".to_string());
+    }
+    for s in &m.stalls {
+        problems
+            .push(format!("{} stalled at t = {:.3} s, {:.3} m from its goal", s.robot, s.since, s.distance));
+    }
+    if !m.finite {
+        problems.push("non-finite values in the trajectory".into());
+    }
+    if m.time_to_goal.is_none() {
+        problems.push(format!("goal not reached ({:.3e} m away at the end)", m.final_goal_distance));
+    }
+    problems
+}
+
+/// `line` when nothing went wrong, else [`DmpctlError::Problems`] (exit code 3).
+fn gate(line: String, problems: Vec<String>) -> Result<String, DmpctlError> {
+    if problems.is_empty() { Ok(line) } else { Err(DmpctlError::Problems { summary: line, problems }) }
 }
 
 fn bench(file: &Path, repeat: usize) -> Result<String, DmpctlError> {

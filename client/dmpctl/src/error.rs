@@ -53,6 +53,15 @@ pub enum DmpctlError {
     /// The plot could not be drawn.
     #[error("plot: {0}")]
     Plot(#[from] PlotError),
+    /// A run completed, with a collision, a stall, a missed goal, non-finite values or late setpoints (`dmpctl`
+    /// exits with code 3: a CI gate). `summary` is the line the run would print; `problems` says which.
+    #[error("{summary}\nthe run completed with problems: {}", problems.join("; "))]
+    Problems {
+        /// The run's summary line.
+        summary: String,
+        /// What went wrong, one entry each.
+        problems: Vec<String>,
+    },
 }
 
 impl DmpctlError {
@@ -63,7 +72,16 @@ impl DmpctlError {
             DmpctlError::Parse { .. } | DmpctlError::Invalid { .. } | DmpctlError::Argument { .. } => true,
             DmpctlError::Client(e) => e.is_bad_input(),
             DmpctlError::Sim(e) => e.is_bad_input(),
-            DmpctlError::Io { .. } | DmpctlError::Plot(_) => false,
+            DmpctlError::Io { .. } | DmpctlError::Plot(_) | DmpctlError::Problems { .. } => false,
+        }
+    }
+
+    /// The process's exit code: 3 for a run with problems, 2 for bad input, 1 for anything else.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            DmpctlError::Problems { .. } => 3,
+            e if e.is_bad_input() => 2,
+            _ => 1,
         }
     }
 

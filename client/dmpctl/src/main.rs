@@ -1,5 +1,6 @@
-//! `dmpctl`: parses flags and calls the library. Exit codes: 0 success, 2 bad input (the message names the field),
-//! 1 any other failure.
+//! `dmpctl`: parses flags and calls the library. Exit codes: 0 success, 3 a run that completed with problems
+//! (collision, stall, missed goal, non-finite values, late setpoints), 2 bad input (the message names the field), 1
+//! any other failure.
 
 use std::process::ExitCode;
 
@@ -18,9 +19,14 @@ fn main() -> ExitCode {
             println!("{out}");
             ExitCode::SUCCESS
         }
+        Err(dmpctl::DmpctlError::Problems { summary, problems }) => {
+            println!("{summary}");
+            eprintln!("dmpctl: the run completed with problems: {}", problems.join("; "));
+            ExitCode::from(3)
+        }
         Err(e) => {
             eprintln!("dmpctl: {e}");
-            ExitCode::from(if e.is_bad_input() { 2 } else { 1 })
+            ExitCode::from(e.exit_code())
         }
     }
 }

@@ -42,6 +42,26 @@ fn scenario_run_writes_the_three_files() {
 }
 
 #[test]
+fn a_run_with_problems_exits_3_with_its_summary_unless_the_collision_is_allowed() {
+    let out = tempfile::tempdir().unwrap();
+    let o = out.path().to_str().unwrap();
+    let file = scenarios().join("paper-one-obstacle/none.json");
+    let run = dmpctl(&["scenario", "run", file.to_str().unwrap(), "--out", o]);
+    let (stdout, stderr) = (String::from_utf8_lossy(&run.stdout), String::from_utf8_lossy(&run.stderr));
+    assert_eq!(run.status.code(), Some(3), "{stderr}");
+    assert!(stdout.contains("collision: true"), "{stdout}");
+    assert!(stderr.contains("the run completed with problems: collision"), "{stderr}");
+    assert!(out.path().join("metrics.json").exists(), "the outputs are written all the same");
+    let allowed = dmpctl(&["scenario", "run", file.to_str().unwrap(), "--out", o, "--allow-collision"]);
+    assert!(allowed.status.success(), "{}", String::from_utf8_lossy(&allowed.stderr));
+    // A run that ends short of its goal fails too: the 3-D bench scenario stops 7.6 cm away.
+    let bench = scenarios().join("bench-3d-ten-dynamic-volumetric.json");
+    let short = dmpctl(&["scenario", "run", bench.to_str().unwrap(), "--out", o]);
+    assert_eq!(short.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&short.stderr).contains("goal not reached"));
+}
+
+#[test]
 fn scenario_bench_prints_one_json_object() {
     let file = scenarios().join("paper-one-obstacle/static_volumetric.json");
     let o = dmpctl(&["scenario", "bench", file.to_str().unwrap(), "--repeat", "3"]);

@@ -91,9 +91,18 @@ async fn server_commands_against_the_server() {
     let streamed = std::fs::read_to_string(dir.path().join("stream/trajectory.csv")).unwrap();
     assert_eq!(streamed.lines().count(), plan.lines().count());
 
-    let run = run_at(&url, &["scenario", "run", scenario.to_str().unwrap(), "--out", &d("scenario")])
+    // The paper's run without avoidance collides, as it is meant to: exit 3 unless allowed.
+    let e = run_at(&url, &["scenario", "run", scenario.to_str().unwrap(), "--out", &d("scenario")])
         .await
-        .unwrap();
+        .unwrap_err();
+    assert_eq!(e.exit_code(), 3, "{e}");
+    assert!(e.to_string().contains("collision: true") && e.to_string().contains("--allow-collision"), "{e}");
+    let run = run_at(
+        &url,
+        &["scenario", "run", scenario.to_str().unwrap(), "--out", &d("scenario"), "--allow-collision"],
+    )
+    .await
+    .unwrap();
     assert!(run.contains("through http://"), "{run}");
     assert!(dir.path().join("scenario/metrics.json").exists());
 

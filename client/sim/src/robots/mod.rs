@@ -102,6 +102,9 @@ pub struct SimArgs {
     /// robots) use the command's own credentials (`--token`, `DMP_TOKEN` or a certificate), a planner's.
     #[arg(long, value_name = "DIR")]
     pub tokens: Option<PathBuf>,
+    /// A collision is expected: it does not make the exit code 3 (the other problems still do).
+    #[arg(long)]
+    pub allow_collision: bool,
 }
 
 /// How a simulation runs.

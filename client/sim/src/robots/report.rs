@@ -87,13 +87,20 @@ impl SimReport {
 
     /// Everything wrong: goals missed, contacts, discontinuities, non-finite values (empty: all good).
     pub fn problems(&self) -> Vec<String> {
+        self.problems_allowing(false)
+    }
+
+    /// [`SimReport::problems`], leaving out the collisions when `allow_collision` (a run meant to collide).
+    pub fn problems_allowing(&self, allow_collision: bool) -> Vec<String> {
         let mut p = Vec::new();
         for (id, r) in &self.robots {
             if !r.reached_goal {
                 p.push(format!("{id}: goal not reached ({} m away, {})", r.final_error_m, r.final_status));
             }
-            for c in &r.collisions {
-                p.push(format!("{id}: touches {c}"));
+            if !allow_collision {
+                for c in &r.collisions {
+                    p.push(format!("{id}: touches {c}"));
+                }
             }
             if r.discontinuities > 0 {
                 p.push(format!("{id}: {} discontinuous steps", r.discontinuities));
