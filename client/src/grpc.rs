@@ -183,6 +183,17 @@ impl DmpClient {
         Ok(self.server.clone().get_stats(v1::GetStatsRequest {}).await?.into_inner())
     }
 
+    /// The standard gRPC health check of `service` (`""`: the server as a whole; or e.g. `dmp.v1.SceneService`,
+    /// which is not serving while the scene's Zenoh routers are unreachable). Answered without credentials, as
+    /// probes need. Returns the status's name, e.g. `SERVING` or `NOT_SERVING`.
+    pub async fn health(&self, service: &str) -> Result<&'static str, ClientError> {
+        use tonic_health::pb::health_check_response::ServingStatus;
+        use tonic_health::pb::{HealthCheckRequest, health_client::HealthClient};
+        let request = HealthCheckRequest { service: service.to_owned() };
+        let status = HealthClient::new(self.raw.clone()).check(request).await?.into_inner().status;
+        Ok(ServingStatus::try_from(status).map_or("UNKNOWN", |s| s.as_str_name()))
+    }
+
     /// How the server is set up (TLS, access control, what is exposed) and who this client is to it.
     pub async fn info(&self) -> Result<v1::ServerInfo, ClientError> {
         Ok(self.server.clone().get_info(v1::GetInfoRequest {}).await?.into_inner())

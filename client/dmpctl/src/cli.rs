@@ -59,8 +59,13 @@ pub enum Command {
     Learn(LearnArgs),
     /// A simulated robot against the server: writes report.json and figures into --out.
     Sim(dmp_sim::robots::SimArgs),
-    /// How the server is set up (TLS, access control, what it exposes) and who this client is to it, as JSON.
+    /// How the server is set up (TLS, access control, what it exposes, its cell, Zenoh locators and limits) and
+    /// who this client is to it, as JSON.
     Info,
+    /// The server's statistics (GetStats) as JSON: uptime, CPU, memory, streams, compute budgets.
+    Stats,
+    /// The gRPC health of the server and of each service, one line each; exits with 1 when one is not serving.
+    Health,
     /// The primitives of a robot (latest version of each).
     List {
         /// The robot.
@@ -390,6 +395,8 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
             server_commands::scene_delete(connect, &zenoh, id, *via).await
         }
         Command::Info => Ok(to_json(&server_commands::info_json(&connect().await?.info().await?))),
+        Command::Stats => Ok(to_json(&server_commands::stats_json(&connect().await?.stats().await?))),
+        Command::Health => server_commands::health(&connect().await?).await,
         Command::Scene(SceneCommand::List) => server_commands::scene_list(&connect().await?).await,
         Command::Load(a) => {
             let report = dmp_sim::load::run_with(a, &server, &place.zenoh_connect, &options).await?;
@@ -441,9 +448,13 @@ async fn resolve_place(cli: &Cli, server: &str, options: &ConnectOptions) -> Res
     if let Some(cell) = &cli.cell {
         dmp_proto::keys::check_name("--cell", cell).map_err(|e| DmpctlError::argument("--cell", e.rule))?;
     }
+    // Commands that act in no cell (or need no server) do not ask.
     let offline = match &cli.command {
         Command::Scenario(ScenarioCommand::Run { .. }) => cli.server.is_none(),
-        Command::Scenario(ScenarioCommand::Bench { .. }) => true,
+        Command::Scenario(ScenarioCommand::Bench { .. })
+        | Command::Health
+        | Command::Info
+        | Command::Stats => true,
         _ => false,
     };
     let need_cell = cli.cell.is_none();

@@ -53,6 +53,9 @@ pub enum DmpctlError {
     /// The plot could not be drawn.
     #[error("plot: {0}")]
     Plot(#[from] PlotError),
+    /// The server answers but some of its services are not serving (`health`).
+    #[error("{0}")]
+    Unhealthy(String),
     /// A run completed, with a collision, a stall, a missed goal, non-finite values or late setpoints (`dmpctl`
     /// exits with code 3: a CI gate). `summary` is the line the run would print; `problems` says which.
     #[error("{summary}\nthe run completed with problems: {}", problems.join("; "))]
@@ -72,7 +75,10 @@ impl DmpctlError {
             DmpctlError::Parse { .. } | DmpctlError::Invalid { .. } | DmpctlError::Argument { .. } => true,
             DmpctlError::Client(e) => e.is_bad_input(),
             DmpctlError::Sim(e) => e.is_bad_input(),
-            DmpctlError::Io { .. } | DmpctlError::Plot(_) | DmpctlError::Problems { .. } => false,
+            DmpctlError::Io { .. }
+            | DmpctlError::Plot(_)
+            | DmpctlError::Problems { .. }
+            | DmpctlError::Unhealthy(_) => false,
         }
     }
 

@@ -122,6 +122,8 @@ pub async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, DmpctlErro
         duration: a.duration.unwrap_or(0.0),
     };
     let r = client.plan(request).await?;
+    let stale = r.trajectory.as_ref().is_some_and(|t| t.scene_stale);
+    print_warnings(&r.warnings, stale, &mut false);
     let seg = r.trajectory.ok_or_else(|| DmpctlError::protocol("the plan has no trajectory".into()))?;
     let mut s = Setpoints::new();
     s.push(&seg)?;
@@ -139,6 +141,84 @@ pub async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, DmpctlErro
         r.stalled,
         a.out.join("trajectory.csv").display()
     ))
+}
+
+/// The line a warning of the server is printed as (on stderr, `dmpctl: warning: ...`).
+pub fn warning_line(w: &v1::Warning) -> String {
+    let kind = v1::warning::Kind::try_from(w.kind).map_or("UNKNOWN", |k| k.as_str_name());
+    let mut line = format!("warning: {kind}");
+    if !w.obstacle_id.is_empty() {
+        line.push_str(&format!(" (obstacle `{}`)", w.obstacle_id));
+    }
+    if !w.field.is_empty() {
+        line.push_str(&format!(" {}:", w.field));
+    }
+    line.push(' ');
+    line.push_str(&w.reason);
+    line
+}
+
+/// Prints the warnings of a reply on stderr, and a scene that went stale or fresh again (`stale` holds the last
+/// state seen: the change is printed once).
+pub fn print_warnings(warnings: &[v1::Warning], scene_stale: bool, stale: &mut bool) {
+    for w in warnings {
+        eprintln!("dmpctl: {}", warning_line(w));
+    }
+    if scene_stale != *stale {
+        *stale = scene_stale;
+        if scene_stale {
+            eprintln!(
+                "dmpctl: warning: computed with a stale scene (its obstacles' sources have gone quiet)"
+            );
+        } else {
+            eprintln!("dmpctl: the scene is fresh again");
+        }
+    }
+}
+
+/// `stats`: the server's statistics as JSON.
+pub fn stats_json(s: &v1::ServerStats) -> serde_json::Value {
+    serde_json::json!({
+        "uptime_s": s.uptime_s,
+        "cpu_seconds": s.cpu_seconds,
+        "rss_bytes": s.rss_bytes,
+        "open_streams": s.open_streams,
+        "segments_sent": s.segments_sent,
+        "cells": s.cells,
+        "robots": s.robots,
+        "robot_states_dropped": s.robot_states_dropped,
+        "realtime_work_reserved": s.realtime_work_reserved,
+        "realtime_work_budget": s.realtime_work_budget,
+        "batch_work_reserved": s.batch_work_reserved,
+        "batch_work_budget": s.batch_work_budget,
+        "realtime_jobs_running": s.realtime_jobs_running,
+        "batch_jobs_running": s.batch_jobs_running,
+        "jobs_abandoned": s.jobs_abandoned,
+        "jobs_failed": s.jobs_failed,
+    })
+}
+
+/// The services `health` checks: the server as a whole, then each of its services.
+pub const HEALTH_SERVICES: [&str; 5] =
+    ["", "dmp.v1.PrimitiveService", "dmp.v1.SceneService", "dmp.v1.MotionService", "dmp.v1.ServerService"];
+
+/// `health`: one line per service with its status; an error naming those not serving.
+pub async fn health(client: &DmpClient) -> Result<String, DmpctlError> {
+    let mut lines = Vec::new();
+    let mut down = Vec::new();
+    for service in HEALTH_SERVICES {
+        let status = client.health(service).await?;
+        let name = if service.is_empty() { "(server)" } else { service };
+        if status != "SERVING" {
+            down.push(format!("{name} {status}"));
+        }
+        lines.push(format!("{name}\t{status}"));
+    }
+    if down.is_empty() {
+        Ok(lines.join("\n"))
+    } else {
+        Err(DmpctlError::Unhealthy(format!("{}\nnot serving: {}", lines.join("\n"), down.join(", "))))
+    }
 }
 
 /// The status name of a segment.
@@ -178,6 +258,7 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
     let mut segments = client.execute(request).await?;
     let mut s = Setpoints::new();
     let mut interrupted = false;
+    let mut stale = false;
     let ctrl_c = tokio::signal::ctrl_c();
     tokio::pin!(ctrl_c);
     loop {
@@ -187,6 +268,7 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
                 Some(seg) => {
                     let seg = seg?;
                     eprintln!("{}", segment_line(&seg));
+                    print_warnings(&seg.warnings, seg.scene_stale, &mut stale);
                     s.push(&seg)?;
                 }
             },
@@ -358,6 +440,20 @@ pub fn info_json(info: &v1::ServerInfo) -> serde_json::Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_warning_reads_as_its_kind_obstacle_field_and_reason() {
+        let w = v1::Warning {
+            kind: v1::warning::Kind::ObstacleIgnored as i32,
+            field: "superquadric.exponents[0]".into(),
+            reason: "too large for this robot".into(),
+            obstacle_id: "crate".into(),
+        };
+        assert_eq!(
+            warning_line(&w),
+            "warning: OBSTACLE_IGNORED (obstacle `crate`) superquadric.exponents[0]: too large for this robot"
+        );
+    }
 
     fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
         let p = dir.join(name);

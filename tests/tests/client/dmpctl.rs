@@ -141,6 +141,13 @@ async fn every_command_acts_in_its_one_cell() {
     let limits = &server.handle().state().config.limits;
     assert_eq!(info["limits"]["max_obstacles"], limits.max_obstacles as u64);
     assert_eq!(info["zenoh_locators"], serde_json::json!([]), "no Zenoh here");
+    let stats: serde_json::Value = serde_json::from_str(&run_at(&url, &["stats"]).await.unwrap()).unwrap();
+    assert!(
+        stats["uptime_s"].as_f64().unwrap() > 0.0 && stats["realtime_work_budget"].as_f64().unwrap() > 0.0
+    );
+    let health = run_at(&url, &["health"]).await.unwrap();
+    assert_eq!(health.lines().count(), 5, "{health}");
+    assert!(health.lines().all(|l| l.ends_with("\tSERVING")), "{health}");
 
     run_at(&url, &["--cell", "lab2", "scene", "put", file]).await.unwrap();
     let lab2 = run_at(&url, &["--cell", "lab2", "scene", "list"]).await.unwrap();
