@@ -164,7 +164,11 @@ impl SceneUpdater {
                     return Ok(());
                 };
                 let (version, existed) = scene.delete(id);
-                debug!(key, existed, version, "obstacle deleted over zenoh");
+                if existed {
+                    info!(cell = names.cell, obstacle = id, version, source = "zenoh", "obstacle deleted");
+                } else {
+                    debug!(key, version, "obstacle delete over zenoh: no such obstacle");
+                }
             }
             SampleKind::Put => {
                 let scene = self.cells.get(names.cell)?;
@@ -172,8 +176,14 @@ impl SceneUpdater {
                 // The encoding's name, with its schema if any (`application/protobuf;dmp.v1.Obstacle`).
                 let encoding = std::borrow::Cow::<'static, str>::from(sample.encoding());
                 let o = decode_obstacle(&encoding, &bytes, id)?;
+                let known = scene.snapshot().obstacles.contains_key(id);
                 let version = scene.put(o, self.clock.now_unix_s())?;
-                debug!(key, version, "obstacle put over zenoh");
+                // A new obstacle at info; the updates of a known one (a tracker's 20 Hz) at debug.
+                if known {
+                    debug!(cell = names.cell, obstacle = id, version, source = "zenoh", "obstacle updated");
+                } else {
+                    info!(cell = names.cell, obstacle = id, version, source = "zenoh", "obstacle added");
+                }
             }
         }
         Ok(())
