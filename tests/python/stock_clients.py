@@ -15,6 +15,7 @@ import json
 import pathlib
 import sys
 import tempfile
+import time
 
 import grpc
 import zenoh
@@ -37,6 +38,7 @@ def stubs(proto_dir: pathlib.Path, out: pathlib.Path):
         importlib.import_module("dmp.v1.motion_pb2_grpc"),
         importlib.import_module("dmp.v1.primitives_pb2"),
         importlib.import_module("dmp.v1.primitives_pb2_grpc"),
+        importlib.import_module("dmp.v1.types_pb2"),
     )
 
 
@@ -100,7 +102,7 @@ def as_robot(motion, motion_grpc, primitives, primitives_grpc, set_dir, addr, ro
     channel.close()
 
 
-def as_perception(set_dir, locator, cell):
+def as_perception(types, set_dir, locator, cell):
     config = zenoh.Config.from_file(str(set_dir / "zenoh-perception.json5"))
     config.insert_json5("connect/endpoints", json.dumps([locator]))
     session = zenoh.open(config)
@@ -110,7 +112,16 @@ def as_perception(set_dir, locator, cell):
 
     # Denied ones and a put then deleted first, the last put last: the server sees them in this order (one link).
     session.put("dmp/cell-b/obstacles/py-elsewhere", obstacle("py-elsewhere"))
-    session.put(f"dmp/{cell}/robots/py-ghost/state", b"\x0a\x08py-ghost")
+    # A robot state the server would take from a server (fresh, in the workspace, with a footprint): only the
+    # access control keeps it out.
+    ghost = types.RobotState(
+        robot_id="py-ghost",
+        stamp_unix_s=time.time(),
+        position=[0.5, 0.25],
+        velocity=[0.0, 0.0],
+        footprint=types.Superquadric(semi_axes=[0.2, 0.2]),
+    )
+    session.put(f"dmp/{cell}/robots/py-ghost/state", ghost.SerializeToString())
     session.put(f"dmp/{cell}/obstacles/py-gone", obstacle("py-gone"))
     session.delete(f"dmp/{cell}/obstacles/py-gone")
     session.put(f"dmp/{cell}/obstacles/py-seen", obstacle("py-seen"))
@@ -124,9 +135,9 @@ def main():
     proto_dir, set_dir, addr, locator, cell, robot, other = sys.argv[1:8]
     set_dir = pathlib.Path(set_dir)
     with tempfile.TemporaryDirectory() as out:
-        motion, motion_grpc, primitives, primitives_grpc = stubs(pathlib.Path(proto_dir), pathlib.Path(out))
+        motion, motion_grpc, primitives, primitives_grpc, types = stubs(pathlib.Path(proto_dir), pathlib.Path(out))
         as_robot(motion, motion_grpc, primitives, primitives_grpc, set_dir, addr, robot, other)
-    as_perception(set_dir, locator, cell)
+        as_perception(types, set_dir, locator, cell)
 
 
 if __name__ == "__main__":

@@ -251,8 +251,18 @@ async fn dmpctl_sim_acts_in_the_servers_cell_without_flags() {
     let url = server.url();
     let args = ["dmpctl", "--server", &url, "sim", "youbot-perception", "--out", out.to_str().unwrap()];
     let cli = dmpctl::cli::Cli::try_parse_from(args).unwrap();
-    let said = within("dmpctl sim", dmpctl::cli::run_async(cli)).await.expect("the simulation runs");
-    assert!(said.contains("collision: false, no problem"), "{said}");
+    // This simulation runs in real time: on a loaded machine some setpoints may be late, which dmpctl reports as
+    // a problem (exit 3). Anything else is a failure.
+    let said = match within("dmpctl sim", dmpctl::cli::run_async(cli)).await {
+        Ok(said) => said,
+        Err(dmpctl::DmpctlError::Problems { summary, problems })
+            if problems.iter().all(|p| p.ends_with("late setpoints")) =>
+        {
+            summary
+        }
+        Err(e) => panic!("{e}"),
+    };
+    assert!(said.contains("collision: false"), "{said}");
     let bar = server.handle().state().cells.find("bar").unwrap().expect("cell bar");
     assert!(bar.snapshot().version > 0, "the perception node's boxes went elsewhere");
     server.stop().await;

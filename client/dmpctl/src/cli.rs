@@ -64,7 +64,8 @@ pub enum Command {
     Info,
     /// The server's statistics (GetStats) as JSON: uptime, CPU, memory, streams, compute budgets.
     Stats,
-    /// The gRPC health of the server and of each service, one line each; exits with 1 when one is not serving.
+    /// The gRPC health of the server and of each service, one line each (5 s per answer at most); exits with 1
+    /// when one is not serving.
     Health,
     /// The primitives of a robot (latest version of each).
     List {
@@ -103,7 +104,8 @@ pub enum Command {
     Scene(SceneCommand),
     /// Many robots streaming in real time against the server (cells of robots avoiding each other, obstacle
     /// updates over Zenoh); prints one JSON object: setpoints on time, lateness, scene update latency, server CPU
-    /// and memory. `--zenoh-connect` defaults to tcp/127.0.0.1:7447; `--cell` is not used (cells are
+    /// and memory. With `--scene-updates`, `--zenoh-connect` defaults to the server's loopback Zenoh locators
+    /// (GetInfo, when the server is on this host), else tcp/127.0.0.1:7447; `--cell` is not used (cells are
     /// `<prefix>-<c>`).
     Load(dmp_sim::load::LoadArgs),
 }
@@ -360,12 +362,12 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
     };
     let place = resolve_place(&cli, &server, &options).await?;
     let zenoh = ZenohArgs {
-        cell: place.cell.clone(),
+        cell: place.zenoh_cell().to_owned(),
         connect: place.zenoh_connect.clone(),
         config_file: cli.zenoh_config.clone(),
     };
     let connect = || async {
-        Ok::<_, DmpctlError>(DmpClient::connect_with(&server, &options).await?.with_cell(place.cell.as_str()))
+        Ok::<_, DmpctlError>(DmpClient::connect_with(&server, &options).await?.with_cell(place.grpc_cell()))
     };
     match &cli.command {
         Command::Scenario(ScenarioCommand::Run { file, out, allow_collision }) => match &cli.server {
@@ -408,7 +410,7 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
                 a,
                 &server,
                 &options,
-                &place.cell,
+                place.zenoh_cell(),
                 &place.zenoh_connect,
                 zenoh_config,
             )
@@ -436,49 +438,95 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
 /// Where a command acts: its one cell, for gRPC and Zenoh alike, and the Zenoh endpoints it connects to.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Place {
-    /// `--cell`, else the server's default cell (GetInfo), else `default` (commands that need no server).
-    pub cell: String,
-    /// `--zenoh-connect`, else the server's Zenoh locators (GetInfo) when no `--zenoh-config` names endpoints.
+    /// `--cell`, else (commands that use Zenoh) the server's default cell from GetInfo; `None`: the server's
+    /// default, which gRPC requests get by naming no cell.
+    pub cell: Option<String>,
+    /// `--zenoh-connect`, else (commands that use Zenoh, when no `--zenoh-config` names endpoints) the server's
+    /// Zenoh locators from GetInfo when the server is on this host ([`usable_locators`]); empty: scouting.
     pub zenoh_connect: Vec<String>,
 }
 
-/// Resolves the command's [`Place`]: a `--cell` is checked against the naming rule; what is not given is asked
-/// of the server (GetInfo) by the commands that talk to it.
+impl Place {
+    /// The cell gRPC requests name (empty: the server's default).
+    pub fn grpc_cell(&self) -> &str {
+        self.cell.as_deref().unwrap_or("")
+    }
+
+    /// The cell of the Zenoh keys.
+    pub fn zenoh_cell(&self) -> &str {
+        self.cell.as_deref().unwrap_or("default")
+    }
+}
+
+/// Resolves the command's [`Place`]. A `--cell` is checked against the naming rule. Commands that use Zenoh (scene
+/// changes `--via zenoh`, `sim`, `load --scene-updates`) ask the server (GetInfo) for what they were not given, so
+/// that their Zenoh keys name the server's cell; if it cannot be asked (no gRPC access, only a Zenoh certificate),
+/// they say so and go on with `default`. gRPC commands ask nothing: naming no cell is the server's default.
 async fn resolve_place(cli: &Cli, server: &str, options: &ConnectOptions) -> Result<Place, DmpctlError> {
     if let Some(cell) = &cli.cell {
         dmp_proto::keys::check_name("--cell", cell).map_err(|e| DmpctlError::argument("--cell", e.rule))?;
     }
-    // Commands that act in no cell (or need no server) do not ask.
-    let offline = match &cli.command {
-        Command::Scenario(ScenarioCommand::Run { .. }) => cli.server.is_none(),
-        Command::Scenario(ScenarioCommand::Bench { .. })
-        | Command::Health
-        | Command::Info
-        | Command::Stats => true,
+    let given = Place { cell: cli.cell.clone(), zenoh_connect: cli.zenoh_connect.clone() };
+    let uses_zenoh = match &cli.command {
+        Command::Scene(SceneCommand::Put { via, .. } | SceneCommand::Delete { via, .. }) => {
+            *via == Via::Zenoh
+        }
+        Command::Sim(_) => true,
+        Command::Load(a) => a.scene_updates > 0.0,
         _ => false,
     };
     let need_cell = cli.cell.is_none();
     let need_zenoh = cli.zenoh_connect.is_empty() && cli.zenoh_config.is_none();
-    let info = if offline || !(need_cell || need_zenoh) {
-        None
-    } else {
-        match DmpClient::connect_with(server, options).await?.info().await {
-            Ok(info) => Some(info),
-            // A server without GetInfo (older than this dmpctl): its defaults are unknown.
-            Err(e) if e.is_unimplemented() => None,
-            Err(e) => return Err(e.into()),
+    if !uses_zenoh || !(need_cell || need_zenoh) {
+        return Ok(given);
+    }
+    let asked = async { DmpClient::connect_with(server, options).await?.info().await }.await;
+    let info = match asked {
+        Ok(info) => info,
+        Err(e) => {
+            eprintln!(
+                "dmpctl: warning: could not ask {server} for its default cell and Zenoh locators ({e}); \
+                 using cell `{}`{}",
+                given.zenoh_cell(),
+                if need_zenoh { " and Zenoh scouting" } else { "" }
+            );
+            return Ok(given);
         }
     };
-    let cell = match (&cli.cell, &info) {
-        (Some(cell), _) => cell.clone(),
-        (None, Some(info)) if !info.cell.is_empty() => info.cell.clone(),
-        _ => "default".into(),
-    };
-    let zenoh_connect = match &info {
-        Some(info) if need_zenoh => info.zenoh_locators.clone(),
-        _ => cli.zenoh_connect.clone(),
-    };
+    let cell = cli.cell.clone().or_else(|| (!info.cell.is_empty()).then(|| info.cell.clone()));
+    let zenoh_connect =
+        if need_zenoh { usable_locators(server, &info.zenoh_locators) } else { cli.zenoh_connect.clone() };
     Ok(Place { cell, zenoh_connect })
+}
+
+/// The host of a URL such as `http://127.0.0.1:50051` or `https://[::1]:50051/`.
+fn url_host(url: &str) -> &str {
+    let rest = url.split_once("://").map_or(url, |(_, r)| r);
+    let authority = rest.split('/').next().unwrap_or(rest);
+    match authority.strip_prefix('[') {
+        Some(v6) => v6.split(']').next().unwrap_or(v6),
+        None => authority.rsplit_once(':').map_or(authority, |(h, _)| h),
+    }
+}
+
+/// Whether `host` names this machine's loopback.
+fn is_loopback(host: &str) -> bool {
+    host == "localhost" || host.parse::<std::net::IpAddr>().is_ok_and(|ip| ip.is_loopback())
+}
+
+/// The locators of a server at `server` that this client can use: the loopback ones, when the server itself is
+/// reached on loopback. A remote server's listen addresses (its loopback, or every one of its interfaces) say
+/// nothing reliable about how to reach it from here, and a wrong one would publish to another system: none then
+/// (scouting, or `--zenoh-connect`).
+pub fn usable_locators(server: &str, locators: &[String]) -> Vec<String> {
+    if !is_loopback(url_host(server)) {
+        return Vec::new();
+    }
+    locators
+        .iter()
+        .filter(|l| l.split_once('/').is_some_and(|(_, addr)| is_loopback(url_host(addr))))
+        .cloned()
+        .collect()
 }
 
 fn summary_line(file: &Path, summary: &RunSummary, out: &Path) -> String {

@@ -202,12 +202,19 @@ pub fn stats_json(s: &v1::ServerStats) -> serde_json::Value {
 pub const HEALTH_SERVICES: [&str; 5] =
     ["", "dmp.v1.PrimitiveService", "dmp.v1.SceneService", "dmp.v1.MotionService", "dmp.v1.ServerService"];
 
+/// How long `health` waits for each answer.
+const HEALTH_TIMEOUT: Duration = Duration::from_secs(5);
+
 /// `health`: one line per service with its status; an error naming those not serving.
 pub async fn health(client: &DmpClient) -> Result<String, DmpctlError> {
     let mut lines = Vec::new();
     let mut down = Vec::new();
     for service in HEALTH_SERVICES {
-        let status = client.health(service).await?;
+        // A wedged server must not hang a probe.
+        let status = match tokio::time::timeout(HEALTH_TIMEOUT, client.health(service)).await {
+            Ok(status) => status?,
+            Err(_) => "NO_ANSWER",
+        };
         let name = if service.is_empty() { "(server)" } else { service };
         if status != "SERVING" {
             down.push(format!("{name} {status}"));

@@ -110,7 +110,13 @@ async fn a_learn_whose_client_left_is_not_stored() {
     assert!(left.await.unwrap_err().is_cancelled());
     let err = within("the timed learn", timed).await.unwrap().unwrap_err();
     assert!(matches!(err.code(), tonic::Code::DeadlineExceeded | tonic::Code::Cancelled), "{err:?}");
-    // The plan's client leaves too: the plan stops at its next chunk and the queued learns are skipped, never run.
+    // The plan still holds the one batch thread (else the learns could have run): its client leaves too, the plan
+    // stops at its next chunk and the queued learns are skipped, never run.
+    assert_eq!(
+        batch.counters().running.load(Ordering::Acquire),
+        1,
+        "the plan ended before the learns' deadline"
+    );
     busy.abort();
     let _ = busy.await;
     until("the plan and the learns stopped", || idle(&server) && batch.queued() == 0).await;

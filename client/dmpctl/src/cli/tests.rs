@@ -34,7 +34,7 @@ fn global_options_go_anywhere() {
     assert_eq!((c.server.as_deref(), c.cell.as_deref()), (Some("http://h:1"), Some("c1")));
     let c = parse(&["list", "--robot", "r", "--zenoh-connect", "tcp/a:1", "--zenoh-connect", "tcp/b:2"]);
     assert_eq!(c.zenoh_connect, vec!["tcp/a:1", "tcp/b:2"]);
-    assert_eq!(c.cell, None, "the server's own cell over gRPC, `default` over Zenoh");
+    assert_eq!(c.cell, None, "the server's own cell (GetInfo for the Zenoh commands)");
 }
 
 #[test]
@@ -271,4 +271,44 @@ fn a_closed_port_is_a_connection_failure_not_bad_input() {
     assert!(e.to_string().contains("127.0.0.1:1"), "{e}");
     let e = run(parse(&["--server", "http://bad host:1", "list", "--robot", "r"])).unwrap_err();
     assert!(e.is_bad_input(), "{e}");
+}
+
+#[test]
+fn only_the_loopback_locators_of_a_server_on_this_host_are_used() {
+    let reported = ["tcp/127.0.0.1:7447", "tcp/10.0.0.5:7447", "tls/[::1]:7448", "tcp/172.17.0.1:7447"]
+        .map(String::from)
+        .to_vec();
+    for local in ["http://127.0.0.1:50051", "https://localhost:50051", "http://[::1]:50051/"] {
+        assert_eq!(
+            usable_locators(local, &reported),
+            vec!["tcp/127.0.0.1:7447", "tls/[::1]:7448"],
+            "{local}"
+        );
+    }
+    // A remote server's listen addresses say nothing reliable about how to reach it: none, so scouting or
+    // --zenoh-connect.
+    assert!(usable_locators("https://robot-host:50051", &reported).is_empty());
+    assert!(usable_locators("http://10.0.0.5:50051", &reported).is_empty());
+}
+
+#[test]
+fn a_zenoh_command_that_cannot_ask_the_server_goes_on_with_the_default_cell() {
+    // Nothing listens on port 1: the perception node publishes all the same (to `default`, by scouting), here
+    // refused only later because no Zenoh peer answers within the wait. gRPC is not needed for a Zenoh put.
+    let c = parse(&[
+        "--server",
+        "http://127.0.0.1:1",
+        "--zenoh-connect",
+        "tcp/127.0.0.1:1",
+        "scene",
+        "delete",
+        "x",
+        "--via",
+        "zenoh",
+    ]);
+    let e = run(c).unwrap_err();
+    assert!(
+        !matches!(e, DmpctlError::Client(ClientError::Connect { ref url, .. }) if url.contains(":1")),
+        "{e}"
+    );
 }
