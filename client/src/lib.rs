@@ -16,6 +16,7 @@ pub mod connect;
 pub mod convert;
 pub mod error;
 pub mod grpc;
+pub mod session;
 pub mod setpoints;
 #[cfg(feature = "zenoh")]
 pub mod zenoh_pub;

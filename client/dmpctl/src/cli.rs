@@ -7,13 +7,13 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use dmp_client::connect::ConnectOptions;
 use dmp_client::grpc::{DEFAULT_SERVER, DmpClient};
 
 use crate::connect_args::{ConnectArgs, TOKEN_ENV};
 use crate::error::DmpctlError;
 use crate::offline::{RunSummary, bench_scenario, run_scenario};
 use crate::outputs::to_json;
+use crate::place::resolve_place;
 use crate::scenario_through_server::run_scenario_through_server;
 use crate::server_commands::{self, ZenohArgs};
 
@@ -433,100 +433,6 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
             gate(line, problems)
         }
     }
-}
-
-/// Where a command acts: its one cell, for gRPC and Zenoh alike, and the Zenoh endpoints it connects to.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Place {
-    /// `--cell`, else (commands that use Zenoh) the server's default cell from GetInfo; `None`: the server's
-    /// default, which gRPC requests get by naming no cell.
-    pub cell: Option<String>,
-    /// `--zenoh-connect`, else (commands that use Zenoh, when no `--zenoh-config` names endpoints) the server's
-    /// Zenoh locators from GetInfo when the server is on this host ([`usable_locators`]); empty: scouting.
-    pub zenoh_connect: Vec<String>,
-}
-
-impl Place {
-    /// The cell gRPC requests name (empty: the server's default).
-    pub fn grpc_cell(&self) -> &str {
-        self.cell.as_deref().unwrap_or("")
-    }
-
-    /// The cell of the Zenoh keys.
-    pub fn zenoh_cell(&self) -> &str {
-        self.cell.as_deref().unwrap_or("default")
-    }
-}
-
-/// Resolves the command's [`Place`]. A `--cell` is checked against the naming rule. Commands that use Zenoh (scene
-/// changes `--via zenoh`, `sim`, `load --scene-updates`) ask the server (GetInfo) for what they were not given, so
-/// that their Zenoh keys name the server's cell; if it cannot be asked (no gRPC access, only a Zenoh certificate),
-/// they say so and go on with `default`. gRPC commands ask nothing: naming no cell is the server's default.
-async fn resolve_place(cli: &Cli, server: &str, options: &ConnectOptions) -> Result<Place, DmpctlError> {
-    if let Some(cell) = &cli.cell {
-        dmp_proto::keys::check_name("--cell", cell).map_err(|e| DmpctlError::argument("--cell", e.rule))?;
-    }
-    let given = Place { cell: cli.cell.clone(), zenoh_connect: cli.zenoh_connect.clone() };
-    let uses_zenoh = match &cli.command {
-        Command::Scene(SceneCommand::Put { via, .. } | SceneCommand::Delete { via, .. }) => {
-            *via == Via::Zenoh
-        }
-        Command::Sim(_) => true,
-        Command::Load(a) => a.scene_updates > 0.0,
-        _ => false,
-    };
-    let need_cell = cli.cell.is_none();
-    let need_zenoh = cli.zenoh_connect.is_empty() && cli.zenoh_config.is_none();
-    if !uses_zenoh || !(need_cell || need_zenoh) {
-        return Ok(given);
-    }
-    let asked = async { DmpClient::connect_with(server, options).await?.info().await }.await;
-    let info = match asked {
-        Ok(info) => info,
-        Err(e) => {
-            eprintln!(
-                "dmpctl: warning: could not ask {server} for its default cell and Zenoh locators ({e}); \
-                 using cell `{}`{}",
-                given.zenoh_cell(),
-                if need_zenoh { " and Zenoh scouting" } else { "" }
-            );
-            return Ok(given);
-        }
-    };
-    let cell = cli.cell.clone().or_else(|| (!info.cell.is_empty()).then(|| info.cell.clone()));
-    let zenoh_connect =
-        if need_zenoh { usable_locators(server, &info.zenoh_locators) } else { cli.zenoh_connect.clone() };
-    Ok(Place { cell, zenoh_connect })
-}
-
-/// The host of a URL such as `http://127.0.0.1:50051` or `https://[::1]:50051/`.
-fn url_host(url: &str) -> &str {
-    let rest = url.split_once("://").map_or(url, |(_, r)| r);
-    let authority = rest.split('/').next().unwrap_or(rest);
-    match authority.strip_prefix('[') {
-        Some(v6) => v6.split(']').next().unwrap_or(v6),
-        None => authority.rsplit_once(':').map_or(authority, |(h, _)| h),
-    }
-}
-
-/// Whether `host` names this machine's loopback.
-fn is_loopback(host: &str) -> bool {
-    host == "localhost" || host.parse::<std::net::IpAddr>().is_ok_and(|ip| ip.is_loopback())
-}
-
-/// The locators of a server at `server` that this client can use: the loopback ones, when the server itself is
-/// reached on loopback. A remote server's listen addresses (its loopback, or every one of its interfaces) say
-/// nothing reliable about how to reach it from here, and a wrong one would publish to another system: none then
-/// (scouting, or `--zenoh-connect`).
-pub fn usable_locators(server: &str, locators: &[String]) -> Vec<String> {
-    if !is_loopback(url_host(server)) {
-        return Vec::new();
-    }
-    locators
-        .iter()
-        .filter(|l| l.split_once('/').is_some_and(|(_, addr)| is_loopback(url_host(addr))))
-        .cloned()
-        .collect()
 }
 
 fn summary_line(file: &Path, summary: &RunSummary, out: &Path) -> String {

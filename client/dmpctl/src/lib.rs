@@ -19,8 +19,10 @@ pub mod demo_csv;
 pub mod error;
 pub mod offline;
 pub mod outputs;
+pub mod place;
 pub mod scenario_file;
 pub mod scenario_through_server;
 pub mod server_commands;
+pub mod server_info;
 
 pub use error::DmpctlError;

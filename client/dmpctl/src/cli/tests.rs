@@ -4,6 +4,7 @@
 use dmp_client::ClientError;
 
 use super::*;
+use crate::place::usable_locators;
 
 fn parse(args: &[&str]) -> Cli {
     Cli::try_parse_from(std::iter::once("dmpctl").chain(args.iter().copied()))
