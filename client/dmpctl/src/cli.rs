@@ -52,7 +52,8 @@ pub struct Cli {
 /// Top-level commands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Reproducible experiments in the scenario format (shared/scenarios/SPEC.md).
+    /// Reproducible experiments in the scenario format (JSON; the data model and its rules are `dmp::scenario`'s,
+    /// the paper's experiments are in `scenarios/`).
     #[command(subcommand)]
     Scenario(ScenarioCommand),
     /// Learn a primitive from one demonstration and store it as the next version of (robot, name).

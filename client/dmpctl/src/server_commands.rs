@@ -80,12 +80,20 @@ pub async fn list(client: &DmpClient, robot: &str) -> Result<String, DmpctlError
         .map(|r| {
             let (dim, n, tau) = r.primitive.as_ref().map_or((0, 0, 0.0), |p| (p.dim, p.n_basis, p.tau));
             format!(
-                "{}\tv{}\tdim {dim}\tN {n}\ttau {tau} s\tcreated_unix_ms {}",
-                r.name, r.version, r.created_unix_ms
+                "{}\tv{}\tdim {dim}\tN {n}\ttau {tau} s\tcreated {}",
+                r.name,
+                r.version,
+                readable_time(r.created_unix_ms.max(0) as u64)
             )
         })
         .collect();
     Ok(lines.join("\n"))
+}
+
+/// A time in Unix milliseconds as RFC 3339 UTC, to the second (`2026-11-26T06:51:00Z`).
+pub fn readable_time(unix_ms: u64) -> String {
+    let t = std::time::UNIX_EPOCH + Duration::from_millis(unix_ms);
+    humantime::format_rfc3339_seconds(t).to_string()
 }
 
 /// `show`: the record as JSON (the primitive in the engine's serde form).
@@ -338,6 +346,12 @@ pub async fn scene_list(client: &DmpClient) -> Result<String, DmpctlError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn times_read_as_rfc_3339() {
+        assert_eq!(readable_time(0), "1970-01-01T00:00:00Z");
+        assert_eq!(readable_time(1_795_000_000_123), "2026-11-18T11:06:40Z");
+    }
 
     #[test]
     fn a_warning_reads_as_its_kind_obstacle_field_and_reason() {

@@ -77,7 +77,7 @@ pub const STEP_TIMEOUT: Duration = Duration::from_secs(30);
 pub enum SimName {
     /// Franka Emika Panda: pick and place past a peg, 3-D at 1 kHz.
     Panda,
-    /// One youBot; a perception node publishes an unknown box over Zenoh.
+    /// One youBot; a perception node publishes an unknown box over Zenoh (always paced in real time: about 20 s).
     YoubotPerception,
     /// Three youBots on one 2-D phase in a walled room with cubes, each a moving obstacle for the others.
     Youbots,
@@ -91,7 +91,8 @@ pub struct SimArgs {
     /// Which simulation.
     #[arg(value_enum)]
     pub name: SimName,
-    /// Pace the robots on the wall clock (the server streams in real time) instead of a simulated clock.
+    /// Pace the robots on the wall clock (the server streams in real time) instead of a simulated clock, where the
+    /// runs go as fast as they are computed (`youbot-perception` is always real time).
     #[arg(long)]
     pub realtime: bool,
     /// Folder of `report.json` and the figures.
