@@ -29,6 +29,16 @@ pub fn config(dir: &Path) -> Config {
     c
 }
 
+/// Secures `c` with the set `dmp-server access init` wrote in `set`: its access file, TLS with its server
+/// certificate, client certificates of its CA (mutual TLS), and Zenoh on a `tls/` loopback endpoint.
+pub fn secure(c: &mut Config, set: &Path) {
+    c.zenoh.listen = vec!["tls/127.0.0.1:0".into()];
+    c.security.access = Some(set.join("access.toml"));
+    c.security.tls_cert = Some(set.join("server.pem"));
+    c.security.tls_key = Some(set.join("server.key"));
+    c.security.tls_client_ca = Some(set.join("ca.pem"));
+}
+
 /// The real server, in-process, its store in a temporary directory removed when it is dropped.
 #[derive(Debug)]
 pub struct TestServer {

@@ -197,11 +197,7 @@ async fn sims_run_against_a_secured_server_each_robot_with_its_own_token() {
     let tokens =
         init(s, &InitOptions { cells: vec!["default".into()], robots, ..Default::default() }).unwrap().tokens;
     let server = TestServer::start_with(|c| {
-        c.zenoh.listen = vec!["tls/127.0.0.1:0".into()];
-        c.security.access = Some(s.join("access.toml"));
-        c.security.tls_cert = Some(s.join("server.pem"));
-        c.security.tls_key = Some(s.join("server.key"));
-        c.security.tls_client_ca = Some(s.join("ca.pem"));
+        dmp_tests::secure(c, s);
     })
     .await;
     let url = format!("https://{}", server.handle().grpc_addr);

@@ -68,11 +68,7 @@ async fn each_zenoh_peer_does_only_what_its_role_may() {
     let data = tempfile::tempdir().unwrap();
     let mut c = dmp_tests::config(data.path());
     c.cell = "cell-a".into();
-    c.zenoh.listen = vec!["tls/127.0.0.1:0".into()];
-    c.security.access = Some(s.join("access.toml"));
-    c.security.tls_cert = Some(s.join("server.pem"));
-    c.security.tls_key = Some(s.join("server.key"));
-    c.security.tls_client_ca = Some(s.join("ca.pem"));
+    dmp_tests::secure(&mut c, s);
     let h = within("server start", start(c)).await.expect("server starts");
     let locator = h.zenoh_locators.iter().find(|l| l.starts_with("tls/")).expect("a tls/ locator").clone();
 
@@ -149,11 +145,7 @@ async fn the_zenoh_denial_matrix_holds_for_every_key_class_and_role() {
     let data = tempfile::tempdir().unwrap();
     let mut c = dmp_tests::config(data.path());
     c.cell = "cell-a".into();
-    c.zenoh.listen = vec!["tls/127.0.0.1:0".into()];
-    c.security.access = Some(s.join("access.toml"));
-    c.security.tls_cert = Some(s.join("server.pem"));
-    c.security.tls_key = Some(s.join("server.key"));
-    c.security.tls_client_ca = Some(s.join("ca.pem"));
+    dmp_tests::secure(&mut c, s);
     let h = within("server start", start(c)).await.expect("server starts");
     let locator = h.zenoh_locators.iter().find(|l| l.starts_with("tls/")).expect("a tls/ locator").clone();
 
