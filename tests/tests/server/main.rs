@@ -35,6 +35,26 @@ async fn serve(dir: &Path) -> (ServerHandle, DmpClient) {
     (handle, client)
 }
 
+/// A server of cell `cell-a`, secured by a fresh `access init` set in `set` for `robots` (TLS, the access file,
+/// Zenoh on a `tls/` loopback endpoint), its data in `data`: the server, its `tls/` Zenoh locator and the set's
+/// tokens (identity, token).
+async fn secured_cell_a(
+    set: &Path,
+    data: &Path,
+    robots: &[&str],
+) -> (ServerHandle, String, Vec<(String, String)>) {
+    let robots = robots.iter().map(|r| r.to_string()).collect();
+    let options =
+        dmp_server::access::init::InitOptions { cells: vec!["cell-a".into()], robots, ..Default::default() };
+    let tokens = dmp_server::access::init::init(set, &options).unwrap().tokens;
+    let mut c = config(data);
+    c.cell = "cell-a".into();
+    dmp_tests::secure(&mut c, set);
+    let h = within("server start", start(c)).await.expect("server starts");
+    let locator = h.zenoh_locators.iter().find(|l| l.starts_with("tls/")).expect("a tls/ locator").clone();
+    (h, locator, tokens)
+}
+
 /// Waits (polling a condition, not a fixed sleep) until `cond` holds.
 async fn until(what: &str, mut cond: impl FnMut() -> bool) {
     within(what, async {

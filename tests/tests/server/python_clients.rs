@@ -11,10 +11,10 @@ use std::time::Duration;
 use dmp_client::DmpClient;
 use dmp_client::connect::{ConnectOptions, TlsOptions};
 use dmp_server::access::init::{InitOptions, init};
-use dmp_server::run::{ServerHandle, start};
+use dmp_server::run::ServerHandle;
 use dmp_tests::within;
 
-use crate::{line, until};
+use crate::{line, secured_cell_a, until};
 
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_owned()
@@ -43,18 +43,10 @@ async fn stock_python_clients_work_as_a_robot_and_as_perception() {
     let set = tempfile::tempdir().unwrap();
     let other = tempfile::tempdir().unwrap();
     let s = set.path();
-    let robots = vec!["panda-1".into(), "panda-2".into()];
-    let tokens =
-        init(s, &InitOptions { cells: vec!["cell-a".into()], robots, ..Default::default() }).unwrap().tokens;
+    let data = tempfile::tempdir().unwrap();
+    let (h, locator, tokens) = secured_cell_a(s, data.path(), &["panda-1", "panda-2"]).await;
     init(other.path(), &InitOptions { cells: vec!["cell-a".into()], ..Default::default() }).unwrap();
     std::fs::copy(other.path().join("ca.pem"), s.join("other-ca.pem")).unwrap();
-
-    let data = tempfile::tempdir().unwrap();
-    let mut c = dmp_tests::config(data.path());
-    c.cell = "cell-a".into();
-    dmp_tests::secure(&mut c, s);
-    let h = within("server start", start(c)).await.expect("server starts");
-    let locator = h.zenoh_locators.iter().find(|l| l.starts_with("tls/")).expect("a tls/ locator").clone();
 
     // The admin stores the robot's primitive (the robot may only read it).
     let admin_token = tokens.iter().find(|(n, _)| n == "admin").unwrap().1.clone();

@@ -8,11 +8,10 @@ use std::path::Path;
 use dmp_proto::keys::{obstacle_key, robot_state_key};
 use dmp_proto::zenoh_session::{SessionOptions, ZenohTls, session_config};
 use dmp_proto::{codec, v1};
-use dmp_server::access::init::{InitOptions, init};
-use dmp_server::run::{ServerHandle, start};
+use dmp_server::run::ServerHandle;
 use dmp_tests::within;
 
-use crate::until;
+use crate::{secured_cell_a, until};
 
 /// A peer connecting to `locator` with the certificate of `identity` (none: no certificate).
 async fn peer(set: &Path, locator: &str, identity: Option<&str>) -> zenoh::Result<zenoh::Session> {
@@ -62,15 +61,8 @@ fn state(id: &str) -> Vec<u8> {
 async fn each_zenoh_peer_does_only_what_its_role_may() {
     let set = tempfile::tempdir().unwrap();
     let s = set.path();
-    let options =
-        InitOptions { cells: vec!["cell-a".into()], robots: vec!["panda-1".into()], ..Default::default() };
-    init(s, &options).unwrap();
     let data = tempfile::tempdir().unwrap();
-    let mut c = dmp_tests::config(data.path());
-    c.cell = "cell-a".into();
-    dmp_tests::secure(&mut c, s);
-    let h = within("server start", start(c)).await.expect("server starts");
-    let locator = h.zenoh_locators.iter().find(|l| l.starts_with("tls/")).expect("a tls/ locator").clone();
+    let (h, locator, _) = secured_cell_a(s, data.path(), &["panda-1"]).await;
 
     // A peer without a certificate cannot even connect.
     assert!(within("open", peer(s, &locator, None)).await.is_err(), "connected without a certificate");
@@ -139,15 +131,8 @@ async fn the_zenoh_denial_matrix_holds_for_every_key_class_and_role() {
 
     let set = tempfile::tempdir().unwrap();
     let s = set.path();
-    let options =
-        InitOptions { cells: vec!["cell-a".into()], robots: vec!["panda-1".into()], ..Default::default() };
-    let tokens = init(s, &options).unwrap().tokens;
     let data = tempfile::tempdir().unwrap();
-    let mut c = dmp_tests::config(data.path());
-    c.cell = "cell-a".into();
-    dmp_tests::secure(&mut c, s);
-    let h = within("server start", start(c)).await.expect("server starts");
-    let locator = h.zenoh_locators.iter().find(|l| l.starts_with("tls/")).expect("a tls/ locator").clone();
+    let (h, locator, tokens) = secured_cell_a(s, data.path(), &["panda-1"]).await;
 
     // role: (obstacles of its cell, obstacles of another cell, robot states, reads the cell)
     let matrix = [
