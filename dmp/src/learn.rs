@@ -26,17 +26,7 @@ impl Demonstration {
     /// Checks and wraps the samples: at least 3, times finite and strictly increasing, every row of the same
     /// dimension `d >= 1` and finite.
     pub fn new(t: Vec<f64>, x: Vec<Vec<f64>>) -> Result<Self> {
-        if t.len() < 3 {
-            return Err(InvalidInput::new("demonstration.t", "needs at least 3 samples").into());
-        }
-        if x.len() != t.len() {
-            return Err(InvalidInput::new(
-                "demonstration.x",
-                format!("must have one row per sample time ({}), found {}", t.len(), x.len()),
-            )
-            .into());
-        }
-        check_times(&t)?;
+        check_samples(&t, x.len(), "demonstration.x", "row")?;
         let d = x[0].len();
         if d == 0 {
             return Err(InvalidInput::new("demonstration.x[0]", "must have at least one coordinate").into());
@@ -77,8 +67,18 @@ impl Demonstration {
     }
 }
 
-/// Checks the sample times of a demonstration: finite and strictly increasing (`demonstration.t[i]` at fault).
-pub(crate) fn check_times(t: &[f64]) -> Result<(), InvalidInput> {
+/// Checks the samples of a demonstration: at least 3 sample times, one `item` of `field` per time (`rows` of
+/// them), and times finite and strictly increasing (`demonstration.t[i]` at fault).
+pub(crate) fn check_samples(t: &[f64], rows: usize, field: &str, item: &str) -> Result<(), InvalidInput> {
+    if t.len() < 3 {
+        return Err(InvalidInput::new("demonstration.t", "needs at least 3 samples"));
+    }
+    if rows != t.len() {
+        return Err(InvalidInput::new(
+            field,
+            format!("must have one {item} per sample time ({}), found {rows}", t.len()),
+        ));
+    }
     for (i, ti) in t.iter().enumerate() {
         ensure_finite(|| format!("demonstration.t[{i}]"), *ti)?;
         if i > 0 && *ti <= t[i - 1] {

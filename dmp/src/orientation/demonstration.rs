@@ -3,8 +3,8 @@
 use nalgebra::UnitQuaternion;
 
 use super::quaternion::from_xyzw;
-use crate::error::{InvalidInput, Result};
-use crate::learn::check_times;
+use crate::error::Result;
+use crate::learn::check_samples;
 
 /// An orientation demonstration: at least 3 strictly increasing, finite sample times (any start, not necessarily
 /// uniform) and one unit quaternion per sample.
@@ -33,17 +33,7 @@ impl OrientationDemonstration {
     /// assert!(OrientationDemonstration::new(vec![0.0, 1.0], vec![[0.0, 0.0, 0.0, 1.0]; 2]).is_err());
     /// ```
     pub fn new(t: Vec<f64>, q: Vec<[f64; 4]>) -> Result<Self> {
-        if t.len() < 3 {
-            return Err(InvalidInput::new("demonstration.t", "needs at least 3 samples").into());
-        }
-        if q.len() != t.len() {
-            return Err(InvalidInput::new(
-                "demonstration.q",
-                format!("must have one quaternion per sample time ({}), found {}", t.len(), q.len()),
-            )
-            .into());
-        }
-        check_times(&t)?;
+        check_samples(&t, q.len(), "demonstration.q", "quaternion")?;
         let mut out: Vec<UnitQuaternion<f64>> = Vec::with_capacity(q.len());
         for (i, raw) in q.into_iter().enumerate() {
             let mut qi = from_xyzw(&format!("demonstration.q[{i}]"), raw)?;
