@@ -1,0 +1,282 @@
+"""`Client`: the server's gRPC services (primitives, motion, scene, server info) and the Zenoh obstacle publisher,
+for Python robot drivers, planners and perception nodes."""
+
+from __future__ import annotations
+
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
+
+import grpc
+
+from . import connect as conn
+from ._proto import motion, motion_grpc, primitives, primitives_grpc, scene, scene_grpc, server, server_grpc, types
+from .errors import ArgumentError, from_rpc
+from .obstacles import check_name, obstacle_to_dict, obstacle_to_proto
+from .stream import Stream
+from .values import number, rows, vector
+from .zenoh_pub import SUBSCRIBER_WAIT_S, ObstaclePublisher
+
+#: The server's address by default.
+DEFAULT_ADDRESS = "127.0.0.1:50051"
+
+#: How long a unary call may take by default, seconds.
+CALL_TIMEOUT_S = 60.0
+
+
+class Client:
+    """A client of the DMP cell's server.
+
+    `address` is `HOST:PORT`, `http://HOST:PORT` or `https://HOST:PORT`. A secured server (see the README, "Who
+    may steer what") wants TLS, as `dmpctl`'s flags: `tls_ca` (the CA that signed the server's certificate),
+    optionally `tls_cert` and `tls_key` (this client's certificate for mutual TLS: its common name names an
+    identity) and `server_name` (the name the server's certificate must have; default: the address's host); and
+    an identity: a bearer `token` (or `token_file`), sent with every call in the `authorization` metadata, or the
+    client certificate. `cell` is the cell of the scene requests and motions (None: the server's default).
+    `zenoh_config` is a stock Zenoh configuration file (`zenoh-perception.json5` of `access init`) for
+    `publish_obstacle`. Connecting waits at most `timeout` seconds; unary calls at most `call_timeout`.
+
+    Every failure raises `dmp_cell.DmpError` (with the gRPC `code` and the server's `reason`).
+    """
+
+    def __init__(
+        self,
+        address: str = DEFAULT_ADDRESS,
+        token: Optional[str] = None,
+        *,
+        token_file: Optional[conn.PathLike] = None,
+        tls_ca: Optional[conn.PathLike] = None,
+        tls_cert: Optional[conn.PathLike] = None,
+        tls_key: Optional[conn.PathLike] = None,
+        server_name: Optional[str] = None,
+        cell: Optional[str] = None,
+        zenoh_config: Optional[conn.PathLike] = None,
+        timeout: float = conn.CONNECT_TIMEOUT_S,
+        call_timeout: float = CALL_TIMEOUT_S,
+    ):
+        self._token = conn.read_token(token, token_file)
+        self.cell = check_name("cell", cell) if cell is not None else ""
+        self.zenoh_config = str(zenoh_config) if zenoh_config is not None else None
+        self.call_timeout = call_timeout
+        self._channel, self._target = conn.open_channel(
+            address, tls_ca=tls_ca, tls_cert=tls_cert, tls_key=tls_key, server_name=server_name, timeout=timeout
+        )
+        self._metadata = conn.metadata(self._token)
+        self._primitives = primitives_grpc.PrimitiveServiceStub(self._channel)
+        self._motion = motion_grpc.MotionServiceStub(self._channel)
+        self._scene = scene_grpc.SceneServiceStub(self._channel)
+        self._server = server_grpc.ServerServiceStub(self._channel)
+        self._publishers: Dict[tuple, ObstaclePublisher] = {}
+
+    # --- Lifetime ---------------------------------------------------------------------------------------------
+
+    def close(self) -> None:
+        """Closes the Zenoh sessions (gracefully: what was published is sent first) and the channel."""
+        publishers, self._publishers = self._publishers, {}
+        for p in publishers.values():
+            p.close()
+        self._channel.close()
+
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _call(self, method, request):
+        try:
+            return method(request, metadata=self._metadata, timeout=self.call_timeout)
+        except grpc.RpcError as e:
+            raise from_rpc(e) from None
+
+    def _cell(self, cell: Optional[str]) -> str:
+        return check_name("cell", cell) if cell is not None else self.cell
+
+    # --- Server -----------------------------------------------------------------------------------------------
+
+    def info(self) -> server.ServerInfo:
+        """How the server is set up (TLS, access control, its default cell, Zenoh locators, limits) and who this
+        client is to it."""
+        return self._call(self._server.GetInfo, server.GetInfoRequest())
+
+    # --- Primitives -------------------------------------------------------------------------------------------
+
+    def learn(
+        self,
+        robot: str,
+        name: str,
+        t: Sequence[float],
+        positions: Any,
+        *,
+        n_basis: int = 0,
+        k: Union[None, float, Sequence[float]] = None,
+        d: Union[None, float, Sequence[float]] = None,
+        alpha: float = 0.0,
+    ) -> types.PrimitiveRecord:
+        """Learns a primitive from one demonstration and stores it as the next version of `(robot, name)`; returns
+        the stored record once it is durable. `t` are the sample times (strictly increasing), `positions` one row
+        per sample (a list of lists or a 2-D numpy array). `n_basis`, `k`, `d` (one value or one per dimension)
+        and `alpha` default to the server's (N = 50, K = 1050, critical damping, alpha = 4)."""
+        times = vector("t", t)
+        flat, dim = rows("positions", positions)
+        if len(flat) // dim != len(times):
+            raise ArgumentError("positions", f"has {len(flat) // dim} rows, t has {len(times)} samples")
+        for i in range(1, len(times)):
+            if times[i] <= times[i - 1]:
+                raise ArgumentError(f"t[{i}]", "sample times must be strictly increasing")
+
+        def gains(field: str, v) -> List[float]:
+            if v is None:
+                return []
+            return [number(field, v)] if isinstance(v, (int, float)) else vector(field, v)
+
+        request = primitives.LearnRequest(
+            robot_id=robot,
+            name=name,
+            demonstration=types.Demonstration(t=times, positions=flat, dim=dim),
+            parameters=types.LearnParameters(
+                n_basis=int(n_basis), k=gains("k", k), d=gains("d", d), alpha=number("alpha", alpha)
+            ),
+        )
+        return self._call(self._primitives.Learn, request).record
+
+    def get_primitive(self, robot: str, name: str, version: int = 0) -> types.PrimitiveRecord:
+        """One primitive: `version` 0 is the latest."""
+        return self._call(self._primitives.Get, primitives.GetPrimitiveRequest(robot_id=robot, name=name,
+                                                                               version=version))
+
+    def list_primitives(self, robot: str) -> List[types.PrimitiveRecord]:
+        """The latest version of each of the robot's primitives, sorted by name (every page)."""
+        records: List[types.PrimitiveRecord] = []
+        token = ""
+        while True:
+            page = self._call(self._primitives.List, primitives.ListPrimitivesRequest(robot_id=robot,
+                                                                                      page_token=token))
+            records.extend(page.records)
+            # A token that does not move on would loop forever: the server's pages are sorted by name.
+            if not page.next_page_token or page.next_page_token <= token:
+                return records
+            token = page.next_page_token
+
+    def delete_primitive(self, robot: str, name: str) -> int:
+        """Deletes every version of `(robot, name)`; returns how many there were."""
+        return self._call(self._primitives.Delete, primitives.DeletePrimitiveRequest(robot_id=robot, name=name)
+                          ).versions_deleted
+
+    # --- Motion -----------------------------------------------------------------------------------------------
+
+    def stream(
+        self,
+        robot: str,
+        name: str,
+        goal: Optional[Sequence[float]] = None,
+        realtime: bool = False,
+        *,
+        start: Optional[Sequence[float]] = None,
+        tau: float = 0.0,
+        version: int = 0,
+        cell: Optional[str] = None,
+        ignore_scene: bool = False,
+        dt: float = 0.0,
+        segment_s: float = 0.0,
+        lookahead_s: float = 0.0,
+        max_duration_s: float = 0.0,
+        take_over: bool = False,
+        deadline_s: Optional[float] = None,
+    ) -> Stream:
+        """Executes the primitive `(robot, name)` (latest `version` by default) as a session, and returns the
+        `Stream`: iterate it for the setpoints in force (supersession applied), send it `set_goal`, `set_tau`,
+        `pause`, `resume` or `stop` meanwhile. `goal`, `start` and `tau` default to the primitive's; `realtime`
+        paces the segments (and the iteration) on the wall clock, otherwise they come as fast as they are read.
+        `dt`, `segment_s`, `lookahead_s` and `max_duration_s` default to the server's (1 ms, 10 ms, 50 ms, until
+        the goal); `take_over` ends another stream of the robot; `deadline_s` bounds the whole call."""
+        spec = motion.MotionSpec(
+            robot_id=robot,
+            primitive=name,
+            version=version,
+            start=vector("start", start) if start is not None else [],
+            goal=vector("goal", goal) if goal is not None else [],
+            tau=number("tau", tau),
+            ignore_scene=ignore_scene,
+            cell=self._cell(cell),
+        )
+        request = motion.ExecuteRequest(
+            motion=spec,
+            dt=number("dt", dt),
+            segment_s=number("segment_s", segment_s),
+            pacing=motion.PACING_REALTIME if realtime else motion.PACING_AS_FAST_AS_READ,
+            lookahead_s=number("lookahead_s", lookahead_s),
+            max_duration_s=number("max_duration_s", max_duration_s),
+            take_over=take_over,
+        )
+        return Stream(self._motion, request, self._metadata, realtime, deadline_s)
+
+    # --- Scene over gRPC --------------------------------------------------------------------------------------
+
+    def put_obstacle(self, obstacle: Mapping[str, Any], cell: Optional[str] = None) -> int:
+        """Adds or replaces an obstacle (a dict, see `dmp_cell.obstacles`) over gRPC; returns the scene's
+        version."""
+        request = scene.PutObstacleRequest(obstacle=obstacle_to_proto(obstacle), cell=self._cell(cell))
+        return self._call(self._scene.PutObstacle, request).scene_version
+
+    def delete_obstacle(self, obstacle_id: str, cell: Optional[str] = None) -> bool:
+        """Removes an obstacle over gRPC; False when there was none of that id."""
+        request = scene.DeleteObstacleRequest(id=obstacle_id, cell=self._cell(cell))
+        return self._call(self._scene.DeleteObstacle, request).changed
+
+    def list_obstacles(self, cell: Optional[str] = None) -> Dict[str, Any]:
+        """The cell's scene, as `dmpctl scene list` prints it: `{"scene_version": .., "obstacles": [dicts]}`."""
+        snapshot = self._call(self._scene.ListObstacles, scene.ListObstaclesRequest(cell=self._cell(cell)))
+        return {"scene_version": snapshot.scene_version,
+                "obstacles": [obstacle_to_dict(o) for o in snapshot.obstacles]}
+
+    # --- Scene over Zenoh -------------------------------------------------------------------------------------
+
+    def _zenoh_place(self, cell: Optional[str], zenoh_connect: Union[None, str, Sequence[str]]):
+        """The cell and the Zenoh endpoints of a publication: the ones given, else the client's cell or the
+        server's default cell, and the server's loopback Zenoh locators when the server is on this host and no
+        Zenoh configuration file names endpoints (as dmpctl)."""
+        connect = [zenoh_connect] if isinstance(zenoh_connect, str) else list(zenoh_connect or [])
+        cell = self._cell(cell)
+        need_locators = not connect and self.zenoh_config is None
+        if not cell or need_locators:
+            info = self.info()
+            cell = cell or info.cell or "default"
+            if need_locators and conn.is_loopback(self._target.host):
+                connect = [
+                    loc for loc in info.zenoh_locators
+                    if "/" in loc and conn.is_loopback(conn.Target(loc.split("/", 1)[1], False).host)
+                ]
+        return cell, connect
+
+    def _publisher(self, connect: List[str]) -> ObstaclePublisher:
+        key = (tuple(connect), self.zenoh_config)
+        if key not in self._publishers:
+            self._publishers[key] = ObstaclePublisher(connect, self.zenoh_config)
+        return self._publishers[key]
+
+    def publish_obstacle(
+        self,
+        cell: Optional[str],
+        obstacle: Mapping[str, Any],
+        zenoh_connect: Union[None, str, Sequence[str]] = None,
+        *,
+        wait_s: float = SUBSCRIBER_WAIT_S,
+    ) -> str:
+        """Publishes an obstacle dict over Zenoh, as a perception node, on `dmp/<cell>/obstacles/<id>` (returned).
+        `cell` None means the client's cell, else the server's default. `zenoh_connect` (an endpoint or a list,
+        e.g. `tls/127.0.0.1:7447`) defaults to the endpoints of `zenoh_config`, else to the server's own loopback
+        locators (see `info()`). Waits at most `wait_s` for the server's subscriber. The Zenoh session stays open
+        for the next publications until `close`."""
+        cell, connect = self._zenoh_place(cell, zenoh_connect)
+        return self._publisher(connect).put(cell, obstacle, wait_s)
+
+    def unpublish_obstacle(
+        self,
+        cell: Optional[str],
+        obstacle_id: str,
+        zenoh_connect: Union[None, str, Sequence[str]] = None,
+        *,
+        wait_s: float = SUBSCRIBER_WAIT_S,
+    ) -> str:
+        """Publishes the deletion of an obstacle over Zenoh; returns its key."""
+        cell, connect = self._zenoh_place(cell, zenoh_connect)
+        return self._publisher(connect).delete(cell, obstacle_id, wait_s)

@@ -1,0 +1,145 @@
+"""The setpoints in force after a stream of segments: supersession, as the Rust client's `Setpoints`.
+
+The schema's rule (`motion.proto`, `Segment`): segment `k + 1` supersedes the points of earlier segments from its
+`start_time` on, so the setpoint in force at time `t` is the one of the latest segment whose `start_time <= t`.
+`Setpoints.push` applies it as segments arrive: each one cuts the rows at and after its start time (a later segment
+replaces the not-yet-executed tail of earlier ones), then appends its own points. A segment without points (a final
+status) supersedes nothing.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from typing import List, NamedTuple, Optional, Tuple
+
+from ._proto import motion, types
+from .errors import ProtocolError
+
+#: Two times closer than this fraction of `dt` are the same row (times are computed as `start + k dt`).
+SAME_TIME = 1e-6
+
+#: The statuses that end a run: its last segment carries one of them.
+FINAL_STATUSES = ("GOAL_REACHED", "STOPPED")
+
+
+class Setpoint(NamedTuple):
+    """One setpoint: run time `t` (seconds since the start of the run), position, velocity dx/dt and acceleration
+    (one value per dimension), the `sequence` of the segment it came from, and in real-time pacing the wall clock
+    (Unix seconds) at which it is due (None as fast as read)."""
+
+    t: float
+    position: Tuple[float, ...]
+    velocity: Tuple[float, ...]
+    acceleration: Tuple[float, ...]
+    sequence: int
+    due_unix_s: Optional[float] = None
+
+
+class ServerWarning(NamedTuple):
+    """What the server could not use or had to change, and why; the run went on. `kind` is the name of
+    `dmp.v1.Warning.Kind` (`OBSTACLE_IGNORED`, `COMMAND_REJECTED`, `SCENE_STALE`, `STATE_DROPPED`,
+    `COMPUTE_OVER_BUDGET`), `field` the request field at fault, `obstacle_id` the obstacle concerned, `sequence` the
+    segment that carried it (None for a plan)."""
+
+    kind: str
+    field: str
+    reason: str
+    obstacle_id: str
+    sequence: Optional[int] = None
+
+    def __str__(self) -> str:
+        obstacle = f" (obstacle `{self.obstacle_id}`)" if self.obstacle_id else ""
+        field = f" {self.field}:" if self.field else ""
+        return f"{self.kind}{obstacle}{field} {self.reason}"
+
+
+def warning_of(w: types.Warning, sequence: Optional[int] = None) -> ServerWarning:
+    try:
+        kind = types.Warning.Kind.Name(w.kind)
+    except ValueError:
+        kind = str(w.kind)
+    return ServerWarning(kind, w.field, w.reason, w.obstacle_id, sequence)
+
+
+def status_name(status: int) -> str:
+    """The name of a `dmp.v1.SegmentStatus` value (`RUNNING`, `GOAL_REACHED`, ...)."""
+    try:
+        return motion.SegmentStatus.Name(status)
+    except ValueError:
+        return f"UNKNOWN({status})"
+
+
+class Setpoints:
+    """The setpoints in force after the segments pushed so far, as parallel lists: `t`, and per row `positions`,
+    `velocities`, `accelerations` (tuples of `dim` values) and `sequences` (the segment each row came from)."""
+
+    def __init__(self) -> None:
+        self.dim: Optional[int] = None
+        self.t: List[float] = []
+        self.positions: List[Tuple[float, ...]] = []
+        self.velocities: List[Tuple[float, ...]] = []
+        self.accelerations: List[Tuple[float, ...]] = []
+        self.sequences: List[int] = []
+        self.segments = 0
+        self.last_status: Optional[str] = None
+        #: Rows of earlier segments that later ones replaced.
+        self.rows_superseded = 0
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def push(self, seg: motion.Segment) -> int:
+        """Applies one segment; returns the index of its first row (where the cut was made). A segment that is
+        inconsistent (a value count that is not `points x dim`, a dimension other than the earlier segments', a bad
+        `dt`) raises `ProtocolError` and changes nothing."""
+        d = seg.dim
+
+        def bad(message: str) -> ProtocolError:
+            return ProtocolError(f"segment {seg.sequence}: {message}")
+
+        if d == 0:
+            if seg.positions or seg.velocities or seg.accelerations:
+                raise bad("dim is 0 but it has points")
+            self._note(seg)
+            return len(self.t)
+        n = len(seg.positions)
+        rows = n // d
+        for name, values in (("positions", seg.positions), ("velocities", seg.velocities),
+                             ("accelerations", seg.accelerations)):
+            if len(values) != rows * d or n % d:
+                raise bad(f"{name} has {len(values)} values, expected points x dim = {rows} x {d}")
+        if self.dim is not None and self.dim != d:
+            raise bad(f"dim is {d}, earlier segments had {self.dim}")
+        if rows == 0:
+            self._note(seg)
+            return len(self.t)
+        if not (math.isfinite(seg.dt) and seg.dt > 0 and math.isfinite(seg.start_time)):
+            raise bad(f"start_time {seg.start_time} and dt {seg.dt} must be finite, dt > 0")
+        self.dim = d
+        keep = bisect.bisect_left(self.t, seg.start_time - SAME_TIME * seg.dt)
+        self.rows_superseded += len(self.t) - keep
+        for column in (self.t, self.positions, self.velocities, self.accelerations, self.sequences):
+            del column[keep:]
+        x, v, a = list(seg.positions), list(seg.velocities), list(seg.accelerations)
+        for k in range(rows):
+            r = slice(k * d, (k + 1) * d)
+            self.t.append(seg.start_time + k * seg.dt)
+            self.positions.append(tuple(x[r]))
+            self.velocities.append(tuple(v[r]))
+            self.accelerations.append(tuple(a[r]))
+            self.sequences.append(seg.sequence)
+        self._note(seg)
+        return keep
+
+    def _note(self, seg: motion.Segment) -> None:
+        self.segments += 1
+        self.last_status = status_name(seg.status)
+
+    def setpoint(self, i: int, due_unix_s: Optional[float] = None) -> Setpoint:
+        """Row `i` as a `Setpoint`."""
+        return Setpoint(self.t[i], self.positions[i], self.velocities[i], self.accelerations[i], self.sequences[i],
+                        due_unix_s)
+
+    def __iter__(self):
+        return (self.setpoint(i) for i in range(len(self.t)))
