@@ -11,7 +11,7 @@ supersession applied, change the goal mid-stream, and publish obstacles over Zen
 The gRPC stubs are generated from the repository's `proto/` when the package is built; `dmp_cell.pb` holds them.
 """
 
-from . import _proto as pb
+from . import pb
 from .client import Client
 from .errors import ArgumentError, ConnectError, DmpError, ProtocolError, StatusError, ZenohError
 from .obstacles import check_obstacle, obstacle_to_dict, obstacle_to_proto

@@ -8,7 +8,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 import grpc
 
 from . import connect as conn
-from ._proto import motion, motion_grpc, primitives, primitives_grpc, scene, scene_grpc, server, server_grpc, types
+from .pb import motion, motion_grpc, primitives, primitives_grpc, scene, scene_grpc, server, server_grpc, types
 from .errors import ArgumentError, from_rpc
 from .obstacles import check_name, obstacle_to_dict, obstacle_to_proto
 from .stream import Stream

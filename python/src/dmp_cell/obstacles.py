@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from typing import Any, Dict, List, Mapping
 
-from ._proto import types
+from .pb import types
 from .errors import ArgumentError
 from .values import number, vector
 

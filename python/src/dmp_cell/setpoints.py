@@ -13,7 +13,7 @@ import bisect
 import math
 from typing import List, NamedTuple, Optional, Tuple
 
-from ._proto import motion, types
+from .pb import motion, types
 from .errors import ProtocolError
 
 #: Two times closer than this fraction of `dt` are the same row (times are computed as `start + k dt`).

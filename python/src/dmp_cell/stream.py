@@ -25,7 +25,7 @@ from typing import Any, Iterator, List, Optional, Sequence
 
 import grpc
 
-from ._proto import motion, types
+from .pb import motion, types
 from .errors import DmpError, from_rpc
 from .setpoints import SAME_TIME, ServerWarning, Setpoint, Setpoints, warning_of
 from .values import vector

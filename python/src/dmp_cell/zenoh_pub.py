@@ -62,6 +62,12 @@ def session_config(connect: Sequence[str], config_file: Optional[str]) -> "zenoh
     return config
 
 
+def _matching(publisher) -> bool:
+    """Whether a subscriber matches the publisher's key expression (zenoh returns a `MatchingStatus`)."""
+    status = publisher.matching_status
+    return bool(getattr(status, "matching", status))
+
+
 class ObstaclePublisher:
     """A Zenoh peer that publishes obstacles, of any cell."""
 
@@ -97,7 +103,7 @@ class ObstaclePublisher:
     def wait_for_subscriber(self, cell: str, timeout: float = SUBSCRIBER_WAIT_S) -> None:
         """Waits until a subscriber of the cell's obstacles (the server) is known, at most `timeout` seconds."""
         probe, matched = self._probe(check_name("cell", cell))
-        if probe.matching_status or matched.wait(timeout) or probe.matching_status:
+        if _matching(probe) or matched.wait(timeout) or _matching(probe):
             return
         raise ZenohError(
             f"no subscriber of dmp/{cell}/obstacles/* after {timeout} s: is the server running with Zenoh on, "
