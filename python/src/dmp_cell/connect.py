@@ -26,6 +26,12 @@ CONNECT_TIMEOUT_S = 5.0
 #: Largest message sent or received (a 1,000,000-step 3-D plan is ~75 MB), as the Rust client.
 MAX_MESSAGE_BYTES = 256 * 1024 * 1024
 
+#: What a stream may have received and not yet handed over, bytes. With grpcio's probing of the bandwidth-delay
+#: product (on by default) the receive window grows until a whole run read "as fast as read" sits in the
+#: transport, and a goal change then arrives after the server has finished; kept small, the server stays close to
+#: the setpoint being read.
+STREAM_LOOKAHEAD_BYTES = 16 * 1024
+
 
 @dataclass(frozen=True)
 class Target:
@@ -114,6 +120,8 @@ def open_channel(
     options: List[Tuple[str, object]] = [
         ("grpc.max_receive_message_length", MAX_MESSAGE_BYTES),
         ("grpc.max_send_message_length", MAX_MESSAGE_BYTES),
+        ("grpc.http2.bdp_probe", 0),
+        ("grpc.http2.lookahead_bytes", STREAM_LOOKAHEAD_BYTES),
     ]
     if target.tls:
         credentials = grpc.ssl_channel_credentials(

@@ -27,12 +27,20 @@ import grpc
 
 from .pb import motion, types
 from .errors import DmpError, from_rpc
-from .setpoints import SAME_TIME, ServerWarning, Setpoint, Setpoints, warning_of
+from .setpoints import ServerWarning, Setpoint, Setpoints, warning_of
 from .values import vector
 
 log = logging.getLogger("dmp_cell")
 
 _END = object()
+
+#: Rows closer in time than this are the same row (a superseding segment may start at the last row yielded).
+_SAME_ROW_S = 1e-9
+
+#: Segments received and not yet applied, at most: a reader that falls behind holds the server back (its stream
+#: is bounded too, and so is the transport's window: `connect.STREAM_LOOKAHEAD_BYTES`) rather than growing memory,
+#: so that as fast as read a command applies close to the setpoint being read.
+QUEUE_SEGMENTS = 16
 
 
 class Stream:
@@ -50,7 +58,7 @@ class Stream:
         self.scene_version = 0
         self.scene_stale = False
         self._requests: "queue.Queue[object]" = queue.Queue()
-        self._segments: "queue.Queue[object]" = queue.Queue()
+        self._segments: "queue.Queue[object]" = queue.Queue(QUEUE_SEGMENTS)
         self._closing = False
         self._ended = False
         self._iterating = False
@@ -94,7 +102,13 @@ class Stream:
         self._closing = True
         self._call.cancel()
         self._requests.put(_END)
-        self._reader.join(timeout=5)
+        # The reader may wait for room in the queue: what it holds is dropped.
+        deadline = time.monotonic() + 10.0
+        while self._reader.is_alive() and time.monotonic() < deadline:
+            try:
+                self._segments.get(timeout=0.05)
+            except queue.Empty:
+                pass
 
     def __enter__(self) -> "Stream":
         return self
@@ -156,11 +170,13 @@ class Stream:
             self.warnings.append(warning)
             log.warning("%s: segment %d: %s", self.robot_id, seg.sequence, warning)
 
-    def _next_item(self, timeout: Optional[float]) -> object:
+    def _next_item(self, timeout: Optional[float]) -> bool:
+        """Applies the next item the reader received, waiting at most `timeout` (None: until one comes; 0: only
+        one already there); False when none came. An error of the call is raised."""
         try:
-            item = self._segments.get(timeout=timeout)
+            item = self._segments.get(timeout=timeout) if timeout != 0 else self._segments.get_nowait()
         except queue.Empty:
-            return None
+            return False
         if item is _END:
             self._ended = True
         elif isinstance(item, DmpError):
@@ -168,7 +184,7 @@ class Stream:
             raise item
         else:
             self._apply(item)
-        return item
+        return True
 
     def __iter__(self) -> Iterator[Setpoint]:
         if self._iterating:
@@ -180,29 +196,33 @@ class Stream:
         s = self.setpoints
         last_t = -math.inf
         while True:
-            i = bisect.bisect_right(s.t, last_t + SAME_TIME * 1e-3) if s.t else 0
+            # Every segment already received first: one may supersede the next setpoint.
+            while not self._ended and self._next_item(0):
+                pass
+            # The next row after the last one yielded (a superseding segment never sends time backwards).
+            i = bisect.bisect_right(s.t, last_t + _SAME_ROW_S)
             if i < len(s.t):
                 if not self.realtime:
-                    if self._ended or s.t[i] < self._latest_start - SAME_TIME * 1e-3:
+                    # As fast as read: final once a later segment starts after it, or the stream has ended.
+                    if self._ended or s.t[i] < self._latest_start - _SAME_ROW_S:
                         last_t = s.t[i]
                         yield s.setpoint(i)
                         continue
                 else:
-                    due = (self._clock_offset or 0.0) + s.t[i] if self._clock_offset is not None else None
+                    # Real time: final when it is due.
+                    due = None if self._clock_offset is None else self._clock_offset + s.t[i]
                     wait = 0.0 if due is None else due - time.time()
                     if wait <= 0:
                         last_t = s.t[i]
                         yield s.setpoint(i, due)
                         continue
                     if self._ended:
-                        time.sleep(wait)
+                        time.sleep(wait)  # the pacing itself: nothing more can supersede it
                     else:
                         self._next_item(wait)
                     continue
             elif self._ended:
                 return
-            if self._ended:
-                continue
             self._next_item(None)
 
     def collect(self) -> Setpoints:
