@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 import math
+import os
 import sys
 from pathlib import Path
+
+# grpcio logs failed TLS handshakes at info level; some tests fail them on purpose.
+os.environ.setdefault("GRPC_VERBOSITY", "ERROR")
 
 import pytest
 

@@ -29,7 +29,7 @@ def test_the_server_name_can_be_given(server):
     with server.client("planner", server_name="localhost") as c:
         assert c.info().identity == "planner"
     with pytest.raises(dmp_cell.ConnectError):
-        server.client("planner", server_name="elsewhere.example", timeout=2.0)
+        server.client("planner", server_name="elsewhere.example", timeout=1.0)
 
 
 def test_without_an_identity_calls_are_unauthenticated(server):
@@ -46,12 +46,12 @@ def test_without_an_identity_calls_are_unauthenticated(server):
 def test_tls_needs_the_right_ca(server, tmp_path):
     # Plaintext against the TLS server, and TLS trusting another cell's CA, do not connect.
     with pytest.raises(dmp_cell.ConnectError):
-        dmp_cell.Client(server.address, token_file=server.token("planner"), timeout=2.0)
+        dmp_cell.Client(server.address, token_file=server.token("planner"), timeout=1.0)
     other = tmp_path / "other"
     subprocess.run([str(server_binary()), "access", "init", str(other), "--cell", "cell-b"], check=True,
                    capture_output=True, timeout=60)
     with pytest.raises(dmp_cell.ConnectError):
-        server.client("planner", tls_ca=other / "ca.pem", timeout=2.0)
+        server.client("planner", tls_ca=other / "ca.pem", timeout=1.0)
 
 
 def test_bad_options_are_refused_before_connecting(server):

@@ -10,7 +10,7 @@ import grpc
 from . import connect as conn
 from .pb import motion, motion_grpc, primitives, primitives_grpc, scene, scene_grpc, server, server_grpc, types
 from .errors import ArgumentError, from_rpc
-from .obstacles import check_name, obstacle_to_dict, obstacle_to_proto
+from .obstacles import check_name, check_obstacle, obstacle_to_dict, obstacle_to_proto
 from .stream import Stream
 from .values import number, rows, vector
 from .zenoh_pub import SUBSCRIBER_WAIT_S, ObstaclePublisher
@@ -266,8 +266,9 @@ class Client:
         e.g. `tls/127.0.0.1:7447`) defaults to the endpoints of `zenoh_config`, else to the server's own loopback
         locators (see `info()`). Waits at most `wait_s` for the server's subscriber. The Zenoh session stays open
         for the next publications until `close`."""
+        checked = check_obstacle(obstacle)
         cell, connect = self._zenoh_place(cell, zenoh_connect)
-        return self._publisher(connect).put(cell, obstacle, wait_s)
+        return self._publisher(connect).put(cell, checked, wait_s)
 
     def unpublish_obstacle(
         self,
@@ -278,5 +279,6 @@ class Client:
         wait_s: float = SUBSCRIBER_WAIT_S,
     ) -> str:
         """Publishes the deletion of an obstacle over Zenoh; returns its key."""
+        check_name("id", obstacle_id)
         cell, connect = self._zenoh_place(cell, zenoh_connect)
         return self._publisher(connect).delete(cell, obstacle_id, wait_s)
