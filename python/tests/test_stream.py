@@ -110,3 +110,32 @@ def test_stop_ends_the_stream_at_rest(server, learned):
     assert s.status == "STOPPED"
     assert norm(s.setpoints.velocities[-1]) < 0.05
     assert norm([a - b for a, b in zip(s.setpoints.positions[-1], learned.primitive.goal)]) > 0.1
+
+
+def test_a_plan_is_the_whole_trajectory_at_once(server, learned):
+    goal = [0.9, 0.4]
+    with server.client(ROBOT) as c:
+        plan = c.plan(ROBOT, "reach", goal=goal, dt=0.002)
+        with c.stream(ROBOT, "reach", goal=goal, dt=0.002, deadline_s=DEADLINE_S) as s:
+            streamed = s.collect()
+    assert not plan.collisions and not plan.stalled and not plan.warnings
+    sps = list(plan.setpoints)
+    assert sps[-1].t == pytest.approx(1.2, abs=2e-3)  # 1.2 tau
+    assert norm([a - b for a, b in zip(sps[-1].position, goal)]) < 2e-2
+    check_continuous(sps, 0.002)
+    # The plan and the stream are the same motion, point for point.
+    n = min(len(sps), len(streamed))
+    assert n > 500
+    for k in range(n):
+        assert plan.setpoints.positions[k] == pytest.approx(streamed.positions[k], abs=1e-9)
+
+
+def test_measured_states_are_reported_and_a_stale_one_is_dropped(server, learned):
+    with server.client(ROBOT) as c, c.stream(ROBOT, "reach", deadline_s=DEADLINE_S) as s:
+        for i, sp in enumerate(s):
+            if i == 100:
+                s.report_state(sp.position, sp.velocity)
+            if i == 200:
+                s.report_state(sp.position, sp.velocity, stamp_unix_s=time.time() - 3600.0)
+    assert s.status == "GOAL_REACHED"
+    assert [(w.kind, w.field) for w in s.warnings] == [("STATE_DROPPED", "state.stamp_unix_s")], s.warnings

@@ -12,7 +12,7 @@ The gRPC stubs are generated from the repository's `proto/` when the package is 
 """
 
 from . import pb
-from .client import Client
+from .client import Client, Plan
 from .errors import ArgumentError, ConnectError, DmpError, ProtocolError, StatusError, ZenohError
 from .obstacles import check_obstacle, obstacle_to_dict, obstacle_to_proto
 from .setpoints import FINAL_STATUSES, ServerWarning, Setpoint, Setpoints
@@ -24,6 +24,7 @@ __all__ = [
     "ConnectError",
     "DmpError",
     "FINAL_STATUSES",
+    "Plan",
     "ProtocolError",
     "Setpoint",
     "Setpoints",

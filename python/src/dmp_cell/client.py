@@ -3,7 +3,7 @@ for Python robot drivers, planners and perception nodes."""
 
 from __future__ import annotations
 
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Union
 
 import grpc
 
@@ -11,9 +11,21 @@ from . import connect as conn
 from .pb import motion, motion_grpc, primitives, primitives_grpc, scene, scene_grpc, server, server_grpc, types
 from .errors import ArgumentError, from_rpc
 from .obstacles import check_name, check_obstacle, obstacle_to_dict, obstacle_to_proto
+from .setpoints import ServerWarning, Setpoints, warning_of
 from .stream import Stream
 from .values import number, rows, vector
 from .zenoh_pub import SUBSCRIBER_WAIT_S, ObstaclePublisher
+
+class Plan(NamedTuple):
+    """A whole trajectory (`Client.plan`): its setpoints, the obstacles it touched, whether it stalled away from
+    the goal, the server's warnings, and the scene version it was computed with."""
+
+    setpoints: Setpoints
+    collisions: List[str]
+    stalled: bool
+    warnings: List[ServerWarning]
+    scene_version: int
+
 
 #: The server's address by default.
 DEFAULT_ADDRESS = "127.0.0.1:50051"
@@ -163,6 +175,46 @@ class Client:
 
     # --- Motion -----------------------------------------------------------------------------------------------
 
+    def plan(
+        self,
+        robot: str,
+        name: str,
+        goal: Optional[Sequence[float]] = None,
+        *,
+        start: Optional[Sequence[float]] = None,
+        tau: float = 0.0,
+        version: int = 0,
+        cell: Optional[str] = None,
+        ignore_scene: bool = False,
+        dt: float = 0.0,
+        duration: float = 0.0,
+    ) -> Plan:
+        """The whole trajectory of the primitive `(robot, name)` at once, around the cell's obstacles: its
+        setpoints, the contacts met, whether it stalled, the server's warnings. `dt` defaults to 1 ms, `duration`
+        to 1.2 tau."""
+        request = motion.PlanRequest(
+            motion=self._motion_spec(robot, name, goal, start, tau, version, cell, ignore_scene),
+            dt=number("dt", dt),
+            duration=number("duration", duration),
+        )
+        r = self._call(self._motion.Plan, request)
+        setpoints = Setpoints()
+        setpoints.push(r.trajectory)
+        return Plan(setpoints, list(r.collisions), r.stalled, [warning_of(w) for w in r.warnings],
+                    r.trajectory.scene_version)
+
+    def _motion_spec(self, robot, name, goal, start, tau, version, cell, ignore_scene) -> motion.MotionSpec:
+        return motion.MotionSpec(
+            robot_id=robot,
+            primitive=name,
+            version=version,
+            start=vector("start", start) if start is not None else [],
+            goal=vector("goal", goal) if goal is not None else [],
+            tau=number("tau", tau),
+            ignore_scene=ignore_scene,
+            cell=self._cell(cell),
+        )
+
     def stream(
         self,
         robot: str,
@@ -188,18 +240,8 @@ class Client:
         paces the segments (and the iteration) on the wall clock, otherwise they come as fast as they are read.
         `dt`, `segment_s`, `lookahead_s` and `max_duration_s` default to the server's (1 ms, 10 ms, 50 ms, until
         the goal); `take_over` ends another stream of the robot; `deadline_s` bounds the whole call."""
-        spec = motion.MotionSpec(
-            robot_id=robot,
-            primitive=name,
-            version=version,
-            start=vector("start", start) if start is not None else [],
-            goal=vector("goal", goal) if goal is not None else [],
-            tau=number("tau", tau),
-            ignore_scene=ignore_scene,
-            cell=self._cell(cell),
-        )
         request = motion.ExecuteRequest(
-            motion=spec,
+            motion=self._motion_spec(robot, name, goal, start, tau, version, cell, ignore_scene),
             dt=number("dt", dt),
             segment_s=number("segment_s", segment_s),
             pacing=motion.PACING_REALTIME if realtime else motion.PACING_AS_FAST_AS_READ,
