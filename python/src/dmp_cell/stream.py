@@ -28,7 +28,7 @@ import grpc
 from .pb import motion, types
 from .errors import DmpError, from_rpc
 from .setpoints import ServerWarning, Setpoint, Setpoints, warning_of
-from .values import vector
+from .values import number, vector
 
 log = logging.getLogger("dmp_cell")
 
@@ -129,7 +129,7 @@ class Stream:
 
     def set_tau(self, tau: float) -> None:
         """Changes tau (larger is slower), from the current state."""
-        self._send(motion.SessionRequest(set_tau=motion.SetTau(tau=float(tau))))
+        self._send(motion.SessionRequest(set_tau=motion.SetTau(tau=number("tau", tau))))
 
     def pause(self) -> None:
         """Holds position."""
