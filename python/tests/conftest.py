@@ -25,6 +25,14 @@ def server(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
+def plain_server(tmp_path_factory):
+    """The server on its defaults: plaintext on loopback, no access control."""
+    s = srv.start(tmp_path_factory.mktemp("dmp-server-plain"), secured=False)
+    yield s
+    s.stop()
+
+
+@pytest.fixture(scope="session")
 def demonstration():
     """A minimum-jerk reach from (0, 0) to (1, 0.5) in 1 s, 1001 samples: times and rows."""
     t = [i / 1000 for i in range(1001)]

@@ -63,7 +63,7 @@ class Server:
 
     process: subprocess.Popen
     address: str
-    set_dir: Path
+    set_dir: Optional[Path]
     log: Path
     zenoh_locator: str
 
@@ -71,7 +71,9 @@ class Server:
         return self.set_dir / f"{identity}.token"
 
     def client(self, identity: Optional[str] = "planner", **options) -> dmp_cell.Client:
-        """A client over TLS with the identity's token (None: no token)."""
+        """A client over TLS with the identity's token (None: no token); a plain one to an unsecured server."""
+        if self.set_dir is None:
+            return dmp_cell.Client(self.address, **options)
         options.setdefault("tls_ca", self.set_dir / "ca.pem")
         if identity is not None:
             options.setdefault("token_file", self.token(identity))
@@ -90,14 +92,25 @@ class Server:
                 self.process.wait(timeout=STOP_S)
 
 
-def start(workdir: Path, attempts: int = 3) -> Server:
-    """`access init` into `workdir/set`, then the server; retried on another port if the port was taken."""
+def start(workdir: Path, secured: bool = True, attempts: int = 3) -> Server:
+    """`access init` into `workdir/set`, then the server secured by it (`secured=False`: the server on its
+    defaults, plaintext gRPC and Zenoh on loopback without access control, in the cell `default`); retried on
+    another port if the port was taken."""
     binary = server_binary()
     set_dir = workdir / "set"
-    subprocess.run(
-        [str(binary), "access", "init", str(set_dir), "--cell", CELL, "--robot", ROBOT],
-        check=True, capture_output=True, timeout=START_S,
-    )
+    if secured:
+        subprocess.run(
+            [str(binary), "access", "init", str(set_dir), "--cell", CELL, "--robot", ROBOT],
+            check=True, capture_output=True, timeout=START_S,
+        )
+    security = [
+        "--cell", CELL,
+        "--zenoh-listen", "tls/127.0.0.1:0",
+        "--access", str(set_dir / "access.toml"),
+        "--tls-cert", str(set_dir / "server.pem"),
+        "--tls-key", str(set_dir / "server.key"),
+        "--tls-client-ca", str(set_dir / "ca.pem"),
+    ] if secured else ["--zenoh-listen", "tcp/127.0.0.1:0"]
     last = ""
     for attempt in range(attempts):
         port = free_port()
@@ -106,25 +119,20 @@ def start(workdir: Path, attempts: int = 3) -> Server:
             str(binary),
             "--grpc-addr", f"127.0.0.1:{port}",
             "--data-dir", str(workdir / f"data-{attempt}"),
-            "--cell", CELL,
-            "--zenoh-listen", "tls/127.0.0.1:0",
             "--zenoh-no-multicast",
-            "--access", str(set_dir / "access.toml"),
-            "--tls-cert", str(set_dir / "server.pem"),
-            "--tls-key", str(set_dir / "server.key"),
-            "--tls-client-ca", str(set_dir / "ca.pem"),
-        ]
+        ] + security
         env = dict(os.environ, RUST_LOG=os.environ.get("RUST_LOG", "info"))
         with open(log, "wb") as out:
             process = subprocess.Popen(args, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                        env=env)
-        server = Server(process, f"127.0.0.1:{port}", set_dir, log, "")
+        server = Server(process, f"127.0.0.1:{port}", set_dir if secured else None, log, "")
         deadline = time.monotonic() + START_S
         while process.poll() is None and time.monotonic() < deadline:
             try:
                 with server.client("admin", timeout=1.0) as c:
                     info = c.info()
-                server.zenoh_locator = next(loc for loc in info.zenoh_locators if loc.startswith("tls/"))
+                scheme = "tls/" if secured else "tcp/"
+                server.zenoh_locator = next(loc for loc in info.zenoh_locators if loc.startswith(scheme))
                 return server
             except dmp_cell.DmpError:
                 time.sleep(0.05)
