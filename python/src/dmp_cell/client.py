@@ -3,6 +3,7 @@ for Python robot drivers, planners and perception nodes."""
 
 from __future__ import annotations
 
+import threading
 from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Union
 
 import grpc
@@ -77,12 +78,14 @@ class Client:
         self._scene = scene_grpc.SceneServiceStub(self._channel)
         self._server = server_grpc.ServerServiceStub(self._channel)
         self._publishers: Dict[tuple, ObstaclePublisher] = {}
+        self._publishers_lock = threading.Lock()
 
     # --- Lifetime ---------------------------------------------------------------------------------------------
 
     def close(self) -> None:
         """Closes the Zenoh sessions (gracefully: what was published is sent first) and the channel."""
-        publishers, self._publishers = self._publishers, {}
+        with self._publishers_lock:
+            publishers, self._publishers = self._publishers, {}
         for p in publishers.values():
             p.close()
         self._channel.close()
@@ -291,9 +294,10 @@ class Client:
 
     def _publisher(self, connect: List[str]) -> ObstaclePublisher:
         key = (tuple(connect), self.zenoh_config)
-        if key not in self._publishers:
-            self._publishers[key] = ObstaclePublisher(connect, self.zenoh_config)
-        return self._publishers[key]
+        with self._publishers_lock:
+            if key not in self._publishers:
+                self._publishers[key] = ObstaclePublisher(connect, self.zenoh_config)
+            return self._publishers[key]
 
     def publish_obstacle(
         self,
