@@ -14,7 +14,8 @@ def test_a_plain_client_learns_streams_and_publishes_with_no_options(plain_serve
             last = list(s)[-1]
         assert s.status == "GOAL_REACHED"
         assert all(abs(a - b) < 1e-2 for a, b in zip(last.position, rows[-1])), last
-        key = c.publish_obstacle(None, {"id": "plain-box", "center": [2.0, 2.0], "semi_axes": [0.1, 0.1]})
+        box = {"id": "plain-box", "center": [2.0, 2.0], "semi_axes": [0.1, 0.1]}
+        key = c.publish_obstacle(None, box, wait_s=30.0)
         assert key == "dmp/default/obstacles/plain-box"
         until("the obstacle is in the default cell's scene",
-              lambda: [o["id"] for o in c.list_obstacles()["obstacles"]] == ["plain-box"], 5.0)
+              lambda: [o["id"] for o in c.list_obstacles()["obstacles"]] == ["plain-box"], 10.0)

@@ -6,7 +6,9 @@ import pytest
 import dmp_cell
 from server import CELL, until
 
-SEEN_WITHIN_S = 5.0
+SEEN_WITHIN_S = 10.0
+#: How long a put may wait for the server's subscriber (the mutual-TLS link of a busy machine).
+WAIT_S = 30.0
 
 
 def ids(c):
@@ -19,7 +21,7 @@ def test_an_obstacle_published_over_zenoh_is_in_the_scene(server):
     perception = server.set_dir / "zenoh-perception.json5"
     with server.client("planner", cell=CELL, zenoh_config=perception) as c:
         before = c.list_obstacles()["scene_version"]
-        key = c.publish_obstacle(CELL, box, zenoh_connect=server.zenoh_locator)
+        key = c.publish_obstacle(CELL, box, zenoh_connect=server.zenoh_locator, wait_s=WAIT_S)
         assert key == f"dmp/{CELL}/obstacles/py-box"
         took = until("the published obstacle is in the scene", lambda: "py-box" in ids(c), SEEN_WITHIN_S)
         seen = ids(c)["py-box"]
@@ -32,10 +34,10 @@ def test_an_obstacle_published_over_zenoh_is_in_the_scene(server):
 
         # A put of the same id replaces it; a delete removes it.
         moved = dict(box, center=[0.7, 0.2])
-        c.publish_obstacle(CELL, moved, zenoh_connect=server.zenoh_locator)
+        c.publish_obstacle(CELL, moved, zenoh_connect=server.zenoh_locator, wait_s=WAIT_S)
         until("the obstacle moves", lambda: ids(c).get("py-box", {}).get("center") == pytest.approx([0.7, 0.2]),
               SEEN_WITHIN_S)
-        c.unpublish_obstacle(CELL, "py-box", zenoh_connect=server.zenoh_locator)
+        c.unpublish_obstacle(CELL, "py-box", zenoh_connect=server.zenoh_locator, wait_s=WAIT_S)
         until("the obstacle is deleted", lambda: "py-box" not in ids(c), SEEN_WITHIN_S)
 
 
@@ -43,11 +45,11 @@ def test_a_bad_obstacle_is_refused_before_it_is_published(server):
     with server.client("planner", cell=CELL) as c:
         with pytest.raises(dmp_cell.ArgumentError) as e:
             c.publish_obstacle(CELL, {"id": "x", "center": [0, 0], "semi_axes": [0.1, 0]},
-                               zenoh_connect=server.zenoh_locator)
+                               zenoh_connect=server.zenoh_locator, wait_s=WAIT_S)
         assert e.value.field == "semi_axes[1]"
         with pytest.raises(dmp_cell.ArgumentError) as e:
             c.publish_obstacle(CELL, {"id": "a/b", "center": [0, 0], "semi_axes": [1, 1]},
-                               zenoh_connect=server.zenoh_locator)
+                               zenoh_connect=server.zenoh_locator, wait_s=WAIT_S)
         assert e.value.field == "id"
 
 
