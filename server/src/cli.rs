@@ -27,6 +27,10 @@ pub struct Args {
     /// The robot cell: Zenoh keys are `dmp/<cell>/...` [default: default].
     #[arg(long, value_name = "NAME")]
     pub cell: Option<String>,
+    /// Address of the Prometheus endpoint (`GET /metrics`, plain HTTP, no authentication), e.g. `0.0.0.0:9464`;
+    /// port 0 picks a free port [default: off].
+    #[arg(long, value_name = "ADDR")]
+    pub metrics_addr: Option<SocketAddr>,
     /// Zenoh mode: an embedded `peer`, or a `client` of a router [default: peer].
     #[arg(long, value_name = "MODE", value_parser = ["peer", "client"])]
     pub zenoh_mode: Option<String>,
@@ -122,6 +126,9 @@ pub fn load_config(args: &Args) -> anyhow::Result<Config> {
     if let Some(cell) = &args.cell {
         config.cell = cell.clone();
     }
+    if args.metrics_addr.is_some() {
+        config.metrics_addr = args.metrics_addr;
+    }
     dmp_proto::keys::check_name("cell", &config.cell).map_err(|e| anyhow::anyhow!("{e}"))?;
     if let Some(mode) = &args.zenoh_mode {
         config.zenoh.mode = mode.clone();
@@ -184,6 +191,7 @@ mod tests {
 grpc_addr = "0.0.0.0:6000"
 data_dir = "/var/lib/dmp"
 cell = "cell-a"
+metrics_addr = "0.0.0.0:9464"
 
 [zenoh]
 mode = "client"
@@ -219,6 +227,8 @@ max_streams = 10
             "127.0.0.1:7000",
             "--cell",
             "cell-b",
+            "--metrics-addr",
+            "127.0.0.1:9464",
             "--zenoh-mode",
             "peer",
             "--zenoh-connect",
@@ -231,6 +241,8 @@ max_streams = 10
         .unwrap();
         assert_eq!(merged.grpc_addr, "127.0.0.1:7000".parse().unwrap());
         assert_eq!(merged.cell, "cell-b");
+        assert_eq!(merged.metrics_addr, Some("127.0.0.1:9464".parse().unwrap()));
+        assert_eq!(from_file.metrics_addr, Some("0.0.0.0:9464".parse().unwrap()));
         assert_eq!(merged.zenoh.mode, "peer");
         assert_eq!(merged.zenoh.connect, ["tcp/127.0.0.1:1", "tcp/127.0.0.1:2"], "flags replace the list");
         assert_eq!(merged.zenoh.listen, ["tcp/0.0.0.0:7447"], "an unset flag keeps the file's value");

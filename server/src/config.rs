@@ -17,6 +17,8 @@ pub struct Config {
     pub data_dir: PathBuf,
     /// The robot cell this server serves: Zenoh keys are `dmp/<cell>/...`.
     pub cell: String,
+    /// Address of the Prometheus endpoint (`GET /metrics`, plain HTTP, no authentication); none: off.
+    pub metrics_addr: Option<SocketAddr>,
     /// The Zenoh session.
     pub zenoh: ZenohConfig,
     /// Defaults applied when a request names no avoidance method.
@@ -54,6 +56,7 @@ impl Default for Config {
             grpc_addr: "127.0.0.1:50051".parse().expect("a valid literal address"),
             data_dir: PathBuf::from("data"),
             cell: "default".into(),
+            metrics_addr: None,
             zenoh: ZenohConfig::default(),
             defaults: Defaults::default(),
             limits: Limits::default(),
