@@ -293,6 +293,19 @@ max_streams = 10
         documented.sort();
         all.sort();
         assert_eq!(documented, all, "deploy/dmp-server.toml must list every key of Config");
+        // The keys without a default are listed commented out (`#   key = ...`).
+        let text = std::fs::read_to_string(path).unwrap();
+        let mut optional = Config { metrics_addr: Some("127.0.0.1:9464".parse().unwrap()), ..Config::default() };
+        let set = Some(PathBuf::from("/x"));
+        let security = &mut optional.security;
+        (security.access, security.tls_cert, security.tls_key, security.tls_client_ca) =
+            (set.clone(), set.clone(), set.clone(), set);
+        let mut every = Vec::new();
+        keys(&toml::Value::try_from(&optional).unwrap(), "", &mut every);
+        for key in every.iter().filter(|k| !all.contains(k)) {
+            let last = key.rsplit('.').next().unwrap();
+            assert!(text.contains(&format!("#   {last} = ")), "deploy/dmp-server.toml must list `{key}`");
+        }
     }
 
     #[test]
