@@ -295,7 +295,8 @@ max_streams = 10
         assert_eq!(documented, all, "deploy/dmp-server.toml must list every key of Config");
         // The keys without a default are listed commented out (`#   key = ...`).
         let text = std::fs::read_to_string(path).unwrap();
-        let mut optional = Config { metrics_addr: Some("127.0.0.1:9464".parse().unwrap()), ..Config::default() };
+        let mut optional =
+            Config { metrics_addr: Some("127.0.0.1:9464".parse().unwrap()), ..Config::default() };
         let set = Some(PathBuf::from("/x"));
         let security = &mut optional.security;
         (security.access, security.tls_cert, security.tls_key, security.tls_client_ca) =

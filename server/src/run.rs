@@ -174,7 +174,8 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
     let metrics_addr = match state.config.metrics_addr {
         Some(addr) => {
             let mut registry = prometheus_client::registry::Registry::default();
-            registry.register_collector(Box::new(ServerCollector::new(state.clone(), bridge_malformed.clone())));
+            registry
+                .register_collector(Box::new(ServerCollector::new(state.clone(), bridge_malformed.clone())));
             Some(crate::metrics::endpoint::serve(addr, registry, shutdown.clone()).await?.0)
         }
         None => None,

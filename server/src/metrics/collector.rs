@@ -40,7 +40,12 @@ impl Family<'_, '_> {
 
     /// `name` without `_total`: the encoding adds it.
     fn counter(&mut self, name: &str, help: &str, value: u64) -> fmt::Result {
-        ConstCounter::new(value).encode(self.encoder.encode_descriptor(name, help, None, MetricType::Counter)?)
+        ConstCounter::new(value).encode(self.encoder.encode_descriptor(
+            name,
+            help,
+            None,
+            MetricType::Counter,
+        )?)
     }
 
     fn gauges<L: EncodeLabelSet>(
@@ -98,7 +103,11 @@ impl Collector for ServerCollector {
             "Robots the cell sees now: its streams' robots and other servers' over Zenoh.",
             per_cell(&|c| c.robot_count()),
         )?;
-        f.gauges("dmp_obstacles", "Obstacles in the cell's scene now.", per_cell(&|c| c.snapshot().obstacles.len()))?;
+        f.gauges(
+            "dmp_obstacles",
+            "Obstacles in the cell's scene now.",
+            per_cell(&|c| c.snapshot().obstacles.len()),
+        )?;
         f.gauge(
             "dmp_open_streams",
             "Streams open now: executions and scene watches.",
@@ -164,7 +173,10 @@ impl Collector for ServerCollector {
         f.gauges(
             "dmp_compute_work_budget",
             "The work budgets: per second for real-time streams, at once for plans and learns.",
-            [([("pool", "realtime")], stats.realtime_work_budget), ([("pool", "batch")], stats.batch_work_budget)],
+            [
+                ([("pool", "realtime")], stats.realtime_work_budget),
+                ([("pool", "batch")], stats.batch_work_budget),
+            ],
         )?;
         f.gauges(
             "dmp_compute_jobs_running",

@@ -40,9 +40,9 @@ pub async fn serve(
     registry: Registry,
     stop: CancellationToken,
 ) -> Result<(SocketAddr, JoinHandle<()>), ServerError> {
-    let listener = TcpListener::bind(addr)
-        .await
-        .map_err(|e| ServerError::FailedPrecondition(format!("metrics_addr: cannot listen on {addr}: {e}")))?;
+    let listener = TcpListener::bind(addr).await.map_err(|e| {
+        ServerError::FailedPrecondition(format!("metrics_addr: cannot listen on {addr}: {e}"))
+    })?;
     let bound = listener.local_addr().map_err(|e| ServerError::Internal(e.to_string()))?;
     info!(metrics = %bound, "serving Prometheus metrics over plain HTTP (GET /metrics), without authentication");
     let registry = Arc::new(registry);

@@ -7,8 +7,8 @@ use serde_json::Value;
 use crate::dockerfile::Dockerfile;
 use crate::zenohd::{check_router_args, router_listen_port};
 use crate::{
-    SET_DIR, as_str, deploy, dmp_server_args, dmpctl_args, flag_values, port_of, read, set_files, set_paths_in, strings,
-    yaml_documents,
+    SET_DIR, as_str, deploy, dmp_server_args, dmpctl_args, flag_values, port_of, read, set_files,
+    set_paths_in, strings, yaml_documents,
 };
 
 /// The container side of each `HOST:CONTAINER` port mapping of a service.
@@ -46,8 +46,12 @@ fn compose_parses_and_its_commands_ports_and_paths_agree_with_the_image() {
     let init = &services["access-init"];
     let init_args = strings(&init["command"], "access-init");
     let init_parsed = dmp_server_args(&init_args, "access-init");
-    let Some(dmp_server::cli::Command::Access(dmp_server::cli::AccessCommand::Init { dir, cells, robots, hosts })) =
-        init_parsed.command
+    let Some(dmp_server::cli::Command::Access(dmp_server::cli::AccessCommand::Init {
+        dir,
+        cells,
+        robots,
+        hosts,
+    })) = init_parsed.command
     else {
         panic!("access-init does not run `access init`: {init_args:?}")
     };
@@ -63,7 +67,11 @@ fn compose_parses_and_its_commands_ports_and_paths_agree_with_the_image() {
     let router_port = router_listen_port(&as_str(&cells));
     assert_eq!(container_ports(zenohd), [router_port]);
     assert_eq!(mounts(zenohd).get(SET_DIR).map(String::as_str), Some("dmp-set"));
-    assert_eq!(hosts.first().map(String::as_str), Some("zenohd"), "zenoh-perception.json5 connects to the first --host");
+    assert_eq!(
+        hosts.first().map(String::as_str),
+        Some("zenohd"),
+        "zenoh-perception.json5 connects to the first --host"
+    );
 
     // Two servers, each its own cell, on the image's ports and volume, connected to the router.
     let mut served = Vec::new();
@@ -106,12 +114,16 @@ fn compose_parses_and_its_commands_ports_and_paths_agree_with_the_image() {
     assert!(docker.binaries.contains("dmpctl"));
     let args = strings(&p["command"], "perception");
     let _ = dmpctl_args(&args, "perception");
-    assert_eq!(set_paths_in(&args, &set, "perception").into_iter().collect::<Vec<_>>(), ["zenoh-perception.json5"]);
+    assert_eq!(
+        set_paths_in(&args, &set, "perception").into_iter().collect::<Vec<_>>(),
+        ["zenoh-perception.json5"]
+    );
     assert!(cells.contains(&flag_values(&args, "--cell")[0].to_owned()));
     let file = &args[args.iter().position(|a| a == "put").expect("scene put") + 1];
     let source = &mounts(p)[file];
     let bytes = std::fs::read(deploy().join(source)).unwrap();
-    dmp_proto::obstacle_json::obstacle_from_json_bytes(&bytes, "").expect("the perception example is an obstacle");
+    dmp_proto::obstacle_json::obstacle_from_json_bytes(&bytes, "")
+        .expect("the perception example is an obstacle");
 
     // Prometheus scrapes the servers' metrics ports.
     let prometheus = yaml_documents(&deploy().join("prometheus.yml")).remove(0);

@@ -49,12 +49,7 @@ impl Dockerfile {
                 _ => {}
             }
         }
-        Self {
-            exposed,
-            volume: volume.expect("a VOLUME"),
-            binaries,
-            cmd: cmd.expect("a CMD"),
-        }
+        Self { exposed, volume: volume.expect("a VOLUME"), binaries, cmd: cmd.expect("a CMD") }
     }
 
     /// The gRPC port and the metrics port (EXPOSE, in that order: 50051 then 9464 by their CMD flags).

@@ -22,7 +22,8 @@ fn expressions(dashboard: &Value) -> Vec<String> {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn every_metric_of_the_dashboard_is_served() {
-    let dashboard: Value = serde_json::from_str(&read(&deploy().join("grafana/dmp-cell.json"))).expect("JSON");
+    let dashboard: Value =
+        serde_json::from_str(&read(&deploy().join("grafana/dmp-cell.json"))).expect("JSON");
     let queried: BTreeSet<String> = expressions(&dashboard)
         .iter()
         .flat_map(|e| {
@@ -47,7 +48,10 @@ async fn every_metric_of_the_dashboard_is_served() {
         .map(|l| l.split(['{', ' ']).next().unwrap())
         .collect();
     for name in &queried {
-        assert!(served.contains(name.as_str()), "the dashboard queries {name}, which the server does not serve");
+        assert!(
+            served.contains(name.as_str()),
+            "the dashboard queries {name}, which the server does not serve"
+        );
     }
     // The `le` label the lateness panel counts as on time.
     assert!(reply.body.contains("dmp_segment_lateness_seconds_bucket{le=\"0.0\"}"));

@@ -7,7 +7,9 @@ use serde_json::Value;
 
 use crate::dockerfile::Dockerfile;
 use crate::zenohd::{check_router_args, router_listen_port};
-use crate::{SET_DIR, deploy, dmp_server_args, port_of, read, set_files, set_paths_in, strings, yaml_documents};
+use crate::{
+    SET_DIR, deploy, dmp_server_args, port_of, read, set_files, set_paths_in, strings, yaml_documents,
+};
 
 /// Every object of deploy/k8s/, by `Kind/name`.
 fn objects() -> BTreeMap<String, Value> {
@@ -18,7 +20,8 @@ fn objects() -> BTreeMap<String, Value> {
     for file in files {
         for doc in yaml_documents(&deploy().join("k8s").join(&file)) {
             let kind = doc["kind"].as_str().unwrap_or_else(|| panic!("{file}: an object without a kind"));
-            let name = doc["metadata"]["name"].as_str().unwrap_or_else(|| panic!("{file}: {kind} without a name"));
+            let name =
+                doc["metadata"]["name"].as_str().unwrap_or_else(|| panic!("{file}: {kind} without a name"));
             assert!(doc["apiVersion"].is_string(), "{file}: {kind}/{name} has no apiVersion");
             out.insert(format!("{kind}/{name}"), doc);
         }
@@ -66,10 +69,15 @@ fn the_kubernetes_files_parse_and_agree_with_the_image_the_server_and_each_other
     let docker = Dockerfile::load();
     let (grpc_port, metrics_port) = docker.grpc_and_metrics_ports();
     let objects = objects();
-    let o = |key: &str| objects.get(key).unwrap_or_else(|| panic!("no {key} in deploy/k8s: {:?}", objects.keys()));
+    let o = |key: &str| {
+        objects.get(key).unwrap_or_else(|| panic!("no {key} in deploy/k8s: {:?}", objects.keys()))
+    };
     let server_set = keys(o("Secret/dmp-server-set"), "stringData");
     let router_set = keys(o("Secret/zenohd-set"), "stringData");
-    assert!(!server_set.contains("ca.key") && !router_set.contains("ca.key"), "the CA's key stays off the cluster");
+    assert!(
+        !server_set.contains("ca.key") && !router_set.contains("ca.key"),
+        "the CA's key stays off the cluster"
+    );
     let statefulset = o("StatefulSet/dmp-server");
     let replicas = statefulset["spec"]["replicas"].as_u64().unwrap();
     // The set the template's comment makes: a cell per pod, the pods' and the router's names.
@@ -77,18 +85,26 @@ fn the_kubernetes_files_parse_and_agree_with_the_image_the_server_and_each_other
     let cells: Vec<&str> = cells.iter().map(String::as_str).collect();
     let set = set_files(&cells, &["panda-1"], &["zenohd"]);
     let template = read(&deploy().join("k8s/secrets.template.yaml"));
-    for name in server_set.iter().chain(&router_set).chain(&keys(o("Secret/dmp-client-tokens"), "stringData")) {
+    for name in server_set.iter().chain(&router_set).chain(&keys(o("Secret/dmp-client-tokens"), "stringData"))
+    {
         assert!(set.contains(name), "{name} is not a file of a set");
-        assert!(template.contains(&format!("$S/{name}")), "the template does not say where {name} comes from");
+        assert!(
+            template.contains(&format!("$S/{name}")),
+            "the template does not say where {name} comes from"
+        );
     }
     for cell in &cells {
-        assert!(template.contains(&format!("--cell {cell}")), "the template's access init lacks the cell {cell}");
+        assert!(
+            template.contains(&format!("--cell {cell}")),
+            "the template's access init lacks the cell {cell}"
+        );
     }
 
     // The configuration file: the server's own Config reads it.
     let configmap = o("ConfigMap/dmp-server-config");
     let text = configmap["data"]["dmp-server.toml"].as_str().unwrap();
-    let config: dmp_server::config::Config = toml::from_str(text).expect("the ConfigMap's dmp-server.toml loads");
+    let config: dmp_server::config::Config =
+        toml::from_str(text).expect("the ConfigMap's dmp-server.toml loads");
     assert_eq!(config.grpc_addr.port(), grpc_port);
     assert_eq!(config.metrics_addr.map(|a| a.port()), Some(metrics_port));
     assert_eq!(config.data_dir.to_str(), Some(docker.volume.as_str()));
@@ -105,7 +121,8 @@ fn the_kubernetes_files_parse_and_agree_with_the_image_the_server_and_each_other
     // The StatefulSet: its arguments parse, a volume per pod for the store, the probes over TLS.
     let pod = &statefulset["spec"]["template"]["spec"];
     let c = &pod["containers"][0];
-    let env: BTreeSet<&str> = c["env"].as_array().unwrap().iter().map(|e| e["name"].as_str().unwrap()).collect();
+    let env: BTreeSet<&str> =
+        c["env"].as_array().unwrap().iter().map(|e| e["name"].as_str().unwrap()).collect();
     let args: Vec<String> = strings(&c["args"], "dmp-server args")
         .into_iter()
         .map(|a| {
@@ -128,14 +145,16 @@ fn the_kubernetes_files_parse_and_agree_with_the_image_the_server_and_each_other
     let annotations = &statefulset["spec"]["template"]["metadata"]["annotations"];
     assert_eq!(annotations["prometheus.io/port"].as_str(), Some(metrics_port.to_string().as_str()));
     let claim = &statefulset["spec"]["volumeClaimTemplates"][0]["metadata"]["name"];
-    let data_mount = c["volumeMounts"].as_array().unwrap().iter().find(|m| m["name"] == *claim).expect("the store");
+    let data_mount =
+        c["volumeMounts"].as_array().unwrap().iter().find(|m| m["name"] == *claim).expect("the store");
     assert_eq!(data_mount["mountPath"].as_str(), Some(docker.volume.as_str()));
     assert_eq!(pod["securityContext"]["runAsUser"], 65532, "the image's user");
     for probe in ["startupProbe", "livenessProbe", "readinessProbe"] {
         let command = strings(&c[probe]["exec"]["command"], probe);
         assert_eq!(command[0], "grpc_health_probe", "{probe}");
         assert!(docker.binaries.contains("grpc_health_probe"));
-        let flag = |name: &str| command.iter().find_map(|a| a.strip_prefix(&format!("-{name}="))).map(str::to_owned);
+        let flag =
+            |name: &str| command.iter().find_map(|a| a.strip_prefix(&format!("-{name}="))).map(str::to_owned);
         assert_eq!(flag("addr").map(|a| port_of(&a)), Some(grpc_port), "{probe}");
         assert!(command.contains(&"-tls".to_owned()), "{probe}: TLS is on");
         let ca = flag("tls-ca-cert").expect("-tls-ca-cert");

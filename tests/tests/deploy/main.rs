@@ -83,8 +83,10 @@ fn strings(v: &Value, what: &str) -> Vec<String> {
 
 /// dmp-server's own parse of `args` (as the binary parses its command line).
 fn dmp_server_args(args: &[String], what: &str) -> dmp_server::cli::Args {
-    dmp_server::cli::Args::try_parse_from(std::iter::once("dmp-server".to_owned()).chain(args.iter().cloned()))
-        .unwrap_or_else(|e| panic!("{what}: dmp-server does not take {args:?}:\n{e}"))
+    dmp_server::cli::Args::try_parse_from(
+        std::iter::once("dmp-server".to_owned()).chain(args.iter().cloned()),
+    )
+    .unwrap_or_else(|e| panic!("{what}: dmp-server does not take {args:?}:\n{e}"))
 }
 
 /// dmpctl's own parse of `args`.
@@ -95,7 +97,8 @@ fn dmpctl_args(args: &[String], what: &str) -> dmpctl::cli::Cli {
 
 /// The version of the zenoh crate in Cargo.lock: the router's image must be the same.
 fn zenoh_version() -> String {
-    let lock: toml::Value = toml::from_str(&read(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../Cargo.lock"))).unwrap();
+    let lock: toml::Value =
+        toml::from_str(&read(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../Cargo.lock"))).unwrap();
     let packages = lock["package"].as_array().unwrap();
     let zenoh = packages.iter().find(|p| p["name"].as_str() == Some("zenoh")).expect("zenoh in Cargo.lock");
     zenoh["version"].as_str().unwrap().to_owned()

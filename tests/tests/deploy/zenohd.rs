@@ -13,7 +13,10 @@ fn check_storage(storage: &Value, what: &str) {
     let key = storage["key_expr"].as_str().unwrap_or_else(|| panic!("{what}: no key_expr"));
     let stored = KeyExpr::try_from(key).unwrap_or_else(|e| panic!("{what}: {key}: {e}"));
     let subscribed = dmp_proto::keys::obstacles_of(dmp_proto::keys::EVERY_CELL);
-    assert!(stored.includes(&KeyExpr::try_from(subscribed.as_str()).unwrap()), "{what}: {key} misses {subscribed}");
+    assert!(
+        stored.includes(&KeyExpr::try_from(subscribed.as_str()).unwrap()),
+        "{what}: {key} misses {subscribed}"
+    );
     assert_eq!(key, "dmp/*/obstacles/**", "{what}: what the server's catch-up query asks");
     let volume = &storage["volume"];
     assert!(volume == "memory" || volume["id"] == "memory", "{what}: memory backend: {volume}");

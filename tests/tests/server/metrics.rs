@@ -71,7 +71,11 @@ async fn the_metrics_move_with_what_the_server_does() {
         within("zenoh open", ObstaclePublisher::open("default", &handle.zenoh_locators, &[])).await.unwrap();
     within("subscriber", perception.wait_for_subscriber(T)).await.unwrap();
     let request = v1::ExecuteRequest {
-        motion: Some(v1::MotionSpec { robot_id: "panda".into(), primitive: "curve".into(), ..Default::default() }),
+        motion: Some(v1::MotionSpec {
+            robot_id: "panda".into(),
+            primitive: "curve".into(),
+            ..Default::default()
+        }),
         pacing: v1::Pacing::Realtime as i32,
         max_duration_s: 30.0,
         ..Default::default()
