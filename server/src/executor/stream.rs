@@ -330,7 +330,10 @@ impl<'a> Producer<'a> {
             sequence: self.sequence,
         };
         let stepped = self.on_pool(step).await?;
-        if let Some(reason) = self.send(stepped, supersedes).await? {
+        let sent = self.send(stepped, supersedes).await?;
+        // Measured at the first segment sent after the change, if this wake-up sent one; never at a later one.
+        self.scene_update_unix_s = None;
+        if let Some(reason) = sent {
             return Ok(Some(reason));
         }
         if supersedes && self.finished.is_none() && horizon.is_some_and(|h| self.time < h) {
@@ -434,13 +437,8 @@ impl<'a> Producer<'a> {
                 _ = app.shutdown.cancelled() => return Err(ServerError::ShuttingDown),
             }
             if self.cfg.realtime {
-                let now = app.clock.now_unix_s();
-                if let Some(due) = first_point_unix_s {
-                    app.histograms.segment_lateness.observe((now - due).max(0.0));
-                }
-                if let Some(received) = self.scene_update_unix_s.take() {
-                    app.histograms.obstacle_update_to_segment.observe((now - received).max(0.0));
-                }
+                let (now, update) = (app.clock.now_unix_s(), self.scene_update_unix_s.take());
+                app.histograms.handed_over(now, first_point_unix_s, update);
             }
             if k == 0 {
                 // One state per wake-up: the cell-mates read them at their own wake-ups (once per refill) and

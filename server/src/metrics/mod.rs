@@ -59,3 +59,34 @@ impl Default for Histograms {
         }
     }
 }
+
+impl Histograms {
+    /// A real-time stream handed a segment to its gRPC stream at `now_unix_s`: its first point was due at
+    /// `first_point_unix_s`, and it is the first computed with an obstacle update received at `update_unix_s`.
+    pub fn handed_over(&self, now_unix_s: f64, first_point_unix_s: Option<f64>, update_unix_s: Option<f64>) {
+        if let Some(due) = first_point_unix_s {
+            self.segment_lateness.observe((now_unix_s - due).max(0.0));
+        }
+        if let Some(received) = update_unix_s {
+            self.obstacle_update_to_segment.observe((now_unix_s - received).max(0.0));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_early_segment_is_on_time_and_an_update_is_measured_once() {
+        let h = Histograms::default();
+        // 50 ms ahead: on time (0, the first bucket), not -0.05.
+        h.handed_over(100.0, Some(100.05), None);
+        // 10 ms late, the first segment computed with an update received 2 ms before.
+        h.handed_over(100.0, Some(99.99), Some(99.998));
+        assert_eq!(h.segment_lateness.count(), 2);
+        assert!((h.segment_lateness.sum() - 0.01).abs() < 1e-9, "{}", h.segment_lateness.sum());
+        assert_eq!(h.obstacle_update_to_segment.count(), 1);
+        assert!((h.obstacle_update_to_segment.sum() - 0.002).abs() < 1e-9);
+    }
+}
