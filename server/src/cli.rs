@@ -31,6 +31,10 @@ pub struct Args {
     /// port 0 picks a free port [default: off].
     #[arg(long, value_name = "ADDR")]
     pub metrics_addr: Option<SocketAddr>,
+    /// The OpenTelemetry collector (OTLP over gRPC) the tracing spans go to, e.g. `http://collector:4317`
+    /// [default: off].
+    #[arg(long, value_name = "URL")]
+    pub otlp_endpoint: Option<String>,
     /// Zenoh mode: an embedded `peer`, or a `client` of a router [default: peer].
     #[arg(long, value_name = "MODE", value_parser = ["peer", "client"])]
     pub zenoh_mode: Option<String>,
@@ -128,6 +132,9 @@ pub fn load_config(args: &Args) -> anyhow::Result<Config> {
     }
     if args.metrics_addr.is_some() {
         config.metrics_addr = args.metrics_addr;
+    }
+    if args.otlp_endpoint.is_some() {
+        config.otlp_endpoint.clone_from(&args.otlp_endpoint);
     }
     dmp_proto::keys::check_name("cell", &config.cell).map_err(|e| anyhow::anyhow!("{e}"))?;
     if let Some(mode) = &args.zenoh_mode {
@@ -295,8 +302,11 @@ max_streams = 10
         assert_eq!(documented, all, "deploy/dmp-server.toml must list every key of Config");
         // The keys without a default are listed commented out (`#   key = ...`).
         let text = std::fs::read_to_string(path).unwrap();
-        let mut optional =
-            Config { metrics_addr: Some("127.0.0.1:9464".parse().unwrap()), ..Config::default() };
+        let mut optional = Config {
+            metrics_addr: Some("127.0.0.1:9464".parse().unwrap()),
+            otlp_endpoint: Some("http://collector:4317".into()),
+            ..Config::default()
+        };
         let set = Some(PathBuf::from("/x"));
         let security = &mut optional.security;
         (security.access, security.tls_cert, security.tls_key, security.tls_client_ca) =

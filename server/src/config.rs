@@ -19,6 +19,8 @@ pub struct Config {
     pub cell: String,
     /// Address of the Prometheus endpoint (`GET /metrics`, plain HTTP, no authentication); none: off.
     pub metrics_addr: Option<SocketAddr>,
+    /// The OTLP/gRPC collector the tracing spans go to, e.g. `http://collector:4317`; none: off.
+    pub otlp_endpoint: Option<String>,
     /// The Zenoh session.
     pub zenoh: ZenohConfig,
     /// Defaults applied when a request names no avoidance method.
@@ -57,6 +59,7 @@ impl Default for Config {
             data_dir: PathBuf::from("data"),
             cell: "default".into(),
             metrics_addr: None,
+            otlp_endpoint: None,
             zenoh: ZenohConfig::default(),
             defaults: Defaults::default(),
             limits: Limits::default(),

@@ -22,6 +22,7 @@
 //! | a connection's streams and requests, and its idle timeout | [`connection`] |
 //! | who may open a stream: pools, per connection, per client | [`stream_permits`] |
 //! | the server's memory budget and its reservations | [`memory`] |
+//! | traces to OpenTelemetry (`--otlp-endpoint`) | [`telemetry`] |
 //! | the Prometheus endpoint: the counters above and two histograms, at each scrape | [`metrics`] |
 
 pub mod access;
@@ -47,6 +48,7 @@ pub mod state;
 pub mod state_admission;
 pub mod store;
 pub mod stream_permits;
+pub mod telemetry;
 pub mod tls;
 pub mod write_batching;
 pub mod zenoh_bridge;

@@ -205,6 +205,8 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         })?;
     }
     let router = server
+        // A span per request: what `--otlp-endpoint` exports (and what is logged inside it carries the path).
+        .trace_fn(|request| tracing::info_span!("grpc", rpc = %request.uri().path()))
         .http2_keepalive_interval(seconds(limits.http2_keepalive_interval_s))
         .http2_keepalive_timeout(seconds(limits.http2_keepalive_timeout_s))
         // Every request is authenticated before any handler, and marks its connection active (the idle timeout
