@@ -73,6 +73,15 @@ fn compose_parses_and_its_commands_ports_and_paths_agree_with_the_image() {
         "zenoh-perception.json5 connects to the first --host"
     );
 
+    // `docker compose build` builds the image once, from deploy/Dockerfile, in a service of no profile (services
+    // of an inactive profile are not built).
+    let builders: Vec<_> = services.iter().filter(|(_, s)| !s["build"].is_null()).collect();
+    assert_eq!(builders.len(), 1, "one service builds dmp-server:latest");
+    let (_, builder) = builders[0];
+    assert!(builder["profiles"].is_null() && builder["image"] == "dmp-server:latest");
+    assert_eq!(builder["build"]["dockerfile"], "deploy/Dockerfile");
+    assert!(deploy().join(builder["build"]["context"].as_str().unwrap()).join("deploy/Dockerfile").exists());
+
     // Two servers, each its own cell, on the image's ports and volume, connected to the router.
     let mut served = Vec::new();
     for (name, s) in services.iter().filter(|(_, s)| s["entrypoint"].is_null() && s["profiles"].is_null()) {
