@@ -2,6 +2,7 @@
 //! the writer) and the latest state of every robot working in the cell (moving obstacles for the others).
 
 use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use dmp_proto::keys::check_name;
@@ -58,12 +59,26 @@ pub struct ObstacleSet {
     pub obstacles: BTreeMap<String, ReceivedObstacle>,
     /// The obstacles' estimated memory, bytes.
     pub bytes: usize,
+    /// When the last change was made (a put or a delete received, an expiry), Unix seconds; 0 before any.
+    pub updated_unix_s: f64,
 }
 
 impl ObstacleSet {
     /// The ids of the stale obstacles, in order.
     pub fn stale_ids(&self) -> impl Iterator<Item = &str> {
         self.obstacles.values().filter(|o| o.stale).map(|o| o.proto.id.as_str())
+    }
+}
+
+/// A stream counted in its cell's [`Cell::streams`] while it lives.
+#[derive(Debug)]
+pub struct CellStream {
+    streams: Arc<AtomicUsize>,
+}
+
+impl Drop for CellStream {
+    fn drop(&mut self) {
+        self.streams.fetch_sub(1, Ordering::Relaxed);
     }
 }
 
@@ -89,6 +104,8 @@ pub struct Cell {
     max_bytes: usize,
     /// The obstacles' share of the server's memory budget. Locked only inside the watch's update.
     memory: Arc<Mutex<Reservation>>,
+    /// Streams executing in the cell now ([`Cell::stream_opened`]).
+    streams: Arc<AtomicUsize>,
     /// Half-width of the workspace box every obstacle's centre must lie in, metres.
     workspace_m: f64,
     staleness: Staleness,
@@ -118,6 +135,7 @@ impl Cell {
             max_obstacles,
             max_bytes,
             memory: Arc::new(Mutex::new(memory.empty())),
+            streams: Arc::default(),
             workspace_m,
             staleness: Staleness::default(),
         }
@@ -157,6 +175,17 @@ impl Cell {
     /// The cell's name.
     pub fn name(&self) -> &str {
         &self.cell
+    }
+
+    /// Counts a stream executing in the cell until the returned guard is dropped.
+    pub fn stream_opened(&self) -> CellStream {
+        self.streams.fetch_add(1, Ordering::Relaxed);
+        CellStream { streams: self.streams.clone() }
+    }
+
+    /// Streams executing in the cell now (Execute, Session, ExecuteGroup: one per stream, whatever its robots).
+    pub fn streams(&self) -> usize {
+        self.streams.load(Ordering::Relaxed)
     }
 
     /// How many robots the cell sees now.
@@ -224,14 +253,16 @@ impl Cell {
             s.bytes = total;
             s.obstacles.insert(entry.proto.id.clone(), entry);
             s.version += 1;
+            s.updated_unix_s = now_unix_s;
             result = Ok(s.version);
             true
         });
         result
     }
 
-    /// Removes an obstacle; returns the version and whether it existed. A delete of an unknown id changes nothing.
-    pub fn delete(&self, id: &str) -> (u64, bool) {
+    /// Removes an obstacle, on a delete received at `now_unix_s`; returns the version and whether it existed. A
+    /// delete of an unknown id changes nothing.
+    pub fn delete(&self, id: &str, now_unix_s: f64) -> (u64, bool) {
         let mut out = (0, false);
         self.tx.send_if_modified(|snap| {
             if let Some(bytes) = snap.obstacles.get(id).map(|o| o.bytes) {
@@ -240,6 +271,7 @@ impl Cell {
                 s.bytes -= bytes;
                 let _ = self.account(bytes, 0, id);
                 s.version += 1;
+                s.updated_unix_s = now_unix_s;
                 out = (s.version, true);
                 true
             } else {
@@ -283,6 +315,7 @@ impl Cell {
                 }
             }
             s.version += 1;
+            s.updated_unix_s = now_unix_s;
             n = expired.len() + stale.len();
             true
         });

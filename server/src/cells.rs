@@ -177,7 +177,7 @@ mod tests {
         // `a` holds an obstacle: no room for `b`.
         assert!(matches!(cells.get("b"), Err(ServerError::ResourceExhausted(_))));
         // Emptied, `a` goes away and `b` takes its place; the default cell stays.
-        a.delete("o");
+        a.delete("o", 0.0);
         drop(a);
         let b = cells.get("b").unwrap();
         assert_eq!(cells.len(), 2);
@@ -234,7 +234,7 @@ mod tests {
         let e = b.put(o("b2"), 0.0).unwrap_err().to_string();
         assert!(e.contains("max_server_bytes = 5000"), "{e}");
         assert_eq!(b.snapshot().obstacles.len(), 1, "a refusal changes nothing");
-        a.delete("a1");
+        a.delete("a1", 0.0);
         b.put(o("b2"), 0.0).expect("room again");
         assert_eq!(memory.used(), 3 * bytes);
         b.expire(0.0);

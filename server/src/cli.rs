@@ -27,6 +27,14 @@ pub struct Args {
     /// The robot cell: Zenoh keys are `dmp/<cell>/...` [default: default].
     #[arg(long, value_name = "NAME")]
     pub cell: Option<String>,
+    /// Address of the Prometheus endpoint (`GET /metrics`, plain HTTP, no authentication), e.g. `0.0.0.0:9464`;
+    /// port 0 picks a free port [default: off].
+    #[arg(long, value_name = "ADDR")]
+    pub metrics_addr: Option<SocketAddr>,
+    /// The OpenTelemetry collector (OTLP over gRPC) the tracing spans go to, e.g. `http://collector:4317`
+    /// [default: off].
+    #[arg(long, value_name = "URL")]
+    pub otlp_endpoint: Option<String>,
     /// Zenoh mode: an embedded `peer`, or a `client` of a router [default: peer].
     #[arg(long, value_name = "MODE", value_parser = ["peer", "client"])]
     pub zenoh_mode: Option<String>,
@@ -122,6 +130,12 @@ pub fn load_config(args: &Args) -> anyhow::Result<Config> {
     if let Some(cell) = &args.cell {
         config.cell = cell.clone();
     }
+    if args.metrics_addr.is_some() {
+        config.metrics_addr = args.metrics_addr;
+    }
+    if args.otlp_endpoint.is_some() {
+        config.otlp_endpoint.clone_from(&args.otlp_endpoint);
+    }
     dmp_proto::keys::check_name("cell", &config.cell).map_err(|e| anyhow::anyhow!("{e}"))?;
     if let Some(mode) = &args.zenoh_mode {
         config.zenoh.mode = mode.clone();
@@ -184,6 +198,7 @@ mod tests {
 grpc_addr = "0.0.0.0:6000"
 data_dir = "/var/lib/dmp"
 cell = "cell-a"
+metrics_addr = "0.0.0.0:9464"
 
 [zenoh]
 mode = "client"
@@ -219,6 +234,8 @@ max_streams = 10
             "127.0.0.1:7000",
             "--cell",
             "cell-b",
+            "--metrics-addr",
+            "127.0.0.1:9464",
             "--zenoh-mode",
             "peer",
             "--zenoh-connect",
@@ -231,6 +248,8 @@ max_streams = 10
         .unwrap();
         assert_eq!(merged.grpc_addr, "127.0.0.1:7000".parse().unwrap());
         assert_eq!(merged.cell, "cell-b");
+        assert_eq!(merged.metrics_addr, Some("127.0.0.1:9464".parse().unwrap()));
+        assert_eq!(from_file.metrics_addr, Some("0.0.0.0:9464".parse().unwrap()));
         assert_eq!(merged.zenoh.mode, "peer");
         assert_eq!(merged.zenoh.connect, ["tcp/127.0.0.1:1", "tcp/127.0.0.1:2"], "flags replace the list");
         assert_eq!(merged.zenoh.listen, ["tcp/0.0.0.0:7447"], "an unset flag keeps the file's value");
@@ -281,6 +300,23 @@ max_streams = 10
         documented.sort();
         all.sort();
         assert_eq!(documented, all, "deploy/dmp-server.toml must list every key of Config");
+        // The keys without a default are listed commented out (`#   key = ...`).
+        let text = std::fs::read_to_string(path).unwrap();
+        let mut optional = Config {
+            metrics_addr: Some("127.0.0.1:9464".parse().unwrap()),
+            otlp_endpoint: Some("http://collector:4317".into()),
+            ..Config::default()
+        };
+        let set = Some(PathBuf::from("/x"));
+        let security = &mut optional.security;
+        (security.access, security.tls_cert, security.tls_key, security.tls_client_ca) =
+            (set.clone(), set.clone(), set.clone(), set);
+        let mut every = Vec::new();
+        keys(&toml::Value::try_from(&optional).unwrap(), "", &mut every);
+        for key in every.iter().filter(|k| !all.contains(k)) {
+            let last = key.rsplit('.').next().unwrap();
+            assert!(text.contains(&format!("#   {last} = ")), "deploy/dmp-server.toml must list `{key}`");
+        }
     }
 
     #[test]

@@ -17,6 +17,10 @@ pub struct Config {
     pub data_dir: PathBuf,
     /// The robot cell this server serves: Zenoh keys are `dmp/<cell>/...`.
     pub cell: String,
+    /// Address of the Prometheus endpoint (`GET /metrics`, plain HTTP, no authentication); none: off.
+    pub metrics_addr: Option<SocketAddr>,
+    /// The OTLP/gRPC collector the tracing spans go to, e.g. `http://collector:4317`; none: off.
+    pub otlp_endpoint: Option<String>,
     /// The Zenoh session.
     pub zenoh: ZenohConfig,
     /// Defaults applied when a request names no avoidance method.
@@ -54,6 +58,8 @@ impl Default for Config {
             grpc_addr: "127.0.0.1:50051".parse().expect("a valid literal address"),
             data_dir: PathBuf::from("data"),
             cell: "default".into(),
+            metrics_addr: None,
+            otlp_endpoint: None,
             zenoh: ZenohConfig::default(),
             defaults: Defaults::default(),
             limits: Limits::default(),

@@ -22,6 +22,8 @@
 //! | a connection's streams and requests, and its idle timeout | [`connection`] |
 //! | who may open a stream: pools, per connection, per client | [`stream_permits`] |
 //! | the server's memory budget and its reservations | [`memory`] |
+//! | traces to OpenTelemetry (`--otlp-endpoint`) | [`telemetry`] |
+//! | the Prometheus endpoint: the counters above and two histograms, at each scrape | [`metrics`] |
 
 pub mod access;
 pub mod cell;
@@ -37,6 +39,7 @@ pub mod executing;
 pub mod executor;
 pub mod exposure;
 pub mod memory;
+pub mod metrics;
 pub mod robots;
 pub mod run;
 pub mod services;
@@ -45,6 +48,7 @@ pub mod state;
 pub mod state_admission;
 pub mod store;
 pub mod stream_permits;
+pub mod telemetry;
 pub mod tls;
 pub mod write_batching;
 pub mod zenoh_bridge;

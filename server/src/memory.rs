@@ -4,7 +4,7 @@
 //! can never leak its share).
 
 use std::sync::Arc;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 use crate::error::ServerError;
 
@@ -18,12 +18,14 @@ pub struct MemoryBudget {
 struct Inner {
     used: AtomicUsize,
     limit: usize,
+    /// Reservations refused so far.
+    refused: AtomicU64,
 }
 
 impl MemoryBudget {
     /// A budget of `limit` bytes, none reserved.
     pub fn new(limit: usize) -> Self {
-        Self { inner: Arc::new(Inner { used: AtomicUsize::new(0), limit }) }
+        Self { inner: Arc::new(Inner { used: AtomicUsize::new(0), limit, refused: AtomicU64::new(0) }) }
     }
 
     /// Bytes reserved now.
@@ -34,6 +36,11 @@ impl MemoryBudget {
     /// The budget, bytes.
     pub fn limit(&self) -> usize {
         self.inner.limit
+    }
+
+    /// Reservations (a stream, an obstacle) refused so far for want of memory.
+    pub fn refusals(&self) -> u64 {
+        self.inner.refused.load(Ordering::Relaxed)
     }
 
     /// An empty reservation, to grow later.
@@ -58,6 +65,7 @@ impl MemoryBudget {
             })
             .map(|_| ())
             .map_err(|used| {
+                self.inner.refused.fetch_add(1, Ordering::Relaxed);
                 ServerError::ResourceExhausted(format!(
                     "{what} needs about {bytes} bytes, and the server's memory budget (limits.max_server_bytes = \
                      {limit}) has {} left; retry later",

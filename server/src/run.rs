@@ -26,6 +26,7 @@ use crate::error::ServerError;
 use crate::executing::Executing;
 use crate::exposure;
 use crate::memory::MemoryBudget;
+use crate::metrics::ServerCollector;
 use crate::robots::RobotBus;
 use crate::services::motion::MotionServiceImpl;
 use crate::services::primitives::PrimitiveServiceImpl;
@@ -49,6 +50,9 @@ pub struct ServerHandle {
     pub grpc_addr: SocketAddr,
     /// Zenoh locators the embedded peer listens on (empty without Zenoh).
     pub zenoh_locators: Vec<String>,
+    /// The address the Prometheus endpoint listens on (the real port when the configuration said 0); none when
+    /// it is off.
+    pub metrics_addr: Option<SocketAddr>,
     state: Arc<AppState>,
     bridge_malformed: Option<Arc<std::sync::atomic::AtomicU64>>,
     task: JoinHandle<Result<(), ServerError>>,
@@ -159,6 +163,7 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         robots,
         shutdown: shutdown.clone(),
         counters: Default::default(),
+        histograms: Default::default(),
         clock,
         executing: Executing::default(),
         state_admission,
@@ -166,6 +171,15 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         exposure,
     });
     let max = state.config.limits.max_message_bytes;
+    let metrics_addr = match state.config.metrics_addr {
+        Some(addr) => {
+            let mut registry = prometheus_client::registry::Registry::default();
+            registry
+                .register_collector(Box::new(ServerCollector::new(state.clone(), bridge_malformed.clone())));
+            Some(crate::metrics::endpoint::serve(addr, registry, shutdown.clone()).await?.0)
+        }
+        None => None,
+    };
 
     let (health, health_service) = tonic_health::server::health_reporter();
     health.set_serving::<PrimitiveServiceServer<PrimitiveServiceImpl>>().await;
@@ -191,6 +205,8 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         })?;
     }
     let router = server
+        // A span per request: what `--otlp-endpoint` exports (and what is logged inside it carries the path).
+        .trace_fn(|request| tracing::info_span!("grpc", rpc = %request.uri().path()))
         .http2_keepalive_interval(seconds(limits.http2_keepalive_interval_s))
         .http2_keepalive_timeout(seconds(limits.http2_keepalive_timeout_s))
         // Every request is authenticated before any handler, and marks its connection active (the idle timeout
@@ -262,13 +278,14 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         grpc = %grpc_addr,
         zenoh = ?zenoh_locators,
         cell = %state.config.cell,
+        metrics = ?metrics_addr,
         tls = security.tls_cert.is_some(),
         mutual_tls = security.tls_client_ca.is_some(),
         access_control = state.access.enabled(),
         insecure = state.exposure.insecure(),
         "serving"
     );
-    Ok(ServerHandle { grpc_addr, zenoh_locators, state, bridge_malformed, task })
+    Ok(ServerHandle { grpc_addr, zenoh_locators, metrics_addr, state, bridge_malformed, task })
 }
 
 /// Runs the server until `shutdown` completes (the binary passes SIGINT or SIGTERM), then stops it cleanly. Each

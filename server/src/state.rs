@@ -42,6 +42,8 @@ pub struct AppState {
     pub shutdown: CancellationToken,
     /// Traffic counters.
     pub counters: Counters,
+    /// What only the streams measure, for the metrics ([`crate::metrics`]).
+    pub histograms: crate::metrics::Histograms,
     /// Wall time and pacing instants.
     pub clock: Clock,
     /// The compute pools and their admission budgets.
@@ -122,6 +124,7 @@ impl AppState {
             config,
             shutdown: CancellationToken::new(),
             counters: Default::default(),
+            histograms: Default::default(),
             clock,
             access: Arc::new(AccessControl::open()),
             exposure: Exposure::default(),

@@ -21,6 +21,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use dmp_proto::primitive::primitive_to_proto;
 use dmp_proto::v1;
@@ -48,7 +49,15 @@ pub struct Store {
     path: Arc<PathBuf>,
     /// Versions kept per `(robot_id, name)`: a put beyond removes the oldest.
     max_versions: usize,
+    /// Operations so far, by kind (in the order of [`Store::operations`]).
+    operations: Arc<[AtomicU64; 4]>,
 }
+
+/// The kinds of operation, in the order of [`Store::operations`].
+const PUT: usize = 0;
+const GET: usize = 1;
+const LIST: usize = 2;
+const DELETE: usize = 3;
 
 impl fmt::Debug for Store {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -96,7 +105,12 @@ impl Store {
                 e if existed => storage(format_args!("cannot open {shown} ({START_FRESH})"), e),
                 e => storage(format_args!("cannot open {shown}"), e),
             })?;
-        let store = Store { db: Arc::new(db), path: Arc::new(path.clone()), max_versions: usize::MAX };
+        let store = Store {
+            db: Arc::new(db),
+            path: Arc::new(path.clone()),
+            max_versions: usize::MAX,
+            operations: Arc::default(),
+        };
         store.check_or_initialise()?;
         Ok(store)
     }
@@ -111,6 +125,17 @@ impl Store {
     /// The database file.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// Operations called so far (whatever their result), by kind: `put` (a learn or a put), `get`, `list` (a
+    /// page), `delete`.
+    pub fn operations(&self) -> [(&'static str, u64); 4] {
+        let n = |i: usize| self.operations[i].load(Ordering::Relaxed);
+        [("put", n(PUT)), ("get", n(GET)), ("list", n(LIST)), ("delete", n(DELETE))]
+    }
+
+    fn count(&self, kind: usize) {
+        self.operations[kind].fetch_add(1, Ordering::Relaxed);
     }
 
     /// Writes the schema version into an empty file, or checks the one found.
@@ -160,6 +185,7 @@ impl Store {
         primitive: &dmp::Primitive,
         now_unix_ms: i64,
     ) -> Result<v1::PrimitiveRecord, ServerError> {
+        self.count(PUT);
         primitive.validate()?;
         let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
         tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
@@ -200,6 +226,7 @@ impl Store {
 
     /// One version of `(robot_id, name)`; `version` 0 means the latest.
     pub fn get(&self, robot_id: &str, name: &str, version: u64) -> Result<v1::PrimitiveRecord, ServerError> {
+        self.count(GET);
         let read = self.db.begin_read().map_err(|e| storage("begin read", e))?;
         let prims = read.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
         let found = if version == 0 {
@@ -235,6 +262,7 @@ impl Store {
         page_size: usize,
     ) -> Result<(Vec<v1::PrimitiveRecord>, Option<String>), ServerError> {
         use std::ops::Bound;
+        self.count(LIST);
         let read = self.db.begin_read().map_err(|e| storage("begin read", e))?;
         let prims = read.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
         let start = match after {
@@ -271,6 +299,7 @@ impl Store {
 
     /// Deletes every version of `(robot_id, name)`; returns how many were removed (NotFound when none).
     pub fn delete(&self, robot_id: &str, name: &str) -> Result<u64, ServerError> {
+        self.count(DELETE);
         let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
         tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
         let removed = {

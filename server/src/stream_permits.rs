@@ -5,6 +5,7 @@
 
 use std::collections::HashMap;
 use std::net::IpAddr;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 use tokio::sync::{OwnedSemaphorePermit, Semaphore};
@@ -60,6 +61,8 @@ pub struct StreamPermits {
     max_watches: usize,
     max_per_connection: usize,
     max_per_client: usize,
+    /// Streams refused so far, by the limit that refused them (in the order of [`StreamPermits::refusals`]).
+    refused: [AtomicU64; 4],
 }
 
 impl StreamPermits {
@@ -73,7 +76,23 @@ impl StreamPermits {
             max_watches: limits.max_watches,
             max_per_connection: limits.max_streams_per_connection,
             max_per_client: limits.max_streams_per_client,
+            refused: Default::default(),
         }
+    }
+
+    /// Streams refused so far, by the setting of the limit that refused them.
+    pub fn refusals(&self) -> [(&'static str, u64); 4] {
+        let n = |i: usize| self.refused[i].load(Ordering::Relaxed);
+        [
+            ("limits.max_streams", n(0)),
+            ("limits.max_watches", n(1)),
+            ("limits.max_streams_per_client", n(2)),
+            ("limits.max_streams_per_connection", n(3)),
+        ]
+    }
+
+    fn refuse(&self, index: usize) {
+        self.refused[index].fetch_add(1, Ordering::Relaxed);
     }
 
     /// Executions open now.
@@ -93,11 +112,12 @@ impl StreamPermits {
 
     /// A permit for a stream of `kind` from `peer`, or ResourceExhausted naming the limit reached.
     pub fn acquire(&self, kind: StreamKind, peer: &Peer) -> Result<StreamPermit, ServerError> {
-        let (pool, max, name, what) = match kind {
-            StreamKind::Execution => (&self.executions, self.max_executions, "max_streams", "executions"),
-            StreamKind::Watch => (&self.watches, self.max_watches, "max_watches", "scene watches"),
+        let (pool, max, name, what, index) = match kind {
+            StreamKind::Execution => (&self.executions, self.max_executions, "max_streams", "executions", 0),
+            StreamKind::Watch => (&self.watches, self.max_watches, "max_watches", "scene watches", 1),
         };
         let pool = pool.clone().try_acquire_owned().map_err(|_| {
+            self.refuse(index);
             ServerError::ResourceExhausted(format!(
                 "{max} {what} are open (limits.{name} = {max}); retry later"
             ))
@@ -107,6 +127,7 @@ impl StreamPermits {
             let mut counts = self.per_client.lock().unwrap_or_else(|p| p.into_inner());
             let n = counts.entry(client).or_insert(0);
             if *n >= self.max_per_client {
+                self.refuse(2);
                 return Err(ServerError::ResourceExhausted(format!(
                     "client {client} has {n} streams open (limits.max_streams_per_client = {}); close one or retry \
                      later",
@@ -118,6 +139,7 @@ impl StreamPermits {
         }
         if let Some(connection) = &peer.connection {
             if !connection.try_open_stream(self.max_per_connection) {
+                self.refuse(3);
                 return Err(ServerError::ResourceExhausted(format!(
                     "this connection has {} streams open (limits.max_streams_per_connection = {}); open another \
                      connection or retry later",

@@ -163,7 +163,7 @@ impl SceneUpdater {
                     debug!(key, "obstacle delete over zenoh for a cell that does not exist");
                     return Ok(());
                 };
-                let (version, existed) = scene.delete(id);
+                let (version, existed) = scene.delete(id, self.clock.now_unix_s());
                 if existed {
                     info!(cell = names.cell, obstacle = id, version, source = "zenoh", "obstacle deleted");
                 } else {

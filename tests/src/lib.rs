@@ -9,6 +9,8 @@ use dmp_client::DmpClient;
 use dmp_server::config::Config;
 use dmp_server::run::ServerHandle;
 
+pub mod scrape;
+
 /// The longest any single await of a test may take.
 pub const T: Duration = Duration::from_secs(120);
 

@@ -12,6 +12,8 @@ use dmp_server::zenoh_threads::{self, ZENOH_RUNTIME};
 use tokio::signal::unix::{SignalKind, signal};
 use tracing::{error, info, warn};
 use tracing_subscriber::EnvFilter;
+use tracing_subscriber::layer::SubscriberExt;
+use tracing_subscriber::util::SubscriberInitExt;
 
 /// Thousands of streams allocate and free small buffers (segments, robot states) at a high rate: mimalloc keeps
 /// that cheaper than the system allocator. Built without transparent huge pages (`no_thp`): with them its resident
@@ -79,11 +81,35 @@ fn main() -> ExitCode {
         }
     }
 
-    tracing_subscriber::fmt()
-        .with_env_filter(EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("info")))
-        .with_writer(std::io::stderr)
-        // Colours only on a terminal: journald and container logs get plain text.
-        .with_ansi(std::io::stderr().is_terminal())
+    let runtime = match tokio::runtime::Builder::new_multi_thread().enable_all().build() {
+        Ok(rt) => rt,
+        Err(e) => {
+            eprintln!("dmp-server: cannot start the tokio runtime: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    // Traces to OpenTelemetry: the exporter's channel lives on the runtime.
+    let otlp = config.otlp_endpoint.as_deref().map(|endpoint| {
+        let _runtime = runtime.enter();
+        dmp_server::telemetry::otlp_layer(endpoint)
+    });
+    let (otlp, traces) = match otlp.transpose() {
+        Ok(Some((layer, provider))) => (Some(layer), Some(provider)),
+        Ok(None) => (None, None),
+        Err(e) => {
+            eprintln!("dmp-server: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    tracing_subscriber::registry()
+        .with(EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("info")))
+        .with(
+            tracing_subscriber::fmt::layer()
+                .with_writer(std::io::stderr)
+                // Colours only on a terminal: journald and container logs get plain text.
+                .with_ansi(std::io::stderr().is_terminal()),
+        )
+        .with(otlp)
         .init();
     // One line with everything (JSON), then the fields an operator looks for first.
     let full = serde_json::to_string(&config).unwrap_or_else(|e| format!("<unprintable: {e}>"));
@@ -97,18 +123,11 @@ fn main() -> ExitCode {
         zenoh_connect = ?config.zenoh.connect,
         zenoh_multicast = config.zenoh.multicast_scouting,
         zenoh_runtime = std::env::var(ZENOH_RUNTIME).unwrap_or_default(),
+        otlp_endpoint = ?config.otlp_endpoint,
         config = %full,
         "effective configuration"
     );
 
-    let runtime = match tokio::runtime::Builder::new_multi_thread().enable_all().build() {
-        Ok(rt) => rt,
-        Err(e) => {
-            error!(error = %e, "cannot start the tokio runtime");
-            eprintln!("dmp-server: cannot start the tokio runtime: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
     let result = runtime.block_on(async {
         let shutdown = shutdown_signal().map_err(|e| format!("cannot install the signal handlers: {e}"))?;
         let hangups =
@@ -116,6 +135,12 @@ fn main() -> ExitCode {
         let hangups = tokio_stream::wrappers::SignalStream::new(hangups);
         dmp_server::run::run(config, shutdown, hangups).await.map_err(|e| e.to_string())
     });
+    // What is pending goes to the collector before the process exits.
+    if let Some(traces) = traces
+        && let Err(e) = traces.shutdown()
+    {
+        warn!(error = %e, "flushing the traces to the OpenTelemetry collector");
+    }
     match result {
         Ok(()) => {
             info!("stopped");

@@ -22,6 +22,8 @@ pub struct Admission {
     batch_queue: f64,
     realtime_used: Arc<AtomicU64>,
     batch_used: Arc<AtomicU64>,
+    /// Requests refused so far, by the budget that refused them (in the order of [`Admission::refusals`]).
+    refused: [AtomicU64; 4],
 }
 
 /// A reservation of a budget, returned when dropped.
@@ -69,6 +71,12 @@ fn reserve(used: &Arc<AtomicU64>, amount: f64, limit: f64) -> Result<Reservation
     .map(|_| Reservation { used: used.clone(), amount, limit })
 }
 
+/// The budgets' places in [`Admission::refusals`].
+const REALTIME: usize = 0;
+const JOB: usize = 1;
+const REQUEST: usize = 2;
+const BATCH_QUEUE: usize = 3;
+
 /// Work units in words: `3.6e8`.
 fn units(v: f64) -> String {
     format!("{v:.2e}")
@@ -84,7 +92,24 @@ impl Admission {
             batch_queue: config.batch_queue_work,
             realtime_used: Arc::default(),
             batch_used: Arc::default(),
+            refused: Default::default(),
         }
+    }
+
+    /// Requests refused so far, by the setting of the budget that refused them.
+    pub fn refusals(&self) -> [(&'static str, u64); 4] {
+        let n = |i: usize| self.refused[i].load(Ordering::Relaxed);
+        [
+            ("compute.realtime_work_per_thread_s", n(REALTIME)),
+            ("compute.max_job_work", n(JOB)),
+            ("compute.max_request_work", n(REQUEST)),
+            ("compute.batch_queue_work", n(BATCH_QUEUE)),
+        ]
+    }
+
+    /// Counts a refusal by the budget at `index` of [`Admission::refusals`].
+    fn refuse(&self, index: usize) {
+        self.refused[index].fetch_add(1, Ordering::Relaxed);
     }
 
     /// Admits a real-time stream that takes `per_second` work units per second of run time and at most `per_job`
@@ -92,6 +117,7 @@ impl Admission {
     pub fn realtime(&self, per_second: f64, per_job: f64, what: &str) -> Result<Reservation, ServerError> {
         self.check_job(per_job, what)?;
         reserve(&self.realtime_used, per_second, self.realtime_per_s).map_err(|used| {
+            self.refuse(REALTIME);
             ServerError::ResourceExhausted(format!(
                 "{what}: this real-time run needs {} work units per second and the real-time budget has {} of {} \
                  left (`compute.realtime_work_per_thread_s`); retry later, or use fewer obstacles, fewer boundary \
@@ -106,6 +132,7 @@ impl Admission {
     /// Checks that one computation of `per_job` work units fits `compute.max_job_work`.
     pub fn check_job(&self, per_job: f64, what: &str) -> Result<(), ServerError> {
         if per_job.is_nan() || per_job > self.max_job {
+            self.refuse(JOB);
             return Err(ServerError::ResourceExhausted(format!(
                 "{what}: one computation of this run would take {} work units, more than the limit of {} \
                  (`compute.max_job_work`); use shorter segments, fewer obstacles or fewer boundary samples",
@@ -119,6 +146,7 @@ impl Admission {
     /// Checks that a request of `total` work units fits `compute.max_request_work`.
     pub fn check_request(&self, total: f64, what: &str) -> Result<(), ServerError> {
         if total.is_nan() || total > self.max_request {
+            self.refuse(REQUEST);
             return Err(ServerError::ResourceExhausted(format!(
                 "{what}: this request would take {} work units, more than the limit of {} \
                  (`compute.max_request_work`); ask for less (a shorter run, fewer obstacles, samples or basis \
@@ -134,6 +162,7 @@ impl Admission {
     pub fn batch(&self, total: f64, what: &str) -> Result<Reservation, ServerError> {
         self.check_request(total, what)?;
         reserve(&self.batch_used, total, self.batch_queue).map_err(|used| {
+            self.refuse(BATCH_QUEUE);
             ServerError::ResourceExhausted(format!(
                 "{what}: the server is busy: {} work units of plans and learns are queued or running, and this \
                  request needs {} more than the {} allowed (`compute.batch_queue_work`); retry later",

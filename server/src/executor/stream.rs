@@ -89,6 +89,7 @@ pub async fn run_stream(
     admitted: Admitted,
 ) {
     run.execution.set_end_time(cfg.max_duration);
+    let _in_cell = cell.stream_opened();
     let ids: Vec<String> = run.execution.members().iter().map(|m| m.id.clone()).collect();
     let stale = StaleGuard::new(cell.staleness(), run.ignore_scene);
     let mut producer = Producer::new(&app, &cell, &cfg, &tx, control, run);
@@ -159,6 +160,9 @@ struct Producer<'a> {
     over_budget: bool,
     /// What the access file allows the stream: it ends with PERMISSION_DENIED once a reload no longer does.
     grant: Option<Grant>,
+    /// Real time: when the scene change applied at this wake-up was received (Unix seconds), until the first
+    /// segment computed with it is sent (`dmp_obstacle_update_to_segment_seconds`).
+    scene_update_unix_s: Option<f64>,
 }
 
 impl<'a> Producer<'a> {
@@ -193,6 +197,7 @@ impl<'a> Producer<'a> {
             budget: None,
             over_budget: false,
             grant: None,
+            scene_update_unix_s: None,
         }
     }
 
@@ -301,6 +306,9 @@ impl<'a> Producer<'a> {
             self.stale.observe(s, &mut self.warnings);
             self.recost(s.obstacles.len());
             debug!(version = s.version, "scene applied");
+            if realtime && !first && s.updated_unix_s > 0.0 {
+                self.scene_update_unix_s = Some(s.updated_unix_s);
+            }
         }
         self.stale.note_commands(&commands);
         let horizon = realtime.then(|| {
@@ -322,7 +330,10 @@ impl<'a> Producer<'a> {
             sequence: self.sequence,
         };
         let stepped = self.on_pool(step).await?;
-        if let Some(reason) = self.send(stepped, supersedes).await? {
+        let sent = self.send(stepped, supersedes).await?;
+        // Measured at the first segment sent after the change, if this wake-up sent one; never at a later one.
+        self.scene_update_unix_s = None;
+        if let Some(reason) = sent {
             return Ok(Some(reason));
         }
         if supersedes && self.finished.is_none() && horizon.is_some_and(|h| self.time < h) {
@@ -420,9 +431,14 @@ impl<'a> Producer<'a> {
             }
             // The robot first: publishing the states may wait on Zenoh (a robot's first state declares its
             // publisher).
+            let first_point_unix_s = computed.batch.first().map(|s| s.start_unix_s);
             tokio::select! {
                 sent = self.tx.send(Ok(computed.batch)) => if sent.is_err() { return Ok(Some("client left")) },
                 _ = app.shutdown.cancelled() => return Err(ServerError::ShuttingDown),
+            }
+            if self.cfg.realtime {
+                let (now, update) = (app.clock.now_unix_s(), self.scene_update_unix_s.take());
+                app.histograms.handed_over(now, first_point_unix_s, update);
             }
             if k == 0 {
                 // One state per wake-up: the cell-mates read them at their own wake-ups (once per refill) and

@@ -126,7 +126,7 @@ impl SceneService for SceneServiceImpl {
         let Some(scene) = self.state.cells.find(cell)? else {
             return Ok(Response::new(v1::SceneChange { scene_version: 0, changed: false }));
         };
-        let (version, changed) = scene.delete(&id);
+        let (version, changed) = scene.delete(&id, self.state.clock.now_unix_s());
         debug!(obstacle = %id, version, changed, "obstacle deleted over gRPC");
         audit!(caller, "delete obstacle", cell, obstacle = %id, version, changed);
         Ok(Response::new(v1::SceneChange { scene_version: version, changed }))
@@ -227,7 +227,7 @@ mod tests {
         let second = within("second", stream.next()).await.unwrap().unwrap();
         assert_eq!(ids(&second), ["a", "b"]);
         assert_eq!(second.snapshot.unwrap().scene_version, 2);
-        scene.delete("a");
+        scene.delete("a", system_unix_s());
         assert_eq!(ids(&within("third", stream.next()).await.unwrap().unwrap()), ["b"]);
         assert_eq!(permits.available_permits(), 0);
 

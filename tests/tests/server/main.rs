@@ -10,6 +10,7 @@ mod hostile_values;
 mod limits;
 mod load;
 mod matches_the_engine;
+mod metrics;
 mod primitives;
 mod python_clients;
 mod scene_over_zenoh;

@@ -112,3 +112,22 @@ async fn exposure_without_protection_is_refused_unless_insecure_and_then_repeate
     assert_eq!(info.identity, "anonymous");
     within("shutdown", handle.shutdown()).await.unwrap();
 }
+
+/// What the Kubernetes probes do (`grpc_health_probe -tls -tls-ca-cert=ca.pem`, deploy/k8s/dmp-server.yaml): gRPC
+/// health over TLS with the CA alone, no client certificate and no token, for the server and for the scene.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_probe_with_the_ca_alone_reads_the_health_over_tls() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    set(d);
+    let server = TestServer::start_with(|c| dmp_tests::secure(c, d)).await;
+    let url = format!("https://{}", server.handle().grpc_addr);
+    let options = ConnectOptions { tls: Some(tls(&d.join("ca.pem"), None)), ..Default::default() };
+    let probe = within("connect", DmpClient::connect_with(&url, &options)).await.unwrap();
+    for service in ["", dmp_proto::v1::scene_service_server::SERVICE_NAME] {
+        assert_eq!(within("health", probe.health(service)).await.unwrap(), "SERVING", "{service:?}");
+    }
+    let e = within("info", probe.info()).await.unwrap_err();
+    assert_eq!(e.code(), Some(tonic::Code::Unauthenticated), "nothing but health answers: {e}");
+    server.stop().await;
+}
