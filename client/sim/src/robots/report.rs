@@ -242,6 +242,10 @@ pub fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), SimE
         obstacles: fig.obstacles,
         robots: fig.robots,
         obstacle_time: fig.time,
+        solids: &[],
+        method: "",
+        clearance: None,
+        events: &[],
     };
     let svg = render_svg(&input).map_err(|e| SimError::Plot(e.to_string()))?;
     let path = dir.join(name);
