@@ -149,10 +149,7 @@ fn legend(input: &PlotInput<'_>, run: &Run<'_>, footprints: bool) -> Vec<Entry> 
         entries.push(Entry::new(Mark::Line(contact_stroke()), "contact").class("legend-contact"));
     }
     if !run.marks.is_empty() {
-        let times: Vec<String> = run.marks.iter().map(|t| fmt_num(*t)).collect();
-        entries.push(
-            Entry::new(Mark::Dot, format!("marked at t = {} s", times.join(", "))).class("legend-time-mark"),
-        );
+        entries.push(Entry::new(Mark::Dot, "path and obstacles at t (s)").class("legend-time-mark"));
     }
     if footprints {
         entries.push(Entry::new(Mark::Patch(TRANSPARENT.to_rgba(), Stroke::solid(MARKER, 1.0)), "footprints"));
@@ -160,6 +157,19 @@ fn legend(input: &PlotInput<'_>, run: &Run<'_>, footprints: bool) -> Vec<Entry> 
     entries.push(Entry::new(Mark::Dot, "start"));
     entries.push(Entry::new(Mark::Cross, "goal"));
     entries
+}
+
+/// The time of an outline, above its highest point inside the panel.
+fn time_label(chart: &mut Chart<'_>, poly: &[P2], t: f64, ((x0, x1), (y0, y1)): ((f64, f64), (f64, f64))) -> Result<(), PlotError> {
+    let inside = poly.iter().filter(|p| finite(p) && p.0 >= x0 && p.0 <= x1 && p.1 >= y0 && p.1 <= y1);
+    let Some(top) = inside.max_by(|a, b| a.1.total_cmp(&b.1)) else { return Ok(()) };
+    let style = (super::style::FONT, px(12)).into_font().color(&OBSTACLE_EDGE);
+    chart
+        .draw_series(std::iter::once(
+            EmptyElement::at(*top) + Text::new(format!("{} s", fmt_num(t)), (-(px(10) as i32), -(px(14) as i32)), style),
+        ))
+        .map_err(drawing_err)?;
+    Ok(())
 }
 
 fn contact_stroke() -> Stroke {
@@ -203,6 +213,9 @@ fn draw_plane(doc: &SharedDoc, chart: &mut Chart<'_>, pl: &Plane, run: &Run<'_>)
             } else {
                 let fill = if o.t.is_none() { obstacle_fill() } else { obstacle_fill().mix(0.5 * f) };
                 draw_patch(chart, &o.poly, fill, Some(Stroke::solid(OBSTACLE_EDGE, 1.0)))?;
+            }
+            if let Some(t) = o.t {
+                time_label(chart, &o.poly, t, pl.ranges)?;
             }
         }
         Ok(())

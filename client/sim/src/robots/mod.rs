@@ -247,6 +247,17 @@ pub enum Method {
     },
 }
 
+impl Method {
+    /// Its name in the scenario format.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::None => "none",
+            Method::Static { .. } => "static_volumetric",
+            Method::Dynamic { .. } => "dynamic_volumetric",
+        }
+    }
+}
+
 /// The message of a method.
 pub fn avoidance(m: Method) -> v1::Avoidance {
     use v1::avoidance as a;

@@ -151,7 +151,8 @@ impl Motion {
         report: &mut SimReport,
     ) -> Result<(), SimError> {
         let body = robot_body(ROBOT, self.body);
-        let r = measure(exec, DT, &self.goal, &body, &world(), &[]);
+        let world = world();
+        let r = measure(exec, DT, &self.goal, &body, &world, &[]);
         report.add(&format!("{ROBOT}/{}", self.key), r);
         let free = free_plan(client, &self.spec(), DT).await?;
         let engine: Vec<dmp::Obstacle> = self
@@ -169,6 +170,10 @@ impl Motion {
             obstacles: &engine,
             robots: &[],
             time: 0.0,
+            world: &world,
+            body: Some(&body),
+            method: self.method.name(),
+            events: &[],
         };
         write_figure(&options.out, &name, &fig)?;
         report.plots.push(name);

@@ -334,6 +334,10 @@ async fn record(
     }
     let title = format!("youBot: {} obstacle, {name} potential", event.key);
     let file = format!("{}-{name}.svg", event.key);
+    let mut events = vec![dmp_plot::Event::new(event.add_at, format!("{} appears", event.id))];
+    if let Some(t) = event.remove_at {
+        events.push(dmp_plot::Event::new(t, format!("{} removed", event.id)));
+    }
     let fig = Figure {
         title: &title,
         line: (&START, &GOAL),
@@ -342,6 +346,10 @@ async fn record(
         obstacles: &planned,
         robots: &[],
         time: 0.0,
+        world: &world,
+        body: Some(&body),
+        method: method.name(),
+        events: &events,
     };
     write_figure(&options.out, &file, &fig)?;
     report.plots.push(file);
