@@ -27,6 +27,9 @@ pub enum SolidShape {
     },
     /// Points, as offsets from the centre (each of the robot's dimension): a perception node's cloud.
     Points(Vec<Vec<f64>>),
+    /// A superquadric that is the true shape itself (an obstacle given as one, before any margin); its own centre,
+    /// rotation and velocity apply, not the [`Solid`]'s.
+    Superquadric(Obstacle),
 }
 
 /// A true shape placed in robot space, present during a time window of the run.
@@ -58,7 +61,10 @@ impl Solid {
     }
 
     fn moving(&self) -> bool {
-        self.velocity.iter().any(|v| *v != 0.0)
+        match &self.shape {
+            SolidShape::Superquadric(o) => o.velocity().iter().any(|v| *v != 0.0),
+            _ => self.velocity.iter().any(|v| *v != 0.0),
+        }
     }
 
     fn center_at(&self, t: f64) -> Vec<f64> {
@@ -85,6 +91,7 @@ impl Solid {
                 .iter()
                 .map(|p| y.iter().zip(p).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt())
                 .fold(f64::INFINITY, f64::min),
+            SolidShape::Superquadric(o) => dmp::distance::signed_distance_world(o, x, t),
         }
     }
 
@@ -132,6 +139,12 @@ impl Solid {
                     .collect()
             }
             SolidShape::Points(points) => points.clone(),
+            SolidShape::Superquadric(o) => {
+                let mut oc = vec![0.0; o.dim()];
+                o.center_at(t, &mut oc);
+                let n = super::OUTLINE_SAMPLES_ND;
+                return o.boundary_offsets(n).chunks(o.dim()).map(|p| p.iter().zip(&oc).map(|(a, b)| a + b).collect()).collect();
+            }
         };
         offsets.iter().map(|o| o.iter().zip(&c).map(|(a, b)| a + b).collect()).collect()
     }
@@ -182,6 +195,9 @@ impl Truth<'_> {
     /// samples in order for a 2-D superquadric), or the points of a cloud.
     pub(super) fn outline(&self, t: f64, (i, j): (usize, usize), samples: usize) -> Vec<P2> {
         match self {
+            Truth::Solid(Solid { shape: SolidShape::Superquadric(o), .. }) => {
+                super::space::obstacle_outline(o, t, (i, j), samples)
+            }
             Truth::Solid(s) => {
                 let p: Vec<P2> = s.samples(t).iter().map(|p| (p[i], p[j])).collect();
                 if self.is_cloud() { p } else { super::projection::convex_hull(p) }
