@@ -202,6 +202,8 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
         body: Solid::Point,
     };
     let mut report = SimReport::new("panda", options.realtime);
+    report.limits =
+        Some(super::html::Limits { speed: MAX_SPEED, acceleration: MAX_ACCELERATION, jerk: MAX_JERK });
     report.notes.push(
         "geometry and gains: see client/sim/src/robots/panda.rs (board box, red and green pegs as cylinders; \
          pegs planned as superquadrics (1, 1, 2), board as a rounded box of exponent 2)"

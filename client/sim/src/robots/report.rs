@@ -71,6 +71,8 @@ pub struct SimReport {
     pub plots: Vec<String>,
     /// What the set-up was (geometry, gains).
     pub notes: Vec<String>,
+    /// The Cartesian limits every robot must stay within, if the simulation has them.
+    pub limits: Option<super::html::Limits>,
 }
 
 impl SimReport {
@@ -115,11 +117,12 @@ impl SimReport {
         p
     }
 
-    /// Writes `report.json` in `dir`.
+    /// Writes `report.json` and `report.html` in `dir` (the figures must be there already).
     pub fn write(&self, dir: &Path) -> Result<(), SimError> {
         let path = dir.join("report.json");
         let text = serde_json::to_string_pretty(self).map_err(|e| SimError::Plot(e.to_string()))?;
-        std::fs::write(&path, text + "\n").map_err(|source| SimError::Io { path, source })
+        std::fs::write(&path, text + "\n").map_err(|source| SimError::Io { path, source })?;
+        super::html::write_html(self, dir)
     }
 }
 
