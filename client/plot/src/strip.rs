@@ -119,12 +119,11 @@ fn draw_events(
         draw_curve(chart, &[(e.t, y0), (e.t, y1)], Stroke { color: EVENT.to_rgba(), width: 1.2, dash: Some((6, 3)) })?;
         if labelled {
             let style = (super::style::FONT, px(12)).into_font().color(&EVENT);
+            let label = format!("{} ({} s)", e.label, fmt_num(e.t));
             chart
-                .draw_series(std::iter::once(Text::new(
-                    format!("{} ({} s)", e.label, fmt_num(e.t)),
-                    (e.t, y1),
-                    style,
-                )))
+                .draw_series(std::iter::once(
+                    EmptyElement::at((e.t, y1)) + Text::new(label, (px(4) as i32, px(2) as i32), style),
+                ))
                 .map_err(drawing_err)?;
         }
         Doc::end(doc);
