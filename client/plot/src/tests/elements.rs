@@ -130,7 +130,12 @@ fn a_time_strip_with_speed_acceleration_clearance_and_events() {
     assert_eq!(count_text(&svg, "scene version 3 (0.6 s)"), 1);
     assert_eq!(count_text(&svg, "t (s)"), 1);
     // The speed |(1, 0.6 t)| grows: drawn upwards (smaller y on screen) from left to right.
-    let speed: Vec<(f64, f64)> = in_class(&doc, "speed", "polyline").iter().flat_map(|p| points(p)).collect();
+    let strip = groups(&doc, "speed")[0];
+    let speed: Vec<(f64, f64)> = strip
+        .descendants()
+        .filter(|n| n.attribute("class") == Some("path-adapted"))
+        .flat_map(|g| g.descendants().filter(|n| n.has_tag_name("polyline")).flat_map(|p| points(&p)).collect::<Vec<_>>())
+        .collect();
     let (first, last) = (speed.first().unwrap(), speed.last().unwrap());
     assert!(first.0 < last.0 && first.1 > last.1, "{first:?} to {last:?}");
 }
