@@ -84,7 +84,8 @@ pub fn open(page: &Path, (width, height): (u32, u32)) -> PageShot {
 
 /// Size, luminance variance and share of non-white pixels of a PNG.
 fn measure(path: &Path) -> ((u32, u32), f64, f64) {
-    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("no screenshot at {}: {e}", path.display()));
+    let file =
+        std::fs::File::open(path).unwrap_or_else(|e| panic!("no screenshot at {}: {e}", path.display()));
     let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
     decoder.set_transformations(png::Transformations::normalize_to_color8());
     let mut reader = decoder.read_info().expect("a PNG");

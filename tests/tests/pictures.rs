@@ -31,7 +31,9 @@ fn count(doc: &roxmltree::Document<'_>, class: &str, tag: &str) -> usize {
 fn legend(doc: &roxmltree::Document<'_>, class: &str) -> Vec<String> {
     doc.descendants()
         .filter(|n| n.attribute("class") == Some(class))
-        .flat_map(|g| g.descendants().filter(|n| n.has_tag_name("text")).filter_map(|n| n.text()).collect::<Vec<_>>())
+        .flat_map(|g| {
+            g.descendants().filter(|n| n.has_tag_name("text")).filter_map(|n| n.text()).collect::<Vec<_>>()
+        })
         .map(|t| t.trim().to_string())
         .collect()
 }

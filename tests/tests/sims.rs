@@ -38,7 +38,8 @@ async fn simulate_then(name: SimName, inspect: impl FnOnce(&std::path::Path)) ->
         let doc = roxmltree::Document::parse(&svg).unwrap_or_else(|e| panic!("{plot} is not XML: {e}"));
         assert!(doc.root_element().has_tag_name("svg"), "{plot} is not an SVG");
         for class in FIGURE_CLASSES {
-            let drawn = doc.descendants().filter(|n| n.attribute("class") == Some(class)).any(|g| g.has_children());
+            let drawn =
+                doc.descendants().filter(|n| n.attribute("class") == Some(class)).any(|g| g.has_children());
             assert!(drawn, "{plot}: nothing of class {class}");
         }
     }

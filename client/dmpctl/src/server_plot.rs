@@ -83,7 +83,8 @@ async fn try_write_plot(
     spec.ignore_scene = true;
     let duration = traj.t.last().copied().unwrap_or(0.0) - traj.t.first().copied().unwrap_or(0.0);
     let plan = client.plan(v1::PlanRequest { motion: Some(spec), dt, duration: duration.max(dt) }).await?;
-    let seg = plan.trajectory.ok_or_else(|| DmpctlError::protocol("the free plan has no trajectory".into()))?;
+    let seg =
+        plan.trajectory.ok_or_else(|| DmpctlError::protocol("the free plan has no trajectory".into()))?;
     let mut s = Setpoints::new();
     s.push(&seg)?;
     let free = s.into_trajectory();

@@ -185,7 +185,13 @@ impl DrawingBackend for FineSvg {
         Ok(())
     }
 
-    fn draw_rect<S: BackendStyle>(&mut self, ul: BackendCoord, br: BackendCoord, style: &S, fill: bool) -> Res {
+    fn draw_rect<S: BackendStyle>(
+        &mut self,
+        ul: BackendCoord,
+        br: BackendCoord,
+        style: &S,
+        fill: bool,
+    ) -> Res {
         let c = style.color();
         if c.alpha > 0.0 {
             let paint = if fill {
@@ -209,7 +215,11 @@ impl DrawingBackend for FineSvg {
         Ok(())
     }
 
-    fn draw_path<S: BackendStyle, I: IntoIterator<Item = BackendCoord>>(&mut self, path: I, style: &S) -> Res {
+    fn draw_path<S: BackendStyle, I: IntoIterator<Item = BackendCoord>>(
+        &mut self,
+        path: I,
+        style: &S,
+    ) -> Res {
         let c = style.color();
         if c.alpha > 0.0 {
             self.push(format!(
@@ -223,7 +233,11 @@ impl DrawingBackend for FineSvg {
         Ok(())
     }
 
-    fn fill_polygon<S: BackendStyle, I: IntoIterator<Item = BackendCoord>>(&mut self, path: I, style: &S) -> Res {
+    fn fill_polygon<S: BackendStyle, I: IntoIterator<Item = BackendCoord>>(
+        &mut self,
+        path: I,
+        style: &S,
+    ) -> Res {
         let c = style.color();
         if c.alpha > 0.0 {
             self.push(format!(
@@ -242,7 +256,11 @@ impl DrawingBackend for FineSvg {
             let paint = if fill {
                 format!("fill=\"{}\" stroke=\"none\"", color(c))
             } else {
-                format!("fill=\"none\" stroke=\"{}\" stroke-width=\"{}\"", color(c), num(style.stroke_width() as i32))
+                format!(
+                    "fill=\"none\" stroke=\"{}\" stroke-width=\"{}\"",
+                    color(c),
+                    num(style.stroke_width() as i32)
+                )
             };
             self.push(format!(
                 "<circle cx=\"{}\" cy=\"{}\" r=\"{}\" {paint} opacity=\"{}\"/>",
@@ -273,7 +291,7 @@ impl DrawingBackend for FineSvg {
         let (x, y) = (num(pos.0), num(pos.1));
         let mut attrs = format!(
             "x=\"{x}\" y=\"{y}\" dy=\"{dy}\" text-anchor=\"{anchor}\" font-family=\"{}\" font-size=\"{}\" fill=\"{}\"",
-            escape(style.family().as_str().as_ref()),
+            escape(style.family().as_str()),
             style.size() / 1.24 / f64::from(SCALE),
             color(c)
         );
@@ -300,7 +318,11 @@ impl DrawingBackend for FineSvg {
         Ok(())
     }
 
-    fn estimate_text_size<T: BackendTextStyle>(&self, text: &str, style: &T) -> Result<(u32, u32), DrawingErrorKind<std::io::Error>> {
+    fn estimate_text_size<T: BackendTextStyle>(
+        &self,
+        text: &str,
+        style: &T,
+    ) -> Result<(u32, u32), DrawingErrorKind<std::io::Error>> {
         let ((x0, y0), (x1, y1)) =
             style.layout_box(text).map_err(|e| DrawingErrorKind::FontError(Box::new(e)))?;
         Ok(((x1 - x0).max(0) as u32, (y1 - y0).max(0) as u32))

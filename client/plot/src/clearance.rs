@@ -73,7 +73,8 @@ pub(super) fn marked_times(t0: f64, t1: f64, extra: f64) -> Vec<f64> {
         return vec![t0];
     }
     let mut marks: Vec<f64> = (0..MARKS).map(|k| t0 + span * k as f64 / (MARKS - 1) as f64).collect();
-    if extra.is_finite() && extra > t0 && extra < t1 && marks.iter().all(|m| (m - extra).abs() > 0.05 * span) {
+    if extra.is_finite() && extra > t0 && extra < t1 && marks.iter().all(|m| (m - extra).abs() > 0.05 * span)
+    {
         marks.push(extra);
         marks.sort_by(f64::total_cmp);
     }

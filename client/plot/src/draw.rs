@@ -30,9 +30,9 @@ pub(super) fn draw_curve(chart: &mut Chart<'_>, pts: &[P2], stroke: Stroke) -> R
         let seg = thinned(chart, seg);
         match stroke.dash {
             None => chart.draw_series(LineSeries::new(seg, stroke.style())).map(|_| ()),
-            Some((on, off)) => chart
-                .draw_series(DashedLineSeries::new(seg, px(on), px(off), stroke.style()))
-                .map(|_| ()),
+            Some((on, off)) => {
+                chart.draw_series(DashedLineSeries::new(seg, px(on), px(off), stroke.style())).map(|_| ())
+            }
         }
         .map_err(drawing_err)?;
     }

@@ -68,19 +68,26 @@ pub(super) fn path_entries(run: &Run<'_>, demo: Option<&str>, method: &str) -> V
     if run.single() {
         let g = &run.groups[0];
         entries.push(Entry::new(Mark::Line(run.free_stroke(g)), "obstacle-free DMP").class("legend-free"));
-        entries.push(Entry::new(Mark::Line(run.adapted_stroke(g)), adapted_text(method)).class("legend-adapted"));
+        entries.push(
+            Entry::new(Mark::Line(run.adapted_stroke(g)), adapted_text(method)).class("legend-adapted"),
+        );
     } else {
         let short = if method == "none" { "no avoidance" } else { "with avoidance" };
         for g in &run.groups {
             entries.push(
-                Entry::new(Mark::Line(run.adapted_stroke(g)), format!("{}, {short}", g.label)).class("legend-adapted"),
+                Entry::new(Mark::Line(run.adapted_stroke(g)), format!("{}, {short}", g.label))
+                    .class("legend-adapted"),
             );
             entries.push(
-                Entry::new(Mark::Line(run.free_stroke(g)), format!("{}, obstacle-free", g.label)).class("legend-free"),
+                Entry::new(Mark::Line(run.free_stroke(g)), format!("{}, obstacle-free", g.label))
+                    .class("legend-free"),
             );
         }
         if !method.is_empty() && method != "none" {
-            entries.push(Entry::new(Mark::Line(Stroke::solid(MARKER, 0.0)), format!("method: {}", method.replace('_', " "))));
+            entries.push(Entry::new(
+                Mark::Line(Stroke::solid(MARKER, 0.0)),
+                format!("method: {}", method.replace('_', " ")),
+            ));
         }
     }
     entries
@@ -91,7 +98,12 @@ pub(super) fn legend_height(entries: &[Entry], notes: &[String]) -> u32 {
 }
 
 /// The legend in a frame: a row per entry, then a row per note.
-pub(super) fn draw_legend(doc: &SharedDoc, area: &Area, entries: &[Entry], notes: &[String]) -> Result<(), PlotError> {
+pub(super) fn draw_legend(
+    doc: &SharedDoc,
+    area: &Area,
+    entries: &[Entry],
+    notes: &[String],
+) -> Result<(), PlotError> {
     let m = px(8);
     let area = area.margin(m, m, m, m);
     let (w, _) = area.dim_in_pixel();
@@ -114,19 +126,19 @@ pub(super) fn draw_legend(doc: &SharedDoc, area: &Area, entries: &[Entry], notes
                 None => area.draw(&PathElement::new(line, s.style())),
                 Some((on, off)) => area.draw(&DashedPathElement::new(line, px(on), px(off), s.style())),
             },
-            Mark::Patch(fill, edge) => area.draw(&Rectangle::new(rect, fill.filled())).and_then(|_| match edge.dash {
-                None => area.draw(&Rectangle::new(rect, edge.style())),
-                Some((on, off)) => area.draw(&DashedPathElement::new(
-                    vec![rect[0], (rect[1].0, rect[0].1), rect[1], (rect[0].0, rect[1].1), rect[0]],
-                    px(on),
-                    px(off),
-                    edge.style(),
-                )),
-            }),
-            Mark::Dot => area.draw(&Circle::new(((x0 + x1) / 2, y), px(4), MARKER.filled())),
-            Mark::Cross => {
-                area.draw(&Cross::new(((x0 + x1) / 2, y), px(5), MARKER.stroke_width(px(2))))
+            Mark::Patch(fill, edge) => {
+                area.draw(&Rectangle::new(rect, fill.filled())).and_then(|_| match edge.dash {
+                    None => area.draw(&Rectangle::new(rect, edge.style())),
+                    Some((on, off)) => area.draw(&DashedPathElement::new(
+                        vec![rect[0], (rect[1].0, rect[0].1), rect[1], (rect[0].0, rect[1].1), rect[0]],
+                        px(on),
+                        px(off),
+                        edge.style(),
+                    )),
+                })
             }
+            Mark::Dot => area.draw(&Circle::new(((x0 + x1) / 2, y), px(4), MARKER.filled())),
+            Mark::Cross => area.draw(&Cross::new(((x0 + x1) / 2, y), px(5), MARKER.stroke_width(px(2)))),
         }
         .map_err(drawing_err)?;
         put_text(&area, &e.text, (x1 + p(10), y), 16, HPos::Left);

@@ -274,4 +274,3 @@ fn validate(input: &PlotInput<'_>) -> Result<usize, PlotError> {
     }
     Ok(d)
 }
-

@@ -52,7 +52,14 @@ pub struct Solid {
 impl Solid {
     /// A still solid, always present.
     pub fn new(id: impl Into<String>, shape: SolidShape, center: Vec<f64>) -> Self {
-        Self { id: id.into(), shape, center, velocity: Vec::new(), from: f64::NEG_INFINITY, until: f64::INFINITY }
+        Self {
+            id: id.into(),
+            shape,
+            center,
+            velocity: Vec::new(),
+            from: f64::NEG_INFINITY,
+            until: f64::INFINITY,
+        }
     }
 
     /// Present at `t`.
@@ -68,7 +75,11 @@ impl Solid {
     }
 
     fn center_at(&self, t: f64) -> Vec<f64> {
-        self.center.iter().enumerate().map(|(i, c)| c + self.velocity.get(i).copied().unwrap_or(0.0) * t).collect()
+        self.center
+            .iter()
+            .enumerate()
+            .map(|(i, c)| c + self.velocity.get(i).copied().unwrap_or(0.0) * t)
+            .collect()
     }
 
     /// Signed distance from `x` to the surface at time `t` (negative inside).
@@ -143,7 +154,11 @@ impl Solid {
                 let mut oc = vec![0.0; o.dim()];
                 o.center_at(t, &mut oc);
                 let n = super::OUTLINE_SAMPLES_ND;
-                return o.boundary_offsets(n).chunks(o.dim()).map(|p| p.iter().zip(&oc).map(|(a, b)| a + b).collect()).collect();
+                return o
+                    .boundary_offsets(n)
+                    .chunks(o.dim())
+                    .map(|p| p.iter().zip(&oc).map(|(a, b)| a + b).collect())
+                    .collect();
             }
         };
         offsets.iter().map(|o| o.iter().zip(&c).map(|(a, b)| a + b).collect()).collect()
@@ -152,7 +167,8 @@ impl Solid {
 
 /// Signed distance of `y` to the box of half-extents `half` about the origin.
 fn box_sdf(y: &[f64], half: &[f64]) -> f64 {
-    let q: Vec<f64> = y.iter().enumerate().map(|(i, v)| v.abs() - half.get(i).copied().unwrap_or(0.0)).collect();
+    let q: Vec<f64> =
+        y.iter().enumerate().map(|(i, v)| v.abs() - half.get(i).copied().unwrap_or(0.0)).collect();
     let outside = q.iter().map(|v| v.max(0.0).powi(2)).sum::<f64>().sqrt();
     let inside = q.iter().copied().fold(f64::NEG_INFINITY, f64::max).min(0.0);
     outside + inside

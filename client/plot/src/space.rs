@@ -9,7 +9,9 @@ use dmp::Obstacle;
 use super::backend::{Doc, SharedDoc, px};
 use super::bounds::fit_equal_aspect;
 use super::draw::{Chart, draw_curve, draw_mesh, draw_outline, draw_patch, drawing_err};
-use super::layout::{CAPTION_H, Frame, PANEL_MARGIN, X_LABEL_AREA, Y_LABEL_AREA, captioned, chart_on, figure};
+use super::layout::{
+    CAPTION_H, Frame, PANEL_MARGIN, X_LABEL_AREA, Y_LABEL_AREA, captioned, chart_on, figure,
+};
 use super::legend::{Entry, Mark, path_entries};
 use super::projection::{Outline, Plane, planes};
 use super::run::Run;
@@ -26,12 +28,8 @@ pub(super) fn obstacle_outline(o: &Obstacle, t: f64, (i, j): (usize, usize), n: 
     let d = o.dim();
     let mut c = vec![0.0; d];
     o.center_at(t, &mut c);
-    let pts: Vec<P2> = o
-        .boundary_offsets(n)
-        .chunks(d)
-        .map(|off| (off[i] + c[i], off[j] + c[j]))
-        .filter(finite)
-        .collect();
+    let pts: Vec<P2> =
+        o.boundary_offsets(n).chunks(d).map(|off| (off[i] + c[i], off[j] + c[j])).filter(finite).collect();
     if d == 2 { pts } else { super::projection::convex_hull(pts) }
 }
 
@@ -134,9 +132,14 @@ fn legend(input: &PlotInput<'_>, run: &Run<'_>, footprints: bool) -> Vec<Entry> 
     let mut entries =
         path_entries(run, (!input.demonstration.is_empty()).then_some("demonstration"), input.method);
     if !run.truths.is_empty() {
-        let text = if input.solids.is_empty() { "obstacle (its isopotential C = 0)" } else { "obstacle (true shape)" };
+        let text = if input.solids.is_empty() {
+            "obstacle (its isopotential C = 0)"
+        } else {
+            "obstacle (true shape)"
+        };
         entries.push(
-            Entry::new(Mark::Patch(obstacle_fill(), Stroke::solid(OBSTACLE_EDGE, 1.0)), text).class("legend-true"),
+            Entry::new(Mark::Patch(obstacle_fill(), Stroke::solid(OBSTACLE_EDGE, 1.0)), text)
+                .class("legend-true"),
         );
     }
     if !input.obstacles.is_empty() && !input.solids.is_empty() {
@@ -152,7 +155,8 @@ fn legend(input: &PlotInput<'_>, run: &Run<'_>, footprints: bool) -> Vec<Entry> 
         entries.push(Entry::new(Mark::Dot, "path and obstacles at t (s)").class("legend-time-mark"));
     }
     if footprints {
-        entries.push(Entry::new(Mark::Patch(TRANSPARENT.to_rgba(), Stroke::solid(MARKER, 1.0)), "footprints"));
+        entries
+            .push(Entry::new(Mark::Patch(TRANSPARENT.to_rgba(), Stroke::solid(MARKER, 1.0)), "footprints"));
     }
     entries.push(Entry::new(Mark::Dot, "start"));
     entries.push(Entry::new(Mark::Cross, "goal"));
@@ -160,13 +164,19 @@ fn legend(input: &PlotInput<'_>, run: &Run<'_>, footprints: bool) -> Vec<Entry> 
 }
 
 /// The time of an outline, above its highest point inside the panel.
-fn time_label(chart: &mut Chart<'_>, poly: &[P2], t: f64, ((x0, x1), (y0, y1)): ((f64, f64), (f64, f64))) -> Result<(), PlotError> {
+fn time_label(
+    chart: &mut Chart<'_>,
+    poly: &[P2],
+    t: f64,
+    ((x0, x1), (y0, y1)): ((f64, f64), (f64, f64)),
+) -> Result<(), PlotError> {
     let inside = poly.iter().filter(|p| finite(p) && p.0 >= x0 && p.0 <= x1 && p.1 >= y0 && p.1 <= y1);
     let Some(top) = inside.max_by(|a, b| a.1.total_cmp(&b.1)) else { return Ok(()) };
     let style = (super::style::FONT, px(12)).into_font().color(&OBSTACLE_EDGE);
     chart
         .draw_series(std::iter::once(
-            EmptyElement::at(*top) + Text::new(format!("{} s", fmt_num(t)), (-(px(10) as i32), -(px(14) as i32)), style),
+            EmptyElement::at(*top)
+                + Text::new(format!("{} s", fmt_num(t)), (-(px(10) as i32), -(px(14) as i32)), style),
         ))
         .map_err(drawing_err)?;
     Ok(())
@@ -268,7 +278,9 @@ fn draw_plane(doc: &SharedDoc, chart: &mut Chart<'_>, pl: &Plane, run: &Run<'_>)
     })?;
     Doc::group(doc, "markers", || -> Result<(), PlotError> {
         for s in pl.starts.iter().filter(|p| finite(p)) {
-            chart.draw_series(std::iter::once(Circle::new(*s, px(4), MARKER.filled()))).map_err(drawing_err)?;
+            chart
+                .draw_series(std::iter::once(Circle::new(*s, px(4), MARKER.filled())))
+                .map_err(drawing_err)?;
         }
         for g in pl.goals.iter().filter(|p| finite(p)) {
             chart

@@ -65,7 +65,12 @@ fn curves(run: &Run<'_>, q: usize) -> Vec<(Vec<P2>, Vec<P2>)> {
 }
 
 /// Draws the strip on `area`.
-pub(super) fn draw(doc: &SharedDoc, area: &Area, input: &PlotInput<'_>, run: &Run<'_>) -> Result<(), PlotError> {
+pub(super) fn draw(
+    doc: &SharedDoc,
+    area: &Area,
+    input: &PlotInput<'_>,
+    run: &Run<'_>,
+) -> Result<(), PlotError> {
     let (tx0, tx1) = time_range(input, run);
     let (w, _) = area.dim_in_pixel();
     for (q, (class, desc)) in QUANTITIES.iter().enumerate() {
@@ -116,7 +121,11 @@ fn draw_events(
 ) -> Result<(), PlotError> {
     for e in input.events.iter().filter(|e| e.t.is_finite()) {
         Doc::begin(doc, &[("class", "event"), ("data-t", &fmt_num(e.t))]);
-        draw_curve(chart, &[(e.t, y0), (e.t, y1)], Stroke { color: EVENT.to_rgba(), width: 1.2, dash: Some((6, 3)) })?;
+        draw_curve(
+            chart,
+            &[(e.t, y0), (e.t, y1)],
+            Stroke { color: EVENT.to_rgba(), width: 1.2, dash: Some((6, 3)) },
+        )?;
         if labelled {
             let style = (super::style::FONT, px(12)).into_font().color(&EVENT);
             let label = format!("{} ({} s)", e.label, fmt_num(e.t));

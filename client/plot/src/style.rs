@@ -97,4 +97,3 @@ pub(super) fn fmt_tick(v: f64) -> String {
     let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s };
     if s == "-0" { "0".into() } else { s }
 }
-

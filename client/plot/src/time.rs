@@ -85,7 +85,8 @@ pub(super) fn render(input: &PlotInput<'_>, run: &Run<'_>, d: usize) -> Result<S
         })
         .collect();
 
-    let panels = vec![(px(840) + 2 * PANEL_MARGIN + Y_LABEL_AREA, px(150) + 2 * PANEL_MARGIN + X_LABEL_AREA); shown];
+    let panels =
+        vec![(px(840) + 2 * PANEL_MARGIN + Y_LABEL_AREA, px(150) + 2 * PANEL_MARGIN + X_LABEL_AREA); shown];
     let demo_text = if run.demo_timed { "demonstration" } else { "demonstration (time rescaled)" };
     let mut entries = path_entries(run, (!input.demonstration.is_empty()).then_some(demo_text), input.method);
     if !input.obstacles.is_empty() {
@@ -126,8 +127,12 @@ pub(super) fn render(input: &PlotInput<'_>, run: &Run<'_>, d: usize) -> Result<S
                 Ok(())
             })?;
             let g = p.owner.map(|gi| &run.groups[gi]).unwrap_or(&run.groups[0]);
-            Doc::group(doc, "demonstration", || draw_curve(&mut chart, &run.demo.against_time(p.j), demo_stroke()))?;
-            Doc::group(doc, "path-free", || draw_curve(&mut chart, &run.free.against_time(p.j), run.free_stroke(g)))?;
+            Doc::group(doc, "demonstration", || {
+                draw_curve(&mut chart, &run.demo.against_time(p.j), demo_stroke())
+            })?;
+            Doc::group(doc, "path-free", || {
+                draw_curve(&mut chart, &run.free.against_time(p.j), run.free_stroke(g))
+            })?;
             Doc::group(doc, "path-adapted", || {
                 draw_curve(&mut chart, &run.adapted.against_time(p.j), run.adapted_stroke(g))
             })

@@ -98,7 +98,10 @@ async fn server_commands_against_the_server() {
         assert!(doc.descendants().any(|n| n.has_tag_name("text") && n.text().map(str::trim) == Some(&title)));
         for class in ["path-free", "path-adapted", "speed", "clearance"] {
             let g = doc.descendants().find(|n| n.attribute("class") == Some(class));
-            assert!(g.is_some_and(|g| g.descendants().any(|n| n.has_tag_name("polyline"))), "{what}: {class}");
+            assert!(
+                g.is_some_and(|g| g.descendants().any(|n| n.has_tag_name("polyline"))),
+                "{what}: {class}"
+            );
         }
     }
 

@@ -4,7 +4,9 @@
 
 use dmp::{Obstacle, Trajectory};
 
-use super::{aspect, bump, check_common, count_text, dump, ellipse, groups, in_class, parse, points, texts, traj};
+use super::{
+    aspect, bump, check_common, count_text, dump, ellipse, groups, in_class, parse, points, texts, traj,
+};
 use crate::{Event, PlotInput, SCALE, Series, Solid, SolidShape, render_svg};
 
 fn input<'a>(free: &'a Trajectory, adapted: &'a Trajectory, obstacles: &'a [Obstacle]) -> PlotInput<'a> {
@@ -48,7 +50,9 @@ fn true_shape_under_a_lighter_isopotential() {
     assert_eq!(b.len(), 4);
     assert!((aspect(&b) - 2.0).abs() < 0.01, "{}", aspect(&b));
     let e = points(&iso[0]);
-    let span = |p: &[(f64, f64)]| p.iter().fold(f64::MIN, |m, q| m.max(q.0)) - p.iter().fold(f64::MAX, |m, q| m.min(q.0));
+    let span = |p: &[(f64, f64)]| {
+        p.iter().fold(f64::MIN, |m, q| m.max(q.0)) - p.iter().fold(f64::MAX, |m, q| m.min(q.0))
+    };
     assert!(span(&e) > 1.9 * span(&b), "the isopotential is wider than the box");
     let opacity = |n: &roxmltree::Node<'_, '_>| n.attribute("opacity").unwrap().parse::<f64>().unwrap();
     assert!(opacity(&iso[0]) < opacity(&truth[0]), "the isopotential is lighter");
@@ -91,7 +95,13 @@ fn the_legend_tells_the_free_run_from_the_adapted_one() {
         let svg = render_svg(&PlotInput { method, ..input(&free, &adapted, &obstacles) }).unwrap();
         let doc = parse(&svg);
         let legend = |class: &str| -> Vec<String> {
-            groups(&doc, class).iter().flat_map(|g| g.descendants().filter(|n| n.has_tag_name("text")).filter_map(|n| n.text())).map(str::trim).filter(|t| !t.is_empty()).map(String::from).collect()
+            groups(&doc, class)
+                .iter()
+                .flat_map(|g| g.descendants().filter(|n| n.has_tag_name("text")).filter_map(|n| n.text()))
+                .map(str::trim)
+                .filter(|t| !t.is_empty())
+                .map(String::from)
+                .collect()
         };
         assert_eq!(legend("legend-adapted"), vec![text.to_string()], "{method}");
         assert_eq!(legend("legend-free"), vec!["obstacle-free DMP".to_string()], "{method}");
@@ -99,7 +109,10 @@ fn the_legend_tells_the_free_run_from_the_adapted_one() {
             assert!(!svg.contains("with avoidance"), "a run without avoidance is labelled as one");
         }
         // Each run is drawn, in the path panel and in the time strip.
-        assert!(in_class(&doc, "path-free", "polyline").len() >= 2 && in_class(&doc, "path-adapted", "polyline").len() >= 2);
+        assert!(
+            in_class(&doc, "path-free", "polyline").len() >= 2
+                && in_class(&doc, "path-adapted", "polyline").len() >= 2
+        );
     }
 }
 
@@ -116,7 +129,9 @@ fn a_time_strip_with_speed_acceleration_clearance_and_events() {
     dump("a_time_strip", &svg);
     check_common(&svg);
     let doc = parse(&svg);
-    for (class, unit) in [("speed", "speed (m/s)"), ("acceleration", "acceleration (m/s²)"), ("clearance", "clearance (m)")] {
+    for (class, unit) in
+        [("speed", "speed (m/s)"), ("acceleration", "acceleration (m/s²)"), ("clearance", "clearance (m)")]
+    {
         let g = groups(&doc, class);
         assert_eq!(g.len(), 1, "{class}");
         assert!(g[0].descendants().any(|n| n.has_tag_name("polyline")), "{class} drawn");
@@ -134,7 +149,12 @@ fn a_time_strip_with_speed_acceleration_clearance_and_events() {
     let speed: Vec<(f64, f64)> = strip
         .descendants()
         .filter(|n| n.attribute("class") == Some("path-adapted"))
-        .flat_map(|g| g.descendants().filter(|n| n.has_tag_name("polyline")).flat_map(|p| points(&p)).collect::<Vec<_>>())
+        .flat_map(|g| {
+            g.descendants()
+                .filter(|n| n.has_tag_name("polyline"))
+                .flat_map(|p| points(&p))
+                .collect::<Vec<_>>()
+        })
         .collect();
     let (first, last) = (speed.first().unwrap(), speed.last().unwrap());
     assert!(first.0 < last.0 && first.1 > last.1, "{first:?} to {last:?}");
@@ -166,7 +186,11 @@ fn zoomed_on_the_motion_not_on_a_large_obstacle() {
     dump("zoomed_on_the_motion", &svg);
     let doc = parse(&svg);
     let panel = doc.descendants().find(|n| n.attribute("id") == Some("panel-0")).unwrap();
-    let ticks: Vec<f64> = panel.descendants().filter(|n| n.has_tag_name("text")).filter_map(|n| n.text()?.trim().parse().ok()).collect();
+    let ticks: Vec<f64> = panel
+        .descendants()
+        .filter(|n| n.has_tag_name("text"))
+        .filter_map(|n| n.text()?.trim().parse().ok())
+        .collect();
     let (lo, hi) = ticks.iter().fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
     assert!(hi - lo < 0.3, "axes span {lo} to {hi}: not zoomed on a motion of 0.1 m");
 }
@@ -178,15 +202,30 @@ fn crisp_sub_pixel_coordinates_with_units() {
     let svg = render_svg(&input(&free, &adapted, &obstacles)).unwrap();
     let doc = parse(&svg);
     let root = doc.root_element();
-    let (w, h): (f64, f64) = (root.attribute("width").unwrap().parse().unwrap(), root.attribute("height").unwrap().parse().unwrap());
+    let (w, h): (f64, f64) = (
+        root.attribute("width").unwrap().parse().unwrap(),
+        root.attribute("height").unwrap().parse().unwrap(),
+    );
     assert_eq!(root.attribute("viewBox"), Some(format!("0 0 {w} {h}").as_str()));
     assert!(w > 600.0 && w < 3000.0 && h > 400.0 && h < 3000.0, "{w} x {h} px");
-    let coords: Vec<f64> = in_class(&doc, "path-adapted", "polyline").iter().flat_map(|p| points(p)).flat_map(|p| [p.0, p.1]).collect();
+    let coords: Vec<f64> = in_class(&doc, "path-adapted", "polyline")
+        .iter()
+        .flat_map(|p| points(p))
+        .flat_map(|p| [p.0, p.1])
+        .collect();
     let fractional = coords.iter().filter(|v| v.fract() != 0.0).count();
-    assert!(fractional > coords.len() / 2, "{fractional} of {} coordinates off the whole pixel", coords.len());
+    assert!(
+        fractional > coords.len() / 2,
+        "{fractional} of {} coordinates off the whole pixel",
+        coords.len()
+    );
     assert!(coords.iter().all(|v| (v * f64::from(SCALE)).fract() == 0.0), "on the 1/{SCALE} pixel grid");
     for unit in ["x1 (m)", "x2 (m)", "t (s)"] {
         assert_eq!(count_text(&svg, unit), 1, "{unit}");
     }
-    assert!(texts(&svg).iter().all(|t| t != "-0" && !t.starts_with("-0.0") || t.parse::<f64>().is_ok_and(|v| v != 0.0)));
+    assert!(
+        texts(&svg)
+            .iter()
+            .all(|t| t != "-0" && !t.starts_with("-0.0") || t.parse::<f64>().is_ok_and(|v| v != 0.0))
+    );
 }

@@ -46,7 +46,10 @@ pub(super) fn parse(svg: &str) -> roxmltree::Document<'_> {
 /// The text of every `<text>` element.
 pub(super) fn texts(svg: &str) -> Vec<String> {
     let doc = parse(svg);
-    doc.descendants().filter(|n| n.has_tag_name("text")).map(|n| n.text().unwrap_or("").trim().to_string()).collect()
+    doc.descendants()
+        .filter(|n| n.has_tag_name("text"))
+        .map(|n| n.text().unwrap_or("").trim().to_string())
+        .collect()
 }
 
 pub(super) fn count_text(svg: &str, s: &str) -> usize {
@@ -59,8 +62,15 @@ pub(super) fn groups<'a, 'i>(doc: &'a roxmltree::Document<'i>, class: &str) -> V
 }
 
 /// The elements named `tag` under the groups of class `class`.
-pub(super) fn in_class<'a, 'i>(doc: &'a roxmltree::Document<'i>, class: &str, tag: &str) -> Vec<roxmltree::Node<'a, 'i>> {
-    groups(doc, class).into_iter().flat_map(|g| g.descendants().filter(|n| n.has_tag_name(tag)).collect::<Vec<_>>()).collect()
+pub(super) fn in_class<'a, 'i>(
+    doc: &'a roxmltree::Document<'i>,
+    class: &str,
+    tag: &str,
+) -> Vec<roxmltree::Node<'a, 'i>> {
+    groups(doc, class)
+        .into_iter()
+        .flat_map(|g| g.descendants().filter(|n| n.has_tag_name(tag)).collect::<Vec<_>>())
+        .collect()
 }
 
 /// The `points` of a polygon or polyline, in pixels.

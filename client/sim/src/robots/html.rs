@@ -35,8 +35,11 @@ fn verdict(ok: bool) -> &'static str {
     if ok { "<td class=\"pass\">pass</td>" } else { "<td class=\"fail\">fail</td>" }
 }
 
-/// The checks of one robot: `(what, passed, detail)`.
-fn checks(r: &RobotReport, realtime: bool, limits: Option<&Limits>) -> Vec<(&'static str, bool, String)> {
+/// A check: what, whether it passed, the figure behind it.
+type Check = (&'static str, bool, String);
+
+/// The checks of one robot.
+fn checks(r: &RobotReport, realtime: bool, limits: Option<&Limits>) -> Vec<Check> {
     let mut c = vec![
         ("goal reached", r.reached_goal, format!("{:.4} m away, {}", r.final_error_m, r.final_status)),
         (
@@ -44,7 +47,11 @@ fn checks(r: &RobotReport, realtime: bool, limits: Option<&Limits>) -> Vec<(&'st
             r.collisions.is_empty(),
             if r.collisions.is_empty() { "none".into() } else { r.collisions.join(", ") },
         ),
-        ("continuous setpoints", r.discontinuities == 0, format!("{} discontinuous steps", r.discontinuities)),
+        (
+            "continuous setpoints",
+            r.discontinuities == 0,
+            format!("{} discontinuous steps", r.discontinuities),
+        ),
         ("finite values", r.non_finite == 0, format!("{} non-finite", r.non_finite)),
         ("setpoints", r.setpoints > 0, format!("{} in {} segments", r.setpoints, r.segments)),
     ];
@@ -66,7 +73,7 @@ fn checks(r: &RobotReport, realtime: bool, limits: Option<&Limits>) -> Vec<(&'st
 /// The page of `report`, with the figures read from `dir`.
 pub fn render_html(report: &SimReport, dir: &Path) -> Result<String, SimError> {
     let limits = report.limits.as_ref();
-    let all: Vec<(String, Vec<(&str, bool, String)>)> =
+    let all: Vec<(String, Vec<Check>)> =
         report.robots.iter().map(|(id, r)| (id.clone(), checks(r, report.realtime, limits))).collect();
     let passed = all.iter().all(|(_, c)| c.iter().all(|x| x.1));
     let mut h = String::new();

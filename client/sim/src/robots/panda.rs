@@ -231,9 +231,13 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
         obstacles: vec![board(RING_RADIUS), peg("red-peg", &RED, RING_RADIUS)],
         body: Solid::Ball { radius: RING_RADIUS },
     };
-    let carry_static =
-        carry("carry-static", "Panda: move to peg (static potential)", Method::Static { a: 10.0, eta: 2.0 });
-    let carry_dynamic = carry("carry-dynamic", "Panda: move to peg (dynamic potential)", dynamic);
+    let carry_static = carry(
+        "carry-static",
+        "Panda: carry the ring past the red peg (static potential)",
+        Method::Static { a: 10.0, eta: 2.0 },
+    );
+    let carry_dynamic =
+        carry("carry-dynamic", "Panda: carry the ring past the red peg (dynamic potential)", dynamic);
     // One after the other: a robot executes one stream at a time.
     let a = carry_static.run(client, options).await?;
     let b = carry_dynamic.run(client, options).await?;
