@@ -142,6 +142,15 @@ fn legend(input: &PlotInput<'_>, run: &Run<'_>, footprints: bool) -> Vec<Entry> 
                 .class("legend-true"),
         );
     }
+    if run.truths.iter().any(|t| t.is_cloud()) {
+        entries.push(
+            Entry::new(
+                Mark::Patch(OBSTACLE_EDGE.to_rgba(), Stroke::solid(OBSTACLE_EDGE, 1.0)),
+                "points seen",
+            )
+            .class("legend-points"),
+        );
+    }
     if !input.obstacles.is_empty() && !input.solids.is_empty() {
         entries.push(
             Entry::new(Mark::Patch(isopotential_fill(), isopotential_stroke()), "isopotential avoided")

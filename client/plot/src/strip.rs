@@ -119,7 +119,7 @@ fn draw_events(
     (y0, y1): (f64, f64),
     labelled: bool,
 ) -> Result<(), PlotError> {
-    for e in input.events.iter().filter(|e| e.t.is_finite()) {
+    for (k, e) in input.events.iter().filter(|e| e.t.is_finite()).enumerate() {
         Doc::begin(doc, &[("class", "event"), ("data-t", &fmt_num(e.t))]);
         draw_curve(
             chart,
@@ -131,7 +131,9 @@ fn draw_events(
             let label = format!("{} ({} s)", e.label, fmt_num(e.t));
             chart
                 .draw_series(std::iter::once(
-                    EmptyElement::at((e.t, y1)) + Text::new(label, (px(4) as i32, px(2) as i32), style),
+                    // Staggered on three rows, so that close events stay readable.
+                    EmptyElement::at((e.t, y1))
+                        + Text::new(label, (px(4) as i32, px(2 + 14 * (k as u32 % 3)) as i32), style),
                 ))
                 .map_err(drawing_err)?;
         }

@@ -171,6 +171,7 @@ impl Motion {
             robots: &[],
             time: 0.0,
             world: &world,
+            seen: &[],
             body: Some(&body),
             method: self.method.name(),
             events: &[],

@@ -443,6 +443,7 @@ fn record(
         robots: &agents,
         time: t_close,
         world: &world(),
+        seen: &[],
         body: None,
         // The pegs and the board with the static potential, the other arm's jaws with the dynamic one.
         method: "static_volumetric",

@@ -232,6 +232,8 @@ pub struct Figure<'a> {
     pub time: f64,
     /// The true world: the obstacles' real shapes, drawn under the superquadrics the planner sees.
     pub world: &'a [Body],
+    /// Point clouds a perception node saw, drawn with the true shapes.
+    pub seen: &'a [dmp_plot::Solid],
     /// The robot's body, for a single robot: its clearance to the world over time is measured with it (else the
     /// figure measures from the controlled point).
     pub body: Option<&'a Body>,
@@ -275,7 +277,8 @@ fn clearance_series(traj: &Trajectory, body: &Body, world: &[Body]) -> Series {
 pub fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), SimError> {
     let demo = vec![fig.line.0.to_vec(), fig.line.1.to_vec()];
     let sub = fig.robots.first().map_or(fig.line.0.len(), |r| r.dims.len()).min(3);
-    let solids: Vec<dmp_plot::Solid> = fig.world.iter().map(|b| plot_solid(b, sub)).collect();
+    let mut solids: Vec<dmp_plot::Solid> = fig.world.iter().map(|b| plot_solid(b, sub)).collect();
+    solids.extend(fig.seen.iter().cloned());
     let clearance = match fig.body {
         Some(body) if fig.robots.len() <= 1 => Some(vec![clearance_series(fig.adapted, body, fig.world)]),
         _ => None,

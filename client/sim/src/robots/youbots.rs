@@ -334,6 +334,7 @@ async fn run_one(
         robots: &agents,
         time: when,
         world: &world,
+        seen: &[],
         body: None,
         method: method.name(),
         events: &[],
