@@ -8,7 +8,7 @@
 //! The figure code wraps what it draws in `<g class="...">` groups ([`Doc::group`]), so that a reader (or a test)
 //! finds the obstacles' true shapes, the isopotentials, the contacts and the events by class.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::fmt::Write as _;
 use std::rc::Rc;
 
@@ -20,6 +20,26 @@ use plotters_backend::{
 
 /// Device units per pixel of the figure.
 pub const SCALE: u32 = 8;
+
+thread_local! {
+    /// The dash pattern of the lines being drawn (device units), set by [`dashed`]: one polyline with a
+    /// `stroke-dasharray` instead of an element per dash.
+    static DASH: Cell<Option<(u32, u32)>> = const { Cell::new(None) };
+}
+
+/// Runs `f` with lines drawn dashed `(on, off)` (device units). Figures are drawn on one thread, start to end.
+pub(super) fn dashed<T>(dash: (u32, u32), f: impl FnOnce() -> T) -> T {
+    let before = DASH.with(|d| d.replace(Some(dash)));
+    let out = f();
+    DASH.with(|d| d.set(before));
+    out
+}
+
+fn dasharray() -> String {
+    DASH.with(Cell::get).map_or(String::new(), |(on, off)| {
+        format!(" stroke-dasharray=\"{} {}\"", num(on as i32), num(off as i32))
+    })
+}
 
 /// `v` pixels in device units.
 pub(super) const fn px(v: u32) -> u32 {
@@ -223,9 +243,10 @@ impl DrawingBackend for FineSvg {
         let c = style.color();
         if c.alpha > 0.0 {
             self.push(format!(
-                "<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" stroke-linejoin=\"round\" opacity=\"{}\" points=\"{}\"/>",
+                "<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" stroke-linejoin=\"round\"{} opacity=\"{}\" points=\"{}\"/>",
                 color(c),
                 num(style.stroke_width() as i32),
+                dasharray(),
                 c.alpha,
                 points(path)
             ));

@@ -5,8 +5,8 @@ use super::draw::Chart;
 
 /// Longest polyline drawn per curve: longer trajectories are decimated (every k-th row, plus the last).
 pub const MAX_POINTS: usize = 2000;
-/// Smallest distance on screen, in device units (a pixel), between consecutive drawn points of a curve.
-const MIN_PIXEL_STEP: i64 = super::backend::SCALE as i64;
+/// Smallest distance on screen, in device units (a pixel and a half), between consecutive drawn points of a curve.
+const MIN_PIXEL_STEP: i64 = 3 * super::backend::SCALE as i64 / 2;
 
 /// Row indices kept when decimating `n` rows to at most about [`MAX_POINTS`]: every k-th row and the last one.
 pub(super) fn decimated(n: usize) -> Vec<usize> {

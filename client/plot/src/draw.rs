@@ -6,7 +6,7 @@ use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::backend::{FineSvg, px};
+use super::backend::{FineSvg, dashed, px};
 use super::decimate::thinned;
 use super::style::{FONT, Stroke, fmt_tick};
 use super::{P2, PlotError, finite};
@@ -28,11 +28,10 @@ fn ranges(chart: &Chart<'_>) -> ((f64, f64), (f64, f64)) {
 pub(super) fn draw_curve(chart: &mut Chart<'_>, pts: &[P2], stroke: Stroke) -> Result<(), PlotError> {
     for seg in pts.split(|p| !finite(p)).filter(|s| s.len() >= 2) {
         let seg = thinned(chart, seg);
+        let mut draw = || chart.draw_series(LineSeries::new(seg.iter().copied(), stroke.style())).map(|_| ());
         match stroke.dash {
-            None => chart.draw_series(LineSeries::new(seg, stroke.style())).map(|_| ()),
-            Some((on, off)) => {
-                chart.draw_series(DashedLineSeries::new(seg, px(on), px(off), stroke.style())).map(|_| ())
-            }
+            None => draw(),
+            Some((on, off)) => dashed((px(on), px(off)), draw),
         }
         .map_err(drawing_err)?;
     }
@@ -48,6 +47,7 @@ pub(super) fn draw_patch(
 ) -> Result<(), PlotError> {
     let poly: Vec<P2> = poly.iter().copied().filter(finite).collect();
     let poly = clip_polygon(&poly, ranges(chart));
+    let poly = thinned(chart, &poly);
     if poly.len() < 3 {
         return Ok(());
     }

@@ -43,7 +43,9 @@ fn outlines(input: &PlotInput<'_>, run: &Run<'_>, axes: (usize, usize), n: usize
         if is_moving { run.marks.iter().map(|t| Some(*t)).collect() } else { vec![None] }
     };
     let mut iso = Vec::new();
-    for o in input.obstacles {
+    // Without true shapes given, the obstacles are their own: the isopotential is the outline drawn as the shape.
+    let isopotentials = if input.solids.is_empty() { &[][..] } else { input.obstacles };
+    for o in isopotentials {
         for t in at(moving(o)) {
             let poly = obstacle_outline(o, t.unwrap_or(run.obstacle_time), axes, n);
             iso.push(Outline { t, poly, cloud: false });
