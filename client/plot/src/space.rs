@@ -174,23 +174,28 @@ fn legend(input: &PlotInput<'_>, run: &Run<'_>, footprints: bool) -> Vec<Entry> 
     entries
 }
 
-/// The time of an outline, above its highest point inside the panel.
+/// Labels of one obstacle's outlines closer than this on screen (device units) are left out.
+const LABEL_GAP: i32 = px(40) as i32;
+
+/// The time of an outline, above its highest point inside the panel, unless that is within [`LABEL_GAP`] of the
+/// `last` label; returns where the last label now is.
 fn time_label(
     chart: &mut Chart<'_>,
     poly: &[P2],
     t: f64,
     ((x0, x1), (y0, y1)): ((f64, f64), (f64, f64)),
-) -> Result<(), PlotError> {
+    last: Option<(i32, i32)>,
+) -> Result<Option<(i32, i32)>, PlotError> {
     let inside = poly.iter().filter(|p| finite(p) && p.0 >= x0 && p.0 <= x1 && p.1 >= y0 && p.1 <= y1);
-    let Some(top) = inside.max_by(|a, b| a.1.total_cmp(&b.1)) else { return Ok(()) };
+    let Some(top) = inside.max_by(|a, b| a.1.total_cmp(&b.1)) else { return Ok(last) };
+    let at = chart.backend_coord(top);
+    if last.is_some_and(|l| (l.0 - at.0).abs().max((l.1 - at.1).abs()) < LABEL_GAP) {
+        return Ok(last);
+    }
     let style = (super::style::FONT, px(12)).into_font().color(&OBSTACLE_EDGE);
-    chart
-        .draw_series(std::iter::once(
-            EmptyElement::at(*top)
-                + Text::new(format!("{} s", fmt_num(t)), (-(px(10) as i32), -(px(14) as i32)), style),
-        ))
-        .map_err(drawing_err)?;
-    Ok(())
+    let label = Text::new(format!("{} s", fmt_num(t)), (-(px(10) as i32), -(px(14) as i32)), style);
+    chart.draw_series(std::iter::once(EmptyElement::at(*top) + label)).map_err(drawing_err)?;
+    Ok(Some(at))
 }
 
 fn contact_stroke() -> Stroke {
@@ -224,7 +229,12 @@ fn draw_plane(doc: &SharedDoc, chart: &mut Chart<'_>, pl: &Plane, run: &Run<'_>)
         Ok(())
     })?;
     Doc::group(doc, "obstacle-true", || -> Result<(), PlotError> {
+        // Where the last time label of the current obstacle went: labels closer than this are left out.
+        let mut last: Option<(i32, i32)> = None;
         for o in &pl.truth {
+            if o.t.is_some() && o.t == run.marks.first().copied() {
+                last = None;
+            }
             let f = fade(run, o.t);
             if o.cloud {
                 let style = OBSTACLE_EDGE.mix(f).filled();
@@ -236,7 +246,7 @@ fn draw_plane(doc: &SharedDoc, chart: &mut Chart<'_>, pl: &Plane, run: &Run<'_>)
                 draw_patch(chart, &o.poly, fill, Some(Stroke::solid(OBSTACLE_EDGE, 1.0)))?;
             }
             if let Some(t) = o.t {
-                time_label(chart, &o.poly, t, pl.ranges)?;
+                last = time_label(chart, &o.poly, t, pl.ranges, last)?;
             }
         }
         Ok(())
