@@ -1,6 +1,8 @@
 //! The fixture of the end-to-end tests (and of the latency example): the real server in-process on loopback, and
 //! timeouts. Every test that needs a running server starts it here.
 
+pub mod browser;
+
 use std::future::Future;
 use std::path::Path;
 use std::time::Duration;

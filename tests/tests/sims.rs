@@ -6,8 +6,17 @@ use dmp_sim::robots::{SimName, SimOptions, SimReport, run, run_with};
 use dmp_tests::{TestServer, within};
 
 /// Starts a server, runs `name` against it (simulated clock), shuts the server down; returns the report and
-/// checks that the report and the figures were written.
+/// checks that the report, the figures and the page were written.
 async fn simulate(name: SimName) -> SimReport {
+    simulate_then(name, |_| {}).await
+}
+
+/// The classes every figure of a simulation has: both shapes of the obstacles, both runs, the time strip.
+const FIGURE_CLASSES: [&str; 7] =
+    ["obstacle-true", "isopotential", "path-free", "path-adapted", "speed", "acceleration", "clearance"];
+
+/// [`simulate`], then `inspect` on the output folder before it is removed.
+async fn simulate_then(name: SimName, inspect: impl FnOnce(&std::path::Path)) -> SimReport {
     let server = TestServer::start().await;
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
@@ -26,8 +35,21 @@ async fn simulate(name: SimName) -> SimReport {
     assert_eq!(written["collision"], serde_json::Value::Bool(report.collision));
     for plot in &report.plots {
         let svg = std::fs::read_to_string(out.join(plot)).unwrap();
-        assert!(svg.starts_with("<svg") || svg.starts_with("<?xml"), "{plot} is not an SVG");
+        let doc = roxmltree::Document::parse(&svg).unwrap_or_else(|e| panic!("{plot} is not XML: {e}"));
+        assert!(doc.root_element().has_tag_name("svg"), "{plot} is not an SVG");
+        for class in FIGURE_CLASSES {
+            let drawn =
+                doc.descendants().filter(|n| n.attribute("class") == Some(class)).any(|g| g.has_children());
+            assert!(drawn, "{plot}: nothing of class {class}");
+        }
     }
+    // One page with every figure inline, a verdict per check, and nothing to fetch.
+    let page = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert_eq!(page.matches("<svg").count(), report.plots.len());
+    let cells = page.matches("<td class=\"pass\">").count() + page.matches("<td class=\"fail\">").count();
+    assert!(cells >= 5 * report.robots.len(), "{cells} verdicts for {} robots", report.robots.len());
+    assert_eq!(page.replace("xmlns=\"http://www.w3.org/2000/svg\"", "").matches("http").count(), 0, "a URL");
+    inspect(&out);
     // Shown with --nocapture (and on failure).
     println!("{}", serde_json::to_string_pretty(&report).unwrap());
     report
@@ -49,7 +71,14 @@ fn assert_clean(report: &SimReport) {
 #[tokio::test(flavor = "multi_thread")]
 async fn panda_picks_and_places_past_the_red_peg() {
     use dmp_sim::robots::panda;
-    let report = simulate(SimName::Panda).await;
+    let report = simulate_then(SimName::Panda, |out| {
+        // The page opens from the disk in a browser: not blank, no console message.
+        let shot = dmp_tests::browser::open(&out.join("report.html"), (1400, 4000));
+        assert!(shot.console.is_empty(), "console: {:#?}", shot.console);
+        assert_eq!(shot.size, (1400, 4000));
+        assert!(shot.luminance_variance > 100.0 && shot.ink > 0.02, "blank page? {shot:?}");
+    })
+    .await;
     assert_clean(&report);
     assert_eq!(report.robots.len(), 3);
     assert_eq!(report.plots.len(), 3);

@@ -95,10 +95,10 @@ pub enum Command {
         #[arg(long)]
         name: String,
     },
-    /// Plan a whole trajectory around the cell's obstacles and write DIR/trajectory.csv.
+    /// Plan a whole trajectory around the cell's obstacles and write DIR/trajectory.csv and DIR/plot.svg.
     Plan(PlanArgs),
     /// Execute as a stream of segments (a line per segment on stderr) and write the setpoints in force to
-    /// DIR/trajectory.csv.
+    /// DIR/trajectory.csv, and DIR/plot.svg.
     Stream(StreamArgs),
     /// The cell's obstacles.
     #[command(subcommand)]

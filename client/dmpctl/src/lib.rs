@@ -10,6 +10,7 @@
 //! | output files | [`outputs`] |
 //! | demonstrations from CSV | [`demo_csv`] |
 //! | the commands that talk to the server (`learn`, `list`, `plan`, `stream`, `scene` ...) | [`server_commands`] |
+//! | the figure of `plan` and `stream` | [`server_plot`] |
 //! | `scenario run --server`: the offline experiment computed by the server | [`scenario_through_server`] |
 //! | errors and the exit code | [`error`] |
 
@@ -24,5 +25,6 @@ pub mod scenario_file;
 pub mod scenario_through_server;
 pub mod server_commands;
 pub mod server_info;
+pub mod server_plot;
 
 pub use error::DmpctlError;

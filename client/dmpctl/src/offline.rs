@@ -56,7 +56,11 @@ pub fn write_outputs(
         goal: Some(&p.motion.goal),
         obstacles: &p.scene.obstacles,
         robots: &p.scene.agents,
-        obstacle_time: 0.0,
+        obstacle_time: f64::NAN,
+        solids: &[],
+        method: p.scene.avoidance.method.name(),
+        clearance: None,
+        events: &[],
     })?;
     write_file(out, "plot.svg", svg.as_bytes())
 }

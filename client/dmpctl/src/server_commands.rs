@@ -122,7 +122,7 @@ pub fn motion_spec(m: &MotionArgs) -> v1::MotionSpec {
     }
 }
 
-/// `plan`: the whole trajectory, written to `DIR/trajectory.csv`.
+/// `plan`: the whole trajectory, written to `DIR/trajectory.csv`, and its figure to `DIR/plot.svg`.
 pub async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, DmpctlError> {
     let request = v1::PlanRequest {
         motion: Some(motion_spec(&a.motion)),
@@ -137,6 +137,7 @@ pub async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, DmpctlErro
     s.push(&seg)?;
     let traj = s.trajectory().ok_or_else(|| DmpctlError::protocol("the plan has no points".into()))?;
     write_file(&a.out, "trajectory.csv", trajectory_csv(traj).as_bytes())?;
+    crate::server_plot::write_plot(client, &a.motion, "plan", traj, seg.dt, &[], &a.out).await;
     let collisions = if r.collisions.is_empty() { "none".to_string() } else { r.collisions.join(", ") };
     Ok(format!(
         "{}/{}: {} points over {} s (dt {}), scene version {}, collisions: {collisions}, stalled: {}; wrote {}",
@@ -171,7 +172,8 @@ pub fn segment_line(seg: &v1::Segment) -> String {
     )
 }
 
-/// `stream`: executes, prints a line per segment on stderr, writes the setpoints in force to `DIR/trajectory.csv`.
+/// `stream`: executes, prints a line per segment on stderr, writes the setpoints in force to `DIR/trajectory.csv`
+/// and their figure to `DIR/plot.svg`.
 /// Ctrl-C ends the stream early and still writes what was received.
 pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, DmpctlError> {
     use tokio_stream::StreamExt;
@@ -191,6 +193,7 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
     let mut s = Setpoints::new();
     let mut interrupted = false;
     let mut stale = false;
+    let mut versions = crate::server_plot::SceneVersions::default();
     let ctrl_c = tokio::signal::ctrl_c();
     tokio::pin!(ctrl_c);
     loop {
@@ -202,6 +205,7 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
                     eprintln!("{}", segment_line(&seg));
                     print_warnings(&seg.warnings, seg.scene_stale, &mut stale);
                     s.push(&seg)?;
+                    versions.see(&seg);
                 }
             },
             _ = &mut ctrl_c => {
@@ -218,6 +222,8 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
         return Err(DmpctlError::protocol(format!("the stream ended after {n} segments without any point")));
     }
     write_file(&a.out, "trajectory.csv", trajectory_csv(&traj).as_bytes())?;
+    let dt = a.dt.unwrap_or(if traj.len() > 1 { traj.t[1] - traj.t[0] } else { 1e-3 });
+    crate::server_plot::write_plot(client, &a.motion, "stream", &traj, dt, &versions.events, &a.out).await;
     Ok(format!(
         "{}/{}: {n} segments{}, {} setpoints in force up to t = {} s, last status {status}; wrote {}",
         a.motion.robot,

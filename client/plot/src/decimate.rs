@@ -5,8 +5,8 @@ use super::draw::Chart;
 
 /// Longest polyline drawn per curve: longer trajectories are decimated (every k-th row, plus the last).
 pub const MAX_POINTS: usize = 2000;
-/// Smallest distance on screen, in pixels, between consecutive drawn points of a curve.
-const MIN_PIXEL_STEP: i64 = 3;
+/// Smallest distance on screen, in device units (a pixel and a half), between consecutive drawn points of a curve.
+const MIN_PIXEL_STEP: i64 = 3 * super::backend::SCALE as i64 / 2;
 
 /// Row indices kept when decimating `n` rows to at most about [`MAX_POINTS`]: every k-th row and the last one.
 pub(super) fn decimated(n: usize) -> Vec<usize> {
@@ -21,9 +21,9 @@ pub(super) fn decimated(n: usize) -> Vec<usize> {
     idx
 }
 
-/// The points of `seg` at least [`MIN_PIXEL_STEP`] pixels apart on screen (and the last one): the backend rounds to
-/// whole pixels, and denser points only draw a jagged line.
-pub(super) fn thinned(chart: &Chart<'_, '_>, seg: &[P2]) -> Vec<P2> {
+/// The points of `seg` at least [`MIN_PIXEL_STEP`] apart on screen (and the last one): denser points only make the
+/// file bigger.
+pub(super) fn thinned(chart: &Chart<'_>, seg: &[P2]) -> Vec<P2> {
     let mut out = Vec::with_capacity(seg.len());
     let mut last: Option<(i32, i32)> = None;
     for (k, p) in seg.iter().enumerate() {

@@ -11,14 +11,30 @@
 //! robot-space panel(s), the obstacles are drawn once, and each robot's footprint is outlined where it is at
 //! [`PlotInput::obstacle_time`].
 //!
-//! Rendering uses plotters' SVG backend without its `ttf` feature: text is emitted as SVG `<text>` elements that the
-//! viewer lays out (plotters only estimates their width for spacing), so no font library is needed. Text that fails to
-//! draw is dropped rather than failing the figure.
+//! Every obstacle is drawn twice: its true shape (a box, ball, cylinder or point cloud, [`Solid`]; filled) and, lighter
+//! and dashed, the isopotential the robot avoids (the inflated superquadric, [`PlotInput::obstacles`]). Where the run
+//! touches a true shape (clearance at most 0) the path is marked. Under the robot-space panels a strip of three
+//! panels shows speed, acceleration and clearance to the nearest obstacle over time, with the run's events as
+//! vertical lines. Moving obstacles and robots are outlined at several marked times, and the paths ticked at the same
+//! times.
+//!
+//! Rendering goes through plotters into its own SVG backend (`backend.rs`): coordinates with sub-pixel precision, and
+//! the parts of the figure in `<g class="...">` groups (`obstacle-true`, `isopotential`, `contact`, `event`,
+//! `time-mark`, `path-free`, `path-adapted`, `legend-free`, `legend-adapted`, `speed`, `acceleration`,
+//! `clearance`). Text is emitted as SVG `<text>` elements that the viewer lays out (plotters only estimates their
+//! width for spacing), so no font library is needed. Text that fails to draw is dropped rather than failing the
+//! figure.
 //!
 //! | concept | file |
 //! | --- | --- |
-//! | input, errors, entry point, figure layout | `lib.rs` |
+//! | input, errors, entry point | `lib.rs` |
+//! | the SVG backend: sub-pixel coordinates, groups | `backend.rs` |
+//! | figure layout: title, panels, strip, legend | `layout.rs` |
 //! | what is drawn: robots, decimated curves, start and goal | `run.rs` |
+//! | true shapes: outlines, signed distance | `solid.rs` |
+//! | clearance over time, contacts, marked times | `clearance.rs` |
+//! | speed, acceleration and clearance against time, events | `strip.rs` |
+//! | legend | `legend.rs` |
 //! | thinning curves (rows, then pixels) | `decimate.rs` |
 //! | data ranges and equal aspect ratio | `bounds.rs` |
 //! | drawing primitives on a chart | `draw.rs` |
@@ -27,27 +43,30 @@
 //! | projecting on a plane, convex hull | `projection.rs` |
 //! | coordinates against time | `time.rs` |
 
+mod backend;
 mod bounds;
+mod clearance;
 mod decimate;
 mod draw;
+mod layout;
+mod legend;
 mod projection;
 mod run;
+mod solid;
 mod space;
+mod strip;
 mod style;
 #[cfg(test)]
 mod tests;
 mod time;
 
-use plotters::prelude::*;
-use plotters::style::text_anchor::HPos;
-
 use dmp::{Agent, Obstacle, Trajectory};
 
-use self::draw::{Area, Chart, drawing_err, put_text};
 use self::run::{Run, groups};
-use self::style::{Entry, FONT, draw_legend, legend_height};
 
+pub use self::backend::SCALE;
 pub use self::decimate::MAX_POINTS;
+pub use self::solid::{Solid, SolidShape};
 
 /// Most panels of a plot against time; further dimensions are left out (the legend says so).
 pub const MAX_TIME_PANELS: usize = 6;
@@ -55,13 +74,6 @@ pub const MAX_TIME_PANELS: usize = 6;
 const OUTLINE_SAMPLES_2D: usize = 200;
 /// Boundary samples of a 3-D (or higher) obstacle, before projection and convex hull / extent.
 const OUTLINE_SAMPLES_ND: usize = 2000;
-
-const TITLE_H: u32 = 40;
-const LEGEND_W: u32 = 300;
-const PANEL_MARGIN: u32 = 12;
-const X_LABEL_AREA: u32 = 44;
-const Y_LABEL_AREA: u32 = 64;
-const CAPTION_H: u32 = 28;
 
 /// A point in a panel's data coordinates.
 type P2 = (f64, f64);
@@ -92,9 +104,46 @@ pub struct PlotInput<'a> {
     pub obstacles: &'a [Obstacle],
     /// Robots sharing the DMP; empty for one robot owning every dimension.
     pub robots: &'a [Agent],
-    /// Time at which moving obstacles (and robot footprints) are drawn; moving obstacles are also outlined faintly
-    /// at the start and at the end of the run.
+    /// A time worth marking when obstacles or robots move (e.g. when two robots are closest): moving obstacles and
+    /// robot footprints are outlined at it and at evenly spaced times of the run. Not finite: only the latter.
     pub obstacle_time: f64,
+    /// The true shapes of the obstacles (what a contact is measured against). Empty: each obstacle of
+    /// [`Self::obstacles`] is its own true shape (the scenario format, where the superquadric is the obstacle).
+    pub solids: &'a [Solid],
+    /// The avoidance method of the adapted run, as the scenario format names it (`none`, `dynamic_volumetric`, ...):
+    /// the legend says which run avoided what. `none` is labelled as a run without avoidance.
+    pub method: &'a str,
+    /// Clearance of each robot to the nearest obstacle over time, as the caller measured it (e.g. with the robot's
+    /// body), in the order of the robots (one series for a single robot). `None`: the distance from the robot's
+    /// controlled point to the nearest true shape present, along the adapted trajectory.
+    pub clearance: Option<&'a [Series]>,
+    /// What happened during the run, drawn as vertical lines in the time strip.
+    pub events: &'a [Event],
+}
+
+/// Values over time.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Series {
+    /// Times, seconds.
+    pub t: Vec<f64>,
+    /// One value per time.
+    pub v: Vec<f64>,
+}
+
+/// Something that happened at a time of the run: an obstacle appears or goes, the goal changes, a new scene version.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Event {
+    /// Time, seconds (the trajectories' clock).
+    pub t: f64,
+    /// What, short (drawn beside the line).
+    pub label: String,
+}
+
+impl Event {
+    /// An event.
+    pub fn new(t: f64, label: impl Into<String>) -> Self {
+        Self { t, label: label.into() }
+    }
 }
 
 /// Why a figure could not be drawn.
@@ -150,6 +199,33 @@ pub fn render_svg(input: &PlotInput<'_>) -> Result<String, PlotError> {
             });
         }
     }
+    for s in input.solids {
+        if s.center.len() != sub {
+            return Err(PlotError::Dimension {
+                what: format!("solid `{}`", s.id),
+                expected: sub,
+                found: s.center.len(),
+            });
+        }
+    }
+    if let Some(series) = input.clearance {
+        if series.len() != groups.len() {
+            return Err(PlotError::Length {
+                what: "the clearance series".into(),
+                expected: groups.len(),
+                found: series.len(),
+            });
+        }
+        for (k, s) in series.iter().enumerate() {
+            if s.t.len() != s.v.len() {
+                return Err(PlotError::Length {
+                    what: format!("clearance series {k}'s values"),
+                    expected: s.t.len(),
+                    found: s.v.len(),
+                });
+            }
+        }
+    }
     let run = Run::new(input, groups);
     match sub {
         2 | 3 => space::render(input, &run),
@@ -197,68 +273,4 @@ fn validate(input: &PlotInput<'_>) -> Result<usize, PlotError> {
         return Err(PlotError::Dimension { what: "the goal".into(), expected: d, found: goal.len() });
     }
     Ok(d)
-}
-
-// ------------------------------------------------------------------------------------------------------------------
-// Layout.
-
-/// The figure: title band on top, panels in a row or a column, legend on the right.
-fn figure(
-    title: &str,
-    panels: &[(u32, u32)],
-    vertical: bool,
-    legend: (&[Entry], &[String]),
-    mut draw_panel: impl FnMut(usize, &Area<'_>) -> Result<(), PlotError>,
-) -> Result<String, PlotError> {
-    let (pw, ph) = if vertical {
-        (panels.iter().map(|p| p.0).max().unwrap_or(0), panels.iter().map(|p| p.1).sum::<u32>())
-    } else {
-        (panels.iter().map(|p| p.0).sum::<u32>(), panels.iter().map(|p| p.1).max().unwrap_or(0))
-    };
-    let size = (pw + LEGEND_W, TITLE_H + ph.max(legend_height(legend.0, legend.1)));
-    let mut buf = String::new();
-    {
-        let root = SVGBackend::with_string(&mut buf, size).into_drawing_area();
-        root.fill(&WHITE).map_err(drawing_err)?;
-        let (top, rest) = root.split_vertically(TITLE_H);
-        let (tw, _) = top.dim_in_pixel();
-        put_text(&top, title, (tw as i32 / 2, TITLE_H as i32 / 2 + 2), 24, HPos::Center);
-        let (panel_area, legend_area) = rest.split_horizontally(pw);
-        let mut offset = 0;
-        for (k, &(w, h)) in panels.iter().enumerate() {
-            let area = if vertical {
-                panel_area.clone().shrink((0, offset), (w, h))
-            } else {
-                panel_area.clone().shrink((offset, 0), (w, h))
-            };
-            offset += if vertical { h } else { w };
-            draw_panel(k, &area)?;
-        }
-        draw_legend(&legend_area, legend.0, legend.1)?;
-        root.present().map_err(drawing_err)?;
-    }
-    Ok(buf)
-}
-
-/// `area` below a caption (the caption is dropped if its text cannot be drawn).
-fn captioned<'b>(area: &Area<'b>, caption: Option<&str>) -> Area<'b> {
-    match caption {
-        None => area.clone(),
-        Some(c) => area.titled(c, (FONT, 19)).unwrap_or_else(|_| area.split_vertically(CAPTION_H).1),
-    }
-}
-
-/// Chart on `area`, built twice: once to measure the plotting area, once with the ranges `fit` gives for its
-/// size in pixels.
-fn chart_on<'c, 'b>(
-    area: &'c Area<'b>,
-    fit: impl FnOnce(f64, f64) -> ((f64, f64), (f64, f64)),
-) -> Result<Chart<'c, 'b>, PlotError> {
-    let mut builder = ChartBuilder::on(area);
-    builder.margin(PANEL_MARGIN).x_label_area_size(X_LABEL_AREA).y_label_area_size(Y_LABEL_AREA);
-    // Building draws nothing (no caption here), so the builder can be used twice.
-    let (pw, ph) =
-        builder.build_cartesian_2d(0.0..1.0, 0.0..1.0).map_err(drawing_err)?.plotting_area().dim_in_pixel();
-    let (x, y) = fit(pw.saturating_sub(1) as f64, ph.saturating_sub(1) as f64);
-    builder.build_cartesian_2d(x.0..x.1, y.0..y.1).map_err(drawing_err)
 }

@@ -1,9 +1,8 @@
-//! Robot space seen on a panel's plane: the planes of a 2-D or 3-D robot, everything projected on one of them, and
-//! outlines as ordered samples (2-D) or convex hulls of projected surface samples (3-D).
+//! Robot space seen on a panel's plane: the planes of a 2-D or 3-D robot, everything projected on one of them, the
+//! data ranges (zoomed on the motion), and the convex hull of projected outlines.
 
 use super::bounds::Bounds;
 use super::run::Run;
-use super::space::Outlines;
 use super::{P2, finite};
 
 /// The local axes `(i, j)` of the panels of a robot moving in `sub` (2 or 3) dimensions.
@@ -11,7 +10,16 @@ pub(super) fn planes(sub: usize) -> Vec<(usize, usize)> {
     if sub == 2 { vec![(0, 1)] } else { vec![(0, 1), (0, 2), (1, 2)] }
 }
 
-/// Everything drawn on one plane, projected, and the data ranges with their margin.
+/// An outline drawn at a time (`None`: it does not move).
+#[derive(Debug)]
+pub(super) struct Outline {
+    pub(super) t: Option<f64>,
+    pub(super) poly: Vec<P2>,
+    /// A point cloud: drawn as dots.
+    pub(super) cloud: bool,
+}
+
+/// Everything drawn on one plane, projected, and the data ranges.
 #[derive(Debug)]
 pub(super) struct Plane {
     pub(super) axes: (usize, usize),
@@ -21,28 +29,39 @@ pub(super) struct Plane {
     pub(super) adapted: Vec<Vec<P2>>,
     pub(super) starts: Vec<P2>,
     pub(super) goals: Vec<P2>,
-    /// Per obstacle, at the obstacle time.
-    pub(super) now: Vec<Vec<P2>>,
-    /// Moving obstacles at the start and at the end.
-    pub(super) ghosts: Vec<Vec<P2>>,
-    /// Moving obstacles' centres from start to end.
-    pub(super) paths: Vec<[P2; 2]>,
-    /// Per robot (empty without a footprint).
-    pub(super) prints: Vec<Vec<P2>>,
+    /// Per robot, its contact stretches.
+    pub(super) contacts: Vec<Vec<Vec<P2>>>,
+    /// Per robot, the path at the marked times.
+    pub(super) ticks: Vec<Vec<(f64, P2)>>,
+    /// The isopotentials.
+    pub(super) iso: Vec<Outline>,
+    /// The true shapes.
+    pub(super) truth: Vec<Outline>,
+    /// Per robot, its footprint at the marked times (empty without a footprint).
+    pub(super) prints: Vec<Vec<Outline>>,
     pub(super) ranges: ((f64, f64), (f64, f64)),
 }
 
 impl Plane {
-    /// Projects on the local axes `axes`; `ordered`: outlines are samples in order around the shape (2-D), else
-    /// their convex hull is taken.
+    /// Projects on the local axes `axes`; `iso`, `truth` and `prints` are already projected.
     pub(super) fn new(
         run: &Run<'_>,
         axes: (usize, usize),
-        obstacles: &[Outlines],
-        prints: &[Vec<Vec<f64>>],
-        ordered: bool,
+        iso: Vec<Outline>,
+        truth: Vec<Outline>,
+        prints: Vec<Vec<Outline>>,
     ) -> Self {
         let local = |p: &[f64], dims: &[usize]| (p[dims[axes.0]], p[dims[axes.1]]);
+        let ticks = run
+            .groups
+            .iter()
+            .map(|g| {
+                run.marks
+                    .iter()
+                    .map(|&t| (t, local(&run.adapted.x[run.adapted_row_at(t)], &g.dims)))
+                    .collect()
+            })
+            .collect();
         let mut pl = Self {
             axes,
             demo: run.groups.iter().map(|g| run.demo.plane(&g.dims, axes)).collect(),
@@ -50,35 +69,51 @@ impl Plane {
             adapted: run.groups.iter().map(|g| run.adapted.plane(&g.dims, axes)).collect(),
             starts: run.groups.iter().map(|g| local(&run.start, &g.dims)).collect(),
             goals: run.groups.iter().map(|g| local(&run.goal, &g.dims)).collect(),
-            now: obstacles.iter().map(|o| project_outline(&o.now, axes, ordered)).collect(),
-            ghosts: obstacles
+            contacts: run
+                .groups
                 .iter()
-                .flat_map(|o| o.ghosts.iter().map(|g| project_outline(g, axes, ordered)))
+                .zip(&run.contacts)
+                .map(|(g, cs)| cs.iter().map(|c| c.plane(&g.dims, axes)).collect())
                 .collect(),
-            paths: obstacles
-                .iter()
-                .filter_map(|o| {
-                    o.path.as_ref().map(|(a, b)| [(a[axes.0], a[axes.1]), (b[axes.0], b[axes.1])])
-                })
-                .collect(),
-            prints: prints.iter().map(|f| project_outline(f, axes, ordered)).collect(),
+            ticks,
+            iso,
+            truth,
+            prints,
             ranges: ((0.0, 1.0), (0.0, 1.0)),
         };
-        let mut b = Bounds::new();
-        for set in [&pl.demo, &pl.free, &pl.adapted, &pl.now, &pl.ghosts, &pl.prints] {
-            set.iter().for_each(|c| b.add_all(c));
-        }
-        b.add_all(&pl.starts);
-        b.add_all(&pl.goals);
-        pl.ranges = b.with_margin();
+        pl.ranges = pl.zoomed();
         pl
     }
-}
 
-/// Projected outline on local axes `(i, j)`: in 2-D the samples go around in order; in 3-D their convex hull.
-fn project_outline(pts: &[Vec<f64>], (i, j): (usize, usize), ordered: bool) -> Vec<P2> {
-    let p: Vec<P2> = pts.iter().map(|p| (p[i], p[j])).filter(finite).collect();
-    if ordered { p } else { convex_hull(p) }
+    /// The ranges: the motion (paths, start, goal, footprints), grown to take in the obstacles near it but not the
+    /// far parts of large ones (a table under the arms does not shrink the motion to a corner).
+    fn zoomed(&self) -> ((f64, f64), (f64, f64)) {
+        let mut motion = Bounds::new();
+        for set in [&self.demo, &self.free, &self.adapted] {
+            set.iter().for_each(|c| motion.add_all(c));
+        }
+        motion.add_all(&self.starts);
+        motion.add_all(&self.goals);
+        self.prints.iter().flatten().for_each(|o| motion.add_all(&o.poly));
+        if motion.is_empty() {
+            return Bounds::new().with_margin();
+        }
+        // The neighbourhood: the motion's box grown by 40 % of its larger span on every side.
+        let span = (motion.x1 - motion.x0).max(motion.y1 - motion.y0).max(1e-9);
+        let grow = 0.4 * span;
+        let near = ((motion.x0 - grow, motion.x1 + grow), (motion.y0 - grow, motion.y1 + grow));
+        let mut all = motion;
+        for o in self.iso.iter().chain(&self.truth) {
+            let clipped = super::draw::clip_polygon(&o.poly, near);
+            all.add_all(if o.cloud { &o.poly } else { &clipped });
+        }
+        let ((x0, x1), (y0, y1)) = near;
+        all.x0 = all.x0.max(x0);
+        all.x1 = all.x1.min(x1);
+        all.y0 = all.y0.max(y0);
+        all.y1 = all.y1.min(y1);
+        all.with_margin()
+    }
 }
 
 /// Convex hull (Andrew's monotone chain), counter-clockwise, without repeating the first vertex.

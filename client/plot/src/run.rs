@@ -4,9 +4,11 @@ use plotters::prelude::*;
 
 use dmp::{Shape, Trajectory};
 
+use super::clearance::{contacts, marked_times, measured};
 use super::decimate::decimated;
+use super::solid::{Truth, truths};
 use super::style::{ADAPTED, FREE, PALETTE, Stroke};
-use super::{P2, PlotError, PlotInput};
+use super::{P2, PlotError, PlotInput, Series};
 
 /// A robot: the DMP dimensions it owns and how it is drawn.
 #[derive(Debug)]
@@ -58,20 +60,37 @@ pub(super) fn groups<'a>(input: &PlotInput<'a>, d: usize) -> Result<Vec<Group<'a
         .collect())
 }
 
-/// A decimated curve: times and full-dimensional positions.
+/// A decimated curve: times and full-dimensional positions (and, for rollouts, velocities and accelerations).
 #[derive(Debug, Default)]
 pub(super) struct Curve {
     pub(super) t: Vec<f64>,
     pub(super) x: Vec<Vec<f64>>,
+    pub(super) v: Vec<Vec<f64>>,
+    pub(super) a: Vec<Vec<f64>>,
 }
 
 impl Curve {
     fn of(tr: &Trajectory) -> Self {
-        let idx = decimated(tr.len());
+        Self::rows(tr, &decimated(tr.len()))
+    }
+
+    /// Rows `idx` of `tr`.
+    pub(super) fn rows(tr: &Trajectory, idx: &[usize]) -> Self {
         Self {
             t: idx.iter().map(|&k| tr.t[k]).collect(),
             x: idx.iter().map(|&k| tr.position(k).to_vec()).collect(),
+            v: idx.iter().map(|&k| tr.velocity(k).to_vec()).collect(),
+            a: idx.iter().map(|&k| tr.acceleration(k).to_vec()).collect(),
         }
+    }
+
+    /// The norm over `dims` of `rows` (velocities or accelerations) against time.
+    pub(super) fn norm_against_time(&self, rows: &[Vec<f64>], dims: &[usize]) -> Vec<P2> {
+        self.t
+            .iter()
+            .zip(rows)
+            .map(|(t, r)| (*t, dims.iter().map(|&k| r[k] * r[k]).sum::<f64>().sqrt()))
+            .collect()
     }
 
     /// The demonstration, its rows spread evenly over `[t0, t1]`.
@@ -81,6 +100,7 @@ impl Curve {
         Self {
             t: idx.iter().map(|&k| t0 + (t1 - t0) * k as f64 / n).collect(),
             x: idx.iter().map(|&k| rows[k].clone()).collect(),
+            ..Self::default()
         }
     }
 
@@ -91,6 +111,7 @@ impl Curve {
         Self {
             t: idx.iter().map(|&k| times[k] - first + t0).collect(),
             x: idx.iter().map(|&k| rows[k].clone()).collect(),
+            ..Self::default()
         }
     }
 
@@ -121,11 +142,18 @@ pub(super) struct Run<'a> {
     /// The time axis of plots against time: `[t0, t1]`, widened to the demonstration's own times.
     pub(super) time_span: (f64, f64),
     pub(super) obstacle_time: f64,
-    pub(super) moving: bool,
+    /// The true shapes.
+    pub(super) truths: Vec<Truth<'a>>,
+    /// Clearance to the nearest true shape over time, per robot.
+    pub(super) clearance: Vec<Series>,
+    /// Where each robot touches a true shape: its adapted path during each contact.
+    pub(super) contacts: Vec<Vec<Curve>>,
+    /// Times at which moving obstacles and footprints are outlined and the paths ticked (empty: nothing moves).
+    pub(super) marks: Vec<f64>,
 }
 
 impl<'a> Run<'a> {
-    pub(super) fn new(input: &PlotInput<'_>, groups: Vec<Group<'a>>) -> Self {
+    pub(super) fn new(input: &PlotInput<'a>, groups: Vec<Group<'a>>) -> Self {
         let reference = if input.free.is_empty() { input.adapted } else { input.free };
         let t0 = reference.t[0];
         let t1 =
@@ -145,6 +173,16 @@ impl<'a> Run<'a> {
             Some(goal) => goal.to_vec(),
             None => reference.position(reference.len() - 1).to_vec(),
         };
+        let truths = truths(input.solids, input.obstacles);
+        let moving = input.obstacles.iter().any(|o| o.velocity().iter().any(|v| *v != 0.0))
+            || truths.iter().any(|t| t.moving());
+        let clearance = match input.clearance {
+            Some(series) => series.to_vec(),
+            None => groups.iter().map(|g| measured(input.adapted, &g.dims, &truths)).collect(),
+        };
+        let contacts = clearance.iter().map(|s| contacts(input.adapted, s)).collect();
+        let footprints = groups.len() > 1 && groups.iter().any(|g| g.footprint.is_some());
+        let marks = if moving || footprints { marked_times(t0, t1, obstacle_time) } else { Vec::new() };
         Self {
             groups,
             demo,
@@ -157,7 +195,10 @@ impl<'a> Run<'a> {
             t1,
             time_span,
             obstacle_time,
-            moving: input.obstacles.iter().any(|o| o.velocity().iter().any(|v| *v != 0.0)),
+            truths,
+            clearance,
+            contacts,
+            marks,
         }
     }
 
@@ -167,14 +208,14 @@ impl<'a> Run<'a> {
 
     pub(super) fn free_stroke(&self, g: &Group<'_>) -> Stroke {
         if self.single() {
-            Stroke::dashed(FREE, 2, (10, 6))
+            Stroke::dashed(FREE, 1.8, (9, 5))
         } else {
-            Stroke { color: g.color.mix(0.7), width: 2, dash: Some((8, 5)) }
+            Stroke { color: g.color.mix(0.7), width: 1.5, dash: Some((8, 5)) }
         }
     }
 
     pub(super) fn adapted_stroke(&self, g: &Group<'_>) -> Stroke {
-        Stroke::solid(if self.single() { ADAPTED } else { g.color }, 2)
+        Stroke::solid(if self.single() { ADAPTED } else { g.color }, 2.0)
     }
 
     /// Row of the adapted trajectory closest in time to `t`.

@@ -4,14 +4,15 @@
 use dmp::Obstacle;
 use plotters::prelude::*;
 
+use super::backend::{Doc, px};
 use super::bounds::{Bounds, padded};
 use super::draw::{draw_curve, draw_mesh, draw_patch};
+use super::layout::{Frame, PANEL_MARGIN, X_LABEL_AREA, Y_LABEL_AREA, chart_on, figure};
+use super::legend::{Entry, Mark, path_entries};
 use super::run::Run;
-use super::style::{Entry, Mark, OBSTACLE_EDGE, Stroke, band_fill, demo_stroke, path_entries};
-use super::{
-    MAX_TIME_PANELS, OUTLINE_SAMPLES_ND, P2, PANEL_MARGIN, PlotError, PlotInput, X_LABEL_AREA, Y_LABEL_AREA,
-    chart_on, figure,
-};
+use super::strip;
+use super::style::{OBSTACLE_EDGE, Stroke, band_fill, demo_stroke};
+use super::{MAX_TIME_PANELS, OUTLINE_SAMPLES_ND, P2, PlotError, PlotInput};
 
 /// One coordinate's panel.
 #[derive(Debug)]
@@ -84,38 +85,58 @@ pub(super) fn render(input: &PlotInput<'_>, run: &Run<'_>, d: usize) -> Result<S
         })
         .collect();
 
-    let panels = vec![(840 + 2 * PANEL_MARGIN + Y_LABEL_AREA, 150 + 2 * PANEL_MARGIN + X_LABEL_AREA); shown];
+    let panels =
+        vec![(px(840) + 2 * PANEL_MARGIN + Y_LABEL_AREA, px(150) + 2 * PANEL_MARGIN + X_LABEL_AREA); shown];
     let demo_text = if run.demo_timed { "demonstration" } else { "demonstration (time rescaled)" };
-    let mut entries = path_entries(run, (!input.demonstration.is_empty()).then_some(demo_text));
+    let mut entries = path_entries(run, (!input.demonstration.is_empty()).then_some(demo_text), input.method);
     if !input.obstacles.is_empty() {
         entries
-            .push(Entry::new(Mark::Patch(band_fill(), Stroke::solid(OBSTACLE_EDGE, 1)), "obstacle extent"));
+            .push(Entry::new(Mark::Patch(band_fill(), Stroke::solid(OBSTACLE_EDGE, 1.0)), "obstacle extent"));
     }
     let mut notes = Vec::new();
     if d > shown {
         notes.push(format!("showing {shown} of {d} coordinates"));
     }
 
-    figure(input.title, &panels, true, (&entries, &notes), |k, area| {
-        let p = &panels_data[k];
-        let mut chart = chart_on(area, |_, _| ((tx0, tx1), p.y))?;
-        let y_desc = match p.owner {
-            Some(gi) if !run.single() => format!("x{} ({})", p.j + 1, run.groups[gi].label),
-            _ => format!("x{}", p.j + 1),
-        };
-        draw_mesh(&mut chart, "t", &y_desc, 10, 5)?;
-        for band in &p.bands {
-            draw_patch(
-                &mut chart,
-                band,
-                band_fill(),
-                Some(Stroke { color: OBSTACLE_EDGE.mix(0.5), width: 1, dash: None }),
-            )?;
-        }
-        let g = p.owner.map(|gi| &run.groups[gi]).unwrap_or(&run.groups[0]);
-        draw_curve(&mut chart, &run.demo.against_time(p.j), demo_stroke())?;
-        draw_curve(&mut chart, &run.free.against_time(p.j), run.free_stroke(g))?;
-        draw_curve(&mut chart, &run.adapted.against_time(p.j), run.adapted_stroke(g))?;
-        Ok(())
-    })
+    let frame = Frame {
+        title: input.title,
+        panels: &panels,
+        vertical: true,
+        legend: (&entries, &notes),
+        strip_h: strip::height(panels[0].0),
+    };
+    figure(
+        &frame,
+        |doc, k, area| {
+            let p = &panels_data[k];
+            let mut chart = chart_on(area, X_LABEL_AREA, |_, _| ((tx0, tx1), p.y))?;
+            let y_desc = match p.owner {
+                Some(gi) if !run.single() => format!("x{} ({})", p.j + 1, run.groups[gi].label),
+                _ => format!("x{}", p.j + 1),
+            };
+            draw_mesh(&mut chart, "t (s)", &y_desc, 10, 5)?;
+            Doc::group(doc, "obstacle-true", || -> Result<(), PlotError> {
+                for band in &p.bands {
+                    draw_patch(
+                        &mut chart,
+                        band,
+                        band_fill(),
+                        Some(Stroke { color: OBSTACLE_EDGE.mix(0.5), width: 1.0, dash: None }),
+                    )?;
+                }
+                Ok(())
+            })?;
+            let g = p.owner.map(|gi| &run.groups[gi]).unwrap_or(&run.groups[0]);
+            Doc::group(doc, "demonstration", || {
+                draw_curve(&mut chart, &run.demo.against_time(p.j), demo_stroke())
+            })?;
+            Doc::group(doc, "path-free", || {
+                draw_curve(&mut chart, &run.free.against_time(p.j), run.free_stroke(g))
+            })?;
+            Doc::group(doc, "path-adapted", || {
+                draw_curve(&mut chart, &run.adapted.against_time(p.j), run.adapted_stroke(g))
+            })
+        },
+        |doc, area| strip::draw(doc, area, input, run),
+    )
 }

@@ -90,6 +90,20 @@ async fn server_commands_against_the_server() {
     );
     let streamed = std::fs::read_to_string(dir.path().join("stream/trajectory.csv")).unwrap();
     assert_eq!(streamed.lines().count(), plan.lines().count());
+    // Both write their figure too: the run and the obstacle-free plan of the same motion, under their title.
+    for what in ["plan", "stream"] {
+        let svg = std::fs::read_to_string(dir.path().join(what).join("plot.svg")).unwrap();
+        let doc = roxmltree::Document::parse(&svg).unwrap();
+        let title = format!("r/p: {what}");
+        assert!(doc.descendants().any(|n| n.has_tag_name("text") && n.text().map(str::trim) == Some(&title)));
+        for class in ["path-free", "path-adapted", "speed", "clearance"] {
+            let g = doc.descendants().find(|n| n.attribute("class") == Some(class));
+            assert!(
+                g.is_some_and(|g| g.descendants().any(|n| n.has_tag_name("polyline"))),
+                "{what}: {class}"
+            );
+        }
+    }
 
     // The paper's run without avoidance collides, as it is meant to: exit 3 unless allowed.
     let e = run_at(&url, &["scenario", "run", scenario.to_str().unwrap(), "--out", &d("scenario")])

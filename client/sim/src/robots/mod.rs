@@ -9,6 +9,7 @@
 //! | a robot's controller: supersession, clock, lateness, continuity | `robot.rs` |
 //! | true shapes and distances (parry3d-f64) | `world.rs` |
 //! | `report.json` and figures | `report.rs` |
+//! | `report.html`: the figures, clearances, limits, pass or fail per check | `html.rs` |
 //! | clearance along a whole run, robots side by side, closest approach | `clearance.rs` |
 //! | the Panda pick and place | `panda.rs` |
 //! | two da Vinci PSMs: ring transfer with a handover, one 6-D phase | `psm.rs` |
@@ -20,6 +21,7 @@
 pub mod clearance;
 pub mod demonstration;
 pub mod ellipse_fit;
+pub mod html;
 pub mod panda;
 pub mod perception;
 pub mod psm;
@@ -245,6 +247,17 @@ pub enum Method {
         /// Exponent eta.
         eta: f64,
     },
+}
+
+impl Method {
+    /// Its name in the scenario format.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::None => "none",
+            Method::Static { .. } => "static_volumetric",
+            Method::Dynamic { .. } => "dynamic_volumetric",
+        }
+    }
 }
 
 /// The message of a method.

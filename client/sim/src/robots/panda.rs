@@ -151,7 +151,8 @@ impl Motion {
         report: &mut SimReport,
     ) -> Result<(), SimError> {
         let body = robot_body(ROBOT, self.body);
-        let r = measure(exec, DT, &self.goal, &body, &world(), &[]);
+        let world = world();
+        let r = measure(exec, DT, &self.goal, &body, &world, &[]);
         report.add(&format!("{ROBOT}/{}", self.key), r);
         let free = free_plan(client, &self.spec(), DT).await?;
         let engine: Vec<dmp::Obstacle> = self
@@ -169,6 +170,11 @@ impl Motion {
             obstacles: &engine,
             robots: &[],
             time: 0.0,
+            world: &world,
+            seen: &[],
+            body: Some(&body),
+            method: self.method.name(),
+            events: &[],
         };
         write_figure(&options.out, &name, &fig)?;
         report.plots.push(name);
@@ -197,6 +203,8 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
         body: Solid::Point,
     };
     let mut report = SimReport::new("panda", options.realtime);
+    report.limits =
+        Some(super::html::Limits { speed: MAX_SPEED, acceleration: MAX_ACCELERATION, jerk: MAX_JERK });
     report.notes.push(
         "geometry and gains: see client/sim/src/robots/panda.rs (board box, red and green pegs as cylinders; \
          pegs planned as superquadrics (1, 1, 2), board as a rounded box of exponent 2)"
@@ -224,9 +232,13 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
         obstacles: vec![board(RING_RADIUS), peg("red-peg", &RED, RING_RADIUS)],
         body: Solid::Ball { radius: RING_RADIUS },
     };
-    let carry_static =
-        carry("carry-static", "Panda: move to peg (static potential)", Method::Static { a: 10.0, eta: 2.0 });
-    let carry_dynamic = carry("carry-dynamic", "Panda: move to peg (dynamic potential)", dynamic);
+    let carry_static = carry(
+        "carry-static",
+        "Panda: carry the ring past the red peg (static potential)",
+        Method::Static { a: 10.0, eta: 2.0 },
+    );
+    let carry_dynamic =
+        carry("carry-dynamic", "Panda: carry the ring past the red peg (dynamic potential)", dynamic);
     // One after the other: a robot executes one stream at a time.
     let a = carry_static.run(client, options).await?;
     let b = carry_dynamic.run(client, options).await?;

@@ -328,12 +328,22 @@ async fn record(
         .map(JsonObstacle::to_engine)
         .collect::<Result<_, _>>()
         .map_err(|e| SimError::Plot(e.to_string()))?;
-    if event.remove_at.is_none() {
-        let o = fitted_obstacle(event.id, &point_cloud(event.center, BOX_HALF))?;
-        planned.push(o.to_engine().map_err(|e| SimError::Plot(e.to_string()))?);
-    }
+    // What the perception node saw and published (for the time the events say).
+    let cloud = point_cloud(event.center, BOX_HALF);
+    let o = fitted_obstacle(event.id, &cloud)?;
+    planned.push(o.to_engine().map_err(|e| SimError::Plot(e.to_string()))?);
+    let mut seen = dmp_plot::Solid::new(
+        format!("{} (points seen)", event.id),
+        dmp_plot::SolidShape::Points(cloud.iter().map(|p| p.to_vec()).collect()),
+        vec![0.0, 0.0],
+    );
+    (seen.from, seen.until) = (event.add_at, event.remove_at.unwrap_or(f64::INFINITY));
     let title = format!("youBot: {} obstacle, {name} potential", event.key);
     let file = format!("{}-{name}.svg", event.key);
+    let mut events = vec![dmp_plot::Event::new(event.add_at, format!("{} appears", event.id))];
+    if let Some(t) = event.remove_at {
+        events.push(dmp_plot::Event::new(t, format!("{} removed", event.id)));
+    }
     let fig = Figure {
         title: &title,
         line: (&START, &GOAL),
@@ -342,6 +352,11 @@ async fn record(
         obstacles: &planned,
         robots: &[],
         time: 0.0,
+        world: &world,
+        seen: std::slice::from_ref(&seen),
+        body: Some(&body),
+        method: method.name(),
+        events: &events,
     };
     write_figure(&options.out, &file, &fig)?;
     report.plots.push(file);

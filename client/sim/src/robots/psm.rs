@@ -442,6 +442,12 @@ fn record(
         obstacles: &engine,
         robots: &agents,
         time: t_close,
+        world: &world(),
+        seen: &[],
+        body: None,
+        // The pegs and the board with the static potential, the other arm's jaws with the dynamic one.
+        method: "static_volumetric",
+        events: &[],
     };
     write_figure(&options.out, &name, &fig)?;
     report.plots.push(name);

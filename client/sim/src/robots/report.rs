@@ -4,12 +4,12 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use dmp::{Agent, Trajectory};
-use dmp_plot::{PlotInput, render_svg};
+use dmp_plot::{Event, PlotInput, Series, SolidShape, render_svg};
 use dmp_proto::v1;
 use serde::Serialize;
 
 use super::robot::{Executed, check};
-use super::world::{Body, point3};
+use super::world::{Body, Solid, point3};
 use crate::error::SimError;
 
 /// A robot ends at its goal when its last setpoint is this close (metres) and the server said GOAL_REACHED.
@@ -71,6 +71,8 @@ pub struct SimReport {
     pub plots: Vec<String>,
     /// What the set-up was (geometry, gains).
     pub notes: Vec<String>,
+    /// The Cartesian limits every robot must stay within, if the simulation has them.
+    pub limits: Option<super::html::Limits>,
 }
 
 impl SimReport {
@@ -115,11 +117,12 @@ impl SimReport {
         p
     }
 
-    /// Writes `report.json` in `dir`.
+    /// Writes `report.json` and `report.html` in `dir` (the figures must be there already).
     pub fn write(&self, dir: &Path) -> Result<(), SimError> {
         let path = dir.join("report.json");
         let text = serde_json::to_string_pretty(self).map_err(|e| SimError::Plot(e.to_string()))?;
-        std::fs::write(&path, text + "\n").map_err(|source| SimError::Io { path, source })
+        std::fs::write(&path, text + "\n").map_err(|source| SimError::Io { path, source })?;
+        super::html::write_html(self, dir)
     }
 }
 
@@ -227,11 +230,59 @@ pub struct Figure<'a> {
     pub robots: &'a [Agent],
     /// When to draw moving obstacles and footprints.
     pub time: f64,
+    /// The true world: the obstacles' real shapes, drawn under the superquadrics the planner sees.
+    pub world: &'a [Body],
+    /// Point clouds a perception node saw, drawn with the true shapes.
+    pub seen: &'a [dmp_plot::Solid],
+    /// The robot's body, for a single robot: its clearance to the world over time is measured with it (else the
+    /// figure measures from the controlled point).
+    pub body: Option<&'a Body>,
+    /// The avoidance method of the run (its name in the scenario format).
+    pub method: &'a str,
+    /// What happened during the run.
+    pub events: &'a [Event],
+}
+
+/// A body of the world as the figure's true shape, in the robot's `sub` dimensions.
+fn plot_solid(b: &Body, sub: usize) -> dmp_plot::Solid {
+    let shape = match b.solid() {
+        Solid::Ball { radius } => SolidShape::Ball { radius },
+        Solid::Cuboid { half } => SolidShape::Box { half: half[..sub].to_vec() },
+        Solid::CylinderZ { radius, half_height } => SolidShape::CylinderZ { radius, half_height },
+        Solid::Point => SolidShape::Points(vec![vec![0.0; sub]]),
+    };
+    let mut s = dmp_plot::Solid::new(b.id.clone(), shape, b.center()[..sub].to_vec());
+    s.from = b.from;
+    s.until = b.until;
+    s
+}
+
+/// Clearance of `body` (around the controlled point) to the nearest body of `world` present, along `traj`.
+fn clearance_series(traj: &Trajectory, body: &Body, world: &[Body]) -> Series {
+    let mut s = Series { t: traj.t.clone(), v: Vec::with_capacity(traj.len()) };
+    for k in 0..traj.len() {
+        let p = point3(position(traj, k));
+        let t = traj.t[k];
+        let d = world
+            .iter()
+            .filter(|o| o.present_at(t))
+            .map(|o| body.distance(p, o, parry3d_f64::math::Vector::ZERO))
+            .fold(f64::INFINITY, f64::min);
+        s.v.push(d);
+    }
+    s
 }
 
 /// Renders `fig` to `dir/name`.
 pub fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), SimError> {
     let demo = vec![fig.line.0.to_vec(), fig.line.1.to_vec()];
+    let sub = fig.robots.first().map_or(fig.line.0.len(), |r| r.dims.len()).min(3);
+    let mut solids: Vec<dmp_plot::Solid> = fig.world.iter().map(|b| plot_solid(b, sub)).collect();
+    solids.extend(fig.seen.iter().cloned());
+    let clearance = match fig.body {
+        Some(body) if fig.robots.len() <= 1 => Some(vec![clearance_series(fig.adapted, body, fig.world)]),
+        _ => None,
+    };
     let input = PlotInput {
         title: fig.title,
         demonstration: &demo,
@@ -242,6 +293,10 @@ pub fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), SimE
         obstacles: fig.obstacles,
         robots: fig.robots,
         obstacle_time: fig.time,
+        solids: &solids,
+        method: fig.method,
+        clearance: clearance.as_deref(),
+        events: fig.events,
     };
     let svg = render_svg(&input).map_err(|e| SimError::Plot(e.to_string()))?;
     let path = dir.join(name);

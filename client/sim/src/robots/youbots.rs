@@ -333,6 +333,11 @@ async fn run_one(
         obstacles: &obstacles,
         robots: &agents,
         time: when,
+        world: &world,
+        seen: &[],
+        body: None,
+        method: method.name(),
+        events: &[],
     };
     write_figure(&options.out, &file, &fig)?;
     report.plots.push(file);

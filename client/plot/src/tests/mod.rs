@@ -6,10 +6,12 @@ use dmp::{Agent, Obstacle, Shape, Superquadric, Trajectory};
 use super::bounds::fit_equal_aspect;
 use super::decimate::decimated;
 use super::projection::convex_hull;
-use super::style::fmt_num;
+use super::style::{fmt_num, fmt_tick};
+
+mod elements;
 use super::{MAX_POINTS, MAX_TIME_PANELS, OUTLINE_SAMPLES_2D, PlotError, PlotInput, render_svg};
 
-fn ellipse(id: &str, center: Vec<f64>, axes: Vec<f64>, velocity: Option<Vec<f64>>) -> Obstacle {
+pub(super) fn ellipse(id: &str, center: Vec<f64>, axes: Vec<f64>, velocity: Option<Vec<f64>>) -> Obstacle {
     let n = axes.len();
     Obstacle::new(
         id,
@@ -22,7 +24,7 @@ fn ellipse(id: &str, center: Vec<f64>, axes: Vec<f64>, velocity: Option<Vec<f64>
 }
 
 /// A trajectory of `rows` rows over `[0, 1]` from `f(s)`.
-fn traj(d: usize, rows: usize, f: impl Fn(f64) -> Vec<f64>) -> Trajectory {
+pub(super) fn traj(d: usize, rows: usize, f: impl Fn(f64) -> Vec<f64>) -> Trajectory {
     let mut tr = Trajectory::with_capacity(d, rows);
     let zero = vec![0.0; d];
     for k in 0..rows {
@@ -32,70 +34,84 @@ fn traj(d: usize, rows: usize, f: impl Fn(f64) -> Vec<f64>) -> Trajectory {
     tr
 }
 
-fn bump(s: f64) -> f64 {
+pub(super) fn bump(s: f64) -> f64 {
     (std::f64::consts::PI * s).sin()
 }
 
-/// A small well-formedness check of plotters' output: every tag closed in order, attribute values quoted.
-fn assert_well_formed(svg: &str) {
-    let svg = svg.trim();
-    assert!(svg.starts_with("<svg") || svg.starts_with("<?xml"), "{}", &svg[..svg.len().min(80)]);
-    assert!(svg.ends_with("</svg>"));
-    let mut stack: Vec<String> = Vec::new();
-    let mut rest = svg;
-    while let Some(start) = rest.find('<') {
-        let end = start + rest[start..].find('>').expect("unterminated tag");
-        let tag = &rest[start + 1..end];
-        assert_eq!(tag.matches('"').count() % 2, 0, "unbalanced quotes in <{tag}>");
-        if let Some(name) = tag.strip_prefix('/') {
-            assert_eq!(stack.pop().as_deref(), Some(name.trim()), "mismatched </{name}>");
-        } else if !tag.starts_with('?') && !tag.ends_with('/') {
-            stack.push(tag.split_whitespace().next().unwrap().to_string());
-        }
-        rest = &rest[end + 1..];
-    }
-    assert!(stack.is_empty(), "unclosed: {stack:?}");
+/// The SVG parsed (a well-formed XML document, or the test fails).
+pub(super) fn parse(svg: &str) -> roxmltree::Document<'_> {
+    roxmltree::Document::parse(svg).unwrap_or_else(|e| panic!("not well-formed XML: {e}"))
 }
 
-fn texts(svg: &str) -> Vec<String> {
-    svg.split("<text")
-        .skip(1)
-        .map(|t| t[t.find('>').unwrap() + 1..t.find("</text>").unwrap()].trim().to_string())
+/// The text of every `<text>` element.
+pub(super) fn texts(svg: &str) -> Vec<String> {
+    let doc = parse(svg);
+    doc.descendants()
+        .filter(|n| n.has_tag_name("text"))
+        .map(|n| n.text().unwrap_or("").trim().to_string())
         .collect()
 }
 
-fn count_text(svg: &str, s: &str) -> usize {
+pub(super) fn count_text(svg: &str, s: &str) -> usize {
     texts(svg).iter().filter(|t| t.as_str() == s).count()
 }
 
-/// Vertices of every `<polygon>`, in pixels.
-fn polygons(svg: &str) -> Vec<Vec<(f64, f64)>> {
-    svg.split("<polygon")
-        .skip(1)
-        .map(|p| {
-            let pts = &p[p.find("points=\"").unwrap() + 8..];
-            pts[..pts.find('"').unwrap()]
-                .split_whitespace()
-                .map(|xy| {
-                    let (x, y) = xy.split_once(',').unwrap();
-                    (x.parse().unwrap(), y.parse().unwrap())
-                })
-                .collect()
+/// The groups of class `class`.
+pub(super) fn groups<'a, 'i>(doc: &'a roxmltree::Document<'i>, class: &str) -> Vec<roxmltree::Node<'a, 'i>> {
+    doc.descendants().filter(|n| n.has_tag_name("g") && n.attribute("class") == Some(class)).collect()
+}
+
+/// The elements named `tag` under the groups of class `class`.
+pub(super) fn in_class<'a, 'i>(
+    doc: &'a roxmltree::Document<'i>,
+    class: &str,
+    tag: &str,
+) -> Vec<roxmltree::Node<'a, 'i>> {
+    groups(doc, class)
+        .into_iter()
+        .flat_map(|g| g.descendants().filter(|n| n.has_tag_name(tag)).collect::<Vec<_>>())
+        .collect()
+}
+
+/// The `points` of a polygon or polyline, in pixels.
+pub(super) fn points(n: &roxmltree::Node<'_, '_>) -> Vec<(f64, f64)> {
+    n.attribute("points")
+        .unwrap_or("")
+        .split_whitespace()
+        .map(|xy| {
+            let (x, y) = xy.split_once(',').unwrap();
+            (x.parse().unwrap(), y.parse().unwrap())
         })
         .collect()
 }
 
+/// Width over height of the bounding box of `pts`.
+pub(super) fn aspect(pts: &[(f64, f64)]) -> f64 {
+    let (w0, w1) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.0), b.max(p.0)));
+    let (h0, h1) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.1), b.max(p.1)));
+    (w1 - w0) / (h1 - h0)
+}
+
+/// Polygons of the true shapes.
+fn polygons(svg: &str) -> Vec<Vec<(f64, f64)>> {
+    let doc = parse(svg);
+    in_class(&doc, "obstacle-true", "polygon").iter().map(points).collect()
+}
+
 /// With `DMP_PLOT_DUMP=dir` set, tests write their figures there (to look at them).
-fn dump(name: &str, svg: &str) {
+pub(super) fn dump(name: &str, svg: &str) {
     if let Some(dir) = std::env::var_os("DMP_PLOT_DUMP") {
         std::fs::write(std::path::Path::new(&dir).join(format!("{name}.svg")), svg).unwrap();
     }
 }
 
-fn check_common(svg: &str) {
-    assert_well_formed(svg);
+pub(super) fn check_common(svg: &str) {
+    parse(svg);
     assert!(!svg.contains("NaN") && !svg.contains("inf"), "non-finite number in the SVG");
     assert!(svg.contains("<text"), "no text at all");
+    for t in texts(svg) {
+        assert!(!t.starts_with("-0") || t.parse::<f64>().is_ok_and(|v| v != 0.0), "label {t:?}");
+    }
 }
 
 struct Case2d {
@@ -130,6 +146,10 @@ fn input_2d(c: &Case2d) -> PlotInput<'_> {
         obstacles: &c.obstacles,
         robots: &[],
         obstacle_time: 0.0,
+        solids: &[],
+        method: "dynamic_volumetric",
+        clearance: None,
+        events: &[],
     }
 }
 
@@ -139,20 +159,22 @@ fn plot_2d_one_ellipse() {
     let svg = render_svg(&input_2d(&c)).unwrap();
     dump("plot_2d_one_ellipse", &svg);
     check_common(&svg);
-    for label in
-        ["2-D: one ellipse", "x1", "x2", "demonstration", "DMP without obstacles", "DMP with avoidance"]
-    {
+    for label in [
+        "2-D: one ellipse",
+        "x1 (m)",
+        "x2 (m)",
+        "demonstration",
+        "obstacle-free DMP",
+        "with avoidance: dynamic volumetric",
+    ] {
         assert_eq!(count_text(&svg, label), 1, "text {label:?}");
     }
     assert!(svg.contains("#D62728") && svg.contains("#1F77B4"), "adapted / free colours");
     // One obstacle in one panel; its outline has the ellipse's 3:1 shape on screen (equal aspect ratio).
     let polys = polygons(&svg);
     assert_eq!(polys.len(), 1);
-    let xs = polys[0].iter().map(|p| p.0);
-    let ys = polys[0].iter().map(|p| p.1);
-    let w = xs.clone().fold(f64::MIN, f64::max) - xs.fold(f64::MAX, f64::min);
-    let h = ys.clone().fold(f64::MIN, f64::max) - ys.fold(f64::MAX, f64::min);
-    assert!((w / h - 3.0).abs() < 0.1, "ellipse drawn {w} x {h} px");
+    let a = aspect(&polys[0]);
+    assert!((a - 3.0).abs() < 0.02, "ellipse drawn with aspect {a}");
     assert_eq!(polys[0].len(), OUTLINE_SAMPLES_2D);
     assert!(svg.len() < 300_000, "{} bytes", svg.len());
     // Deterministic.
@@ -175,6 +197,10 @@ fn plot_3d_three_projections() {
         obstacles: &obstacles,
         robots: &[],
         obstacle_time: 0.0,
+        solids: &[],
+        method: "dynamic_volumetric",
+        clearance: None,
+        events: &[],
     };
     let svg = render_svg(&input).unwrap();
     dump("plot_3d_three_projections", &svg);
@@ -182,18 +208,15 @@ fn plot_3d_three_projections() {
     for caption in ["x1 - x2", "x1 - x3", "x2 - x3"] {
         assert_eq!(count_text(&svg, caption), 1, "panel {caption:?}");
     }
-    for axis in ["x1", "x2", "x3"] {
+    for axis in ["x1 (m)", "x2 (m)", "x3 (m)"] {
         assert_eq!(count_text(&svg, axis), 2, "axis name {axis:?}");
     }
     // The ellipsoid in each projection, with the right proportions.
     let polys = polygons(&svg);
     assert_eq!(polys.len(), 3);
     for (poly, ratio) in polys.iter().zip([2.0, 0.2 / 0.15, 0.1 / 0.15]) {
-        let w = poly.iter().map(|p| p.0).fold(f64::MIN, f64::max)
-            - poly.iter().map(|p| p.0).fold(f64::MAX, f64::min);
-        let h = poly.iter().map(|p| p.1).fold(f64::MIN, f64::max)
-            - poly.iter().map(|p| p.1).fold(f64::MAX, f64::min);
-        assert!((w / h - ratio).abs() < 0.1 * ratio, "{w} x {h} px, expected ratio {ratio}");
+        let a = aspect(poly);
+        assert!((a - ratio).abs() < 0.02 * ratio, "aspect {a}, expected {ratio}");
     }
 }
 
@@ -232,20 +255,27 @@ fn plot_three_robots() {
         obstacles: &obstacles,
         robots: &robots,
         obstacle_time: 0.5,
+        solids: &[],
+        method: "dynamic_volumetric",
+        clearance: None,
+        events: &[],
     };
     let svg = render_svg(&input).unwrap();
     dump("plot_three_robots", &svg);
     check_common(&svg);
     for r in &robots {
-        assert_eq!(count_text(&svg, &r.id), 1, "legend entry {}", r.id);
+        assert_eq!(count_text(&svg, &format!("{}, with avoidance", r.id)), 1, "legend entry {}", r.id);
+        assert_eq!(count_text(&svg, &format!("{}, obstacle-free", r.id)), 1, "legend entry {}", r.id);
     }
     for colour in ["#1F77B4", "#FF7F0E", "#2CA02C"] {
         assert!(svg.contains(&format!("stroke=\"{colour}\"")), "robot colour {colour}");
     }
-    assert_eq!(count_text(&svg, "x1"), 1);
-    // The obstacle is filled once (at t = 0.5); its start and end positions are dashed outlines only.
-    assert_eq!(polygons(&svg).len(), 1);
-    assert_eq!(count_text(&svg, "obstacle at t = 0.5"), 1);
+    assert_eq!(count_text(&svg, "x1 (m)"), 1);
+    // The moving obstacle at the five marked times (t = 0.5 among them).
+    assert_eq!(polygons(&svg).len(), 5);
+    assert_eq!(count_text(&svg, "0 s"), 1 + 3, "the obstacle and each robot's tick at t = 0");
+    // The obstacle moves 0.1 m in all: its outlines are too close to label each; the robots' ticks are labelled.
+    assert_eq!(count_text(&svg, "0.5 s"), 3, "each robot's tick at t = 0.5");
 }
 
 #[test]
@@ -264,11 +294,15 @@ fn plot_against_time_above_3d() {
         obstacles: &obstacles,
         robots: &[],
         obstacle_time: 0.0,
+        solids: &[],
+        method: "dynamic_volumetric",
+        clearance: None,
+        events: &[],
     };
     let svg = render_svg(&input).unwrap();
     dump("plot_against_time_above_3d", &svg);
     check_common(&svg);
-    assert_eq!(count_text(&svg, "t"), MAX_TIME_PANELS);
+    assert_eq!(count_text(&svg, "t (s)"), MAX_TIME_PANELS + 1, "each panel and the time strip");
     assert_eq!(count_text(&svg, "x6"), 1);
     assert_eq!(count_text(&svg, "x7"), 0);
     assert_eq!(count_text(&svg, "showing 6 of 7 coordinates"), 1);
@@ -296,6 +330,10 @@ fn plot_1d_and_non_finite_rows() {
         obstacles: &obstacles,
         robots: &[],
         obstacle_time: f64::NAN,
+        solids: &[],
+        method: "dynamic_volumetric",
+        clearance: None,
+        events: &[],
     };
     let svg = render_svg(&input).unwrap();
     dump("plot_1d_and_non_finite_rows", &svg);
@@ -347,6 +385,10 @@ fn plot_demonstration_times() {
         obstacles: &[],
         robots: &[],
         obstacle_time: 0.0,
+        solids: &[],
+        method: "dynamic_volumetric",
+        clearance: None,
+        events: &[],
     };
     let spread = render_svg(&input).unwrap();
     assert_eq!(count_text(&spread, "demonstration (time rescaled)"), 1);
@@ -359,7 +401,7 @@ fn plot_demonstration_times() {
     dump("plot_demonstration_times", &long);
     check_common(&long);
     assert_ne!(long.replace("demonstration", ""), timed.replace("demonstration", ""));
-    assert_eq!(count_text(&long, "2.0"), 1, "tick at t = 2");
+    assert_eq!(count_text(&long, "2"), 1, "tick at t = 2");
     let err = render_svg(&PlotInput { demonstration_t: Some(&[0.0, 1.0]), ..input }).unwrap_err();
     assert!(matches!(err, PlotError::Length { expected: 3, found: 2, .. }), "{err}");
 }
@@ -375,4 +417,8 @@ fn plot_helpers() {
     assert!(((x1 - x0) / (y1 - y0) - 2.0).abs() < 1e-12 && (y1 - y0 - 3.0).abs() < 1e-12);
     assert_eq!(fmt_num(0.5), "0.5");
     assert_eq!(fmt_num(2.0), "2");
+    assert_eq!(fmt_num(-0.0001), "0");
+    assert_eq!(fmt_tick(-0.0), "0");
+    assert_eq!(fmt_tick(0.1 + 0.2), "0.3");
+    assert_eq!(fmt_tick(0.0025), "0.0025");
 }
