@@ -10,8 +10,8 @@ impl Execution {
     /// stability check on the step and `tau` should prevent); nothing from that point on is handed out.
     ///
     /// The stretch's outcome is, in this order: [`Outcome::Stopped`] once a stop has come to rest;
-    /// [`Outcome::GoalReached`] when every member is at its goal and at rest, and nothing below happened in the
-    /// stretch; [`Outcome::EndTime`] when its last point is at the end time; otherwise [`Outcome::Collision`] (a
+    /// [`Outcome::GoalReached`] when every member is at its goal and at rest (within [`Execution::goal_tolerance`],
+    /// since [`Execution::goal_met_since`]), and nothing below happened in the stretch; [`Outcome::EndTime`] when its last point is at the end time; otherwise [`Outcome::Collision`] (a
     /// contact in the stretch), [`Outcome::Stalled`], [`Outcome::Holding`] or [`Outcome::Running`].
     pub fn advance(&mut self, n: usize) -> Result<Stretch> {
         let d = self.primitive.dim;
@@ -77,6 +77,7 @@ impl Execution {
             }
         }
         self.history.push(p.start_time, &self.stretch_s, &p.x, &p.xd);
+        self.track_goal(p.start_time, &p.x, &p.xd, n);
         if n > 0 {
             self.last_x.copy_from_slice(&p.x[(n - 1) * d..]);
             self.last_xd.copy_from_slice(&p.xd[(n - 1) * d..]);

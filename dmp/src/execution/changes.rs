@@ -76,6 +76,7 @@ impl Execution {
             }
         }
         self.scratch = restored;
+        self.forget_goal_after(self.out_t);
         self.out_t
     }
 

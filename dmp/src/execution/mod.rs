@@ -20,6 +20,7 @@
 mod advance;
 mod changes;
 mod fields;
+mod goal_tolerance;
 mod grid;
 mod group;
 mod history;
@@ -35,16 +36,17 @@ use crate::integrate::{Integrator, Motion, State};
 use crate::primitive::Primitive;
 use crate::stall::{Stall, StallConfig, StallDetector};
 
+pub use self::goal_tolerance::GoalTolerance;
 pub use self::group::{GroupMember, join_group};
 use self::history::History;
 use self::ignored::Ignored;
 pub use self::ignored::IgnoredObstacle;
 pub use self::stepping::{IntegrationCost, MAX_STIFF_STEP, Stepping, check_stability};
 
-/// Distance to the goal and speed under which a robot has arrived.
-pub const ARRIVED_DISTANCE: f64 = 1e-3;
-/// See [`ARRIVED_DISTANCE`].
-pub const ARRIVED_SPEED: f64 = 1e-3;
+/// The default distance to the goal under which a robot has arrived ([`GoalTolerance::DEFAULT`]).
+pub const ARRIVED_DISTANCE: f64 = GoalTolerance::DEFAULT.position;
+/// The default speed under which a robot has arrived, and the speed under which a stop has come to rest.
+pub const ARRIVED_SPEED: f64 = GoalTolerance::DEFAULT.speed;
 
 /// What a stretch of points came to. Later variants are not "worse": see [`Execution::advance`] for the order in
 /// which they are judged.
@@ -182,6 +184,10 @@ pub struct Execution {
     c0: Vec<f64>,
     /// Every obstacle or robot touched so far.
     touched: std::collections::BTreeSet<String>,
+    /// "At the goal and at rest".
+    goal_tolerance: GoalTolerance,
+    /// Since when every member has been within `goal_tolerance`, up to the last point handed out.
+    goal_met_since: Option<f64>,
     /// Obstacles left out of the run, and the reports not yet handed out.
     ignored: Ignored,
     cost: IntegrationCost,
@@ -244,6 +250,8 @@ impl Execution {
             member_ids,
             c0: Vec::new(),
             touched: Default::default(),
+            goal_tolerance: GoalTolerance::DEFAULT,
+            goal_met_since: None,
             ignored: Ignored::default(),
             cost: IntegrationCost::default(),
             primitive,
@@ -324,14 +332,11 @@ impl Execution {
         if self.has_last { (&self.last_x, &self.last_xd) } else { (&self.knot0.x, &self.knot0.xd) }
     }
 
-    /// Whether every member is at its goal and at rest (at the last output point).
+    /// Whether every member is at its goal and at rest (at the last output point), within
+    /// [`Execution::goal_tolerance`].
     pub fn arrived(&self) -> bool {
         let (x, xd) = self.last();
-        self.members().iter().all(|m| {
-            let dist: f64 = m.dims.iter().map(|&i| (x[i] - self.motion.goal[i]).powi(2)).sum::<f64>().sqrt();
-            let speed: f64 = m.dims.iter().map(|&i| xd[i].powi(2)).sum::<f64>().sqrt();
-            dist <= ARRIVED_DISTANCE && speed <= ARRIVED_SPEED
-        })
+        self.within_goal_tolerance(x, xd)
     }
 
     /// True when every member is at rest (at the last output point).

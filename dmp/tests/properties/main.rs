@@ -4,6 +4,7 @@
 //!
 //! Measured numbers are printed with `eprintln!` (`cargo test -p dmp --test properties -- --nocapture`).
 
+mod arrival;
 mod changing_the_motion;
 mod fixtures;
 mod guard_rails;
