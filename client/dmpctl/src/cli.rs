@@ -205,6 +205,12 @@ pub struct MotionArgs {
     /// Ignore the cell's scene.
     #[arg(long = "ignore-scene")]
     pub ignore_scene: bool,
+    /// "At the goal": largest distance to the goal, in the demonstration's units [default: 0.001].
+    #[arg(long = "goal-tolerance", value_name = "DISTANCE", value_parser = positive)]
+    pub goal_tolerance: Option<f64>,
+    /// "At rest": largest speed at the goal, in the demonstration's units per second [default: 0.001].
+    #[arg(long = "goal-speed-tolerance", value_name = "SPEED", value_parser = positive)]
+    pub goal_speed_tolerance: Option<f64>,
 }
 
 /// `dmpctl plan`.

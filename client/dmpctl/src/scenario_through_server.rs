@@ -243,6 +243,7 @@ async fn run_robot_group(
                         extra_obstacles: if free { Vec::new() } else { obstacles.clone() },
                         ignore_scene: true,
                         cell: String::new(),
+                        goal_tolerance: None,
                     }),
                 }
             })

@@ -118,6 +118,12 @@ pub fn motion_spec(m: &MotionArgs) -> v1::MotionSpec {
         tau: m.tau.unwrap_or(0.0),
         avoidance: m.avoidance.as_ref().map(|a| avoidance_to_proto(a, m.point_samples.unwrap_or(0))),
         ignore_scene: m.ignore_scene,
+        goal_tolerance: (m.goal_tolerance.is_some() || m.goal_speed_tolerance.is_some()).then(|| {
+            v1::GoalTolerance {
+                position: m.goal_tolerance.unwrap_or(0.0),
+                speed: m.goal_speed_tolerance.unwrap_or(0.0),
+            }
+        }),
         ..Default::default()
     }
 }
@@ -193,6 +199,7 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
     let mut s = Setpoints::new();
     let mut interrupted = false;
     let mut stale = false;
+    let mut arrived = 0.0;
     let mut versions = crate::server_plot::SceneVersions::default();
     let ctrl_c = tokio::signal::ctrl_c();
     tokio::pin!(ctrl_c);
@@ -204,6 +211,7 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
                     let seg = seg?;
                     eprintln!("{}", segment_line(&seg));
                     print_warnings(&seg.warnings, seg.scene_stale, &mut stale);
+                    arrived = seg.goal_reached_time;
                     s.push(&seg)?;
                     versions.see(&seg);
                 }
@@ -215,7 +223,13 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
         }
     }
     drop(segments);
-    let status = s.last_status().map_or("none", |st| st.as_str_name());
+    let status = match s.last_status() {
+        None => "none".to_string(),
+        Some(v1::SegmentStatus::GoalReached) => {
+            format!("GOAL_REACHED (at the goal and at rest since t = {arrived} s)")
+        }
+        Some(st) => st.as_str_name().to_string(),
+    };
     let n = s.segments();
     let traj = s.into_trajectory();
     if traj.is_empty() {

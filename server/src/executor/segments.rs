@@ -20,6 +20,10 @@ pub fn member_segments(
     let e = &run.execution;
     let d = e.dim();
     let n = p.x.len() / d.max(1);
+    let goal_reached_time = match status {
+        v1::SegmentStatus::GoalReached => e.goal_met_since().unwrap_or(0.0),
+        _ => 0.0,
+    };
     let segment = |robot_id: &str, dim: usize, positions, velocities, accelerations| v1::Segment {
         robot_id: robot_id.to_string(),
         sequence,
@@ -34,6 +38,7 @@ pub fn member_segments(
         start_unix_s: start_unix.map(|s| s + p.start_time).unwrap_or(0.0),
         warnings: Vec::new(),
         scene_stale: false,
+        goal_reached_time,
     };
     match e.members() {
         [m] if m.dims.len() == d => vec![segment(&m.id, d, p.x, p.xd, p.xdd)],

@@ -5,7 +5,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use dmp::Stepping;
-use dmp::execution::{GroupMember, join_group};
+use dmp::execution::{GoalTolerance, GroupMember, join_group};
 use dmp::field::Agent;
 use dmp_proto::status::segment_status;
 use dmp_proto::v1;
@@ -70,14 +70,16 @@ impl MotionServiceImpl {
     ) -> Result<ServedRun, ServerError> {
         let dim = r.primitive.dim;
         let member = Agent { id: r.robot_id, dims: (0..dim).collect(), footprint: r.footprint };
-        ServedRun::new(
+        let mut run = ServedRun::new(
             r.primitive,
             r.motion,
             vec![(member, r.footprint_proto)],
             r.avoidance,
             stepping,
             history,
-        )
+        )?;
+        run.execution.set_goal_tolerance(r.goal_tolerance)?;
+        Ok(run)
     }
 
     /// Refuses, before any work, an answer that would exceed the message size: `values` numbers of position,
@@ -237,6 +239,10 @@ impl MotionService for MotionServiceImpl {
         let (execution, scene_version) = (run.execution, run.scene_version);
         let collisions: Vec<String> = execution.touched().iter().cloned().collect();
         let stalled = !stretch.stalls.is_empty();
+        let goal_reached_time = match stretch.outcome {
+            dmp::Outcome::GoalReached => execution.goal_met_since().unwrap_or(0.0),
+            _ => 0.0,
+        };
         info!(robot = %robot_id, steps, collisions = collisions.len(), stalled, "planned");
         Ok(Response::new(v1::PlanResponse {
             trajectory: Some(v1::Segment {
@@ -253,6 +259,7 @@ impl MotionService for MotionServiceImpl {
                 start_unix_s: 0.0,
                 warnings: Vec::new(),
                 scene_stale: false,
+                goal_reached_time,
             }),
             collisions,
             stalled,
@@ -426,6 +433,11 @@ impl MotionService for MotionServiceImpl {
                 }
             }
         }
+        // Every member within its own tolerance: the tightest of each.
+        let goal_tolerance =
+            resolved.iter().map(|r| r.goal_tolerance).fold(resolved[0].goal_tolerance, |a, b| {
+                GoalTolerance { position: a.position.min(b.position), speed: a.speed.min(b.speed) }
+            });
         let members =
             agents.into_iter().zip(resolved.into_iter().map(|r| r.footprint_proto)).collect::<Vec<_>>();
         info!(robots = members.len(), realtime = cfg.realtime, "execute group");
@@ -434,7 +446,8 @@ impl MotionService for MotionServiceImpl {
         let claim = self.claim(&cell, &ids, req.take_over).await?;
         audit!(caller, "execute group", cell = cell.name(), robots = ?ids, take_over = req.take_over);
         let grant = self.grant(caller, &cell, ids.iter().map(|id| id.to_string()).collect())?;
-        let run = ServedRun::new(primitive, motion, members, avoidance, cfg.stepping, history_len(&cfg))?;
+        let mut run = ServedRun::new(primitive, motion, members, avoidance, cfg.stepping, history_len(&cfg))?;
+        run.execution.set_goal_tolerance(goal_tolerance).map_err(ServerError::from)?;
         let rx = self.spawn(run, cell, cfg, None, &peer, Owner { claim, grant })?;
         let stream = ReceiverStream::new(rx).map(|r| {
             r.map(|segments| v1::GroupSegment {

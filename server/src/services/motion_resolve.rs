@@ -1,5 +1,6 @@
 //! A motion request resolved against the access rules and the store: the primitive, the motion, the avoidance.
 
+use dmp::execution::GoalTolerance;
 use dmp::{Motion, Primitive};
 use dmp_proto::avoidance::avoidance_from_proto;
 use dmp_proto::check::{check_in_workspace, check_tau, check_vector};
@@ -43,6 +44,8 @@ pub(super) struct ResolvedMotion {
     pub(super) avoidance: RunAvoidance,
     pub(super) footprint: Option<dmp::Shape>,
     pub(super) footprint_proto: Option<v1::Superquadric>,
+    /// "At the goal and at rest".
+    pub(super) goal_tolerance: GoalTolerance,
 }
 
 impl MotionServiceImpl {
@@ -123,6 +126,20 @@ impl MotionServiceImpl {
             avoidance: RunAvoidance { obstacles, robots, extra, ignore_scene: spec.ignore_scene },
             footprint,
             footprint_proto: spec.footprint.clone(),
+            goal_tolerance: goal_tolerance(spec.goal_tolerance.as_ref(), prefix)?,
         })
     }
+}
+
+/// The request's goal tolerance, a field left 0 (or the whole message unset) taking its default.
+fn goal_tolerance(t: Option<&v1::GoalTolerance>, prefix: &str) -> Result<GoalTolerance, ServerError> {
+    let default = GoalTolerance::DEFAULT;
+    let Some(t) = t else { return Ok(default) };
+    let or_default = |v: f64, d: f64| if v == 0.0 { d } else { v };
+    let tolerance = GoalTolerance {
+        position: or_default(t.position, default.position),
+        speed: or_default(t.speed, default.speed),
+    };
+    tolerance.validate().map_err(|e| e.within(&format!("{prefix}.goal_tolerance")))?;
+    Ok(tolerance)
 }

@@ -90,6 +90,38 @@ async fn server_commands_against_the_server() {
     );
     let streamed = std::fs::read_to_string(dir.path().join("stream/trajectory.csv")).unwrap();
     assert_eq!(streamed.lines().count(), plan.lines().count());
+    // With a looser "at the goal and at rest", the same motion arrives, and says since when.
+    let loose = [
+        "stream",
+        "--robot",
+        "r",
+        "--name",
+        "p",
+        "--goal",
+        "2,-1",
+        "--goal-tolerance",
+        "0.05",
+        "--goal-speed-tolerance",
+        "0.5",
+        "--max-duration",
+        "5",
+        "--out",
+        &d("loose"),
+    ];
+    let said = run_at(&url, &loose).await.unwrap();
+    let since: f64 = said
+        .split("at the goal and at rest since t = ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .unwrap_or_else(|| panic!("{said}"))
+        .parse()
+        .unwrap();
+    assert!(said.contains("last status GOAL_REACHED") && since > 0.5 && since < 1.5, "{said}");
+    let mut bad = vec!["dmpctl", "--server", &url];
+    bad.extend_from_slice(&loose);
+    bad[11] = "0";
+    let e = Cli::try_parse_from(&bad).unwrap_err().to_string();
+    assert!(e.contains("--goal-tolerance") && e.contains("greater than zero"), "{e}");
     // Both write their figure too: the run and the obstacle-free plan of the same motion, under their title.
     for what in ["plan", "stream"] {
         let svg = std::fs::read_to_string(dir.path().join(what).join("plot.svg")).unwrap();

@@ -36,6 +36,11 @@ pub fn motion_spec() -> BoxedStrategy<v1::MotionSpec> {
                 prop_oneof![Just(None), superquadric(d, 5).prop_map(Some)],
                 vec(obstacle(&["e1", "e2"]), 0..3),
                 any::<bool>(),
+                prop_oneof![
+                    Just(None),
+                    (zero_or(around(0.001, 1.0)), zero_or(around(0.001, 1.0)))
+                        .prop_map(|(position, speed)| Some(v1::GoalTolerance { position, speed })),
+                ],
             )
                 .prop_map(
                     move |(
@@ -46,6 +51,7 @@ pub fn motion_spec() -> BoxedStrategy<v1::MotionSpec> {
                         footprint,
                         extra,
                         ignore,
+                        goal_tolerance,
                     )| {
                         v1::MotionSpec {
                             robot_id: robot_id.clone(),
@@ -60,6 +66,7 @@ pub fn motion_spec() -> BoxedStrategy<v1::MotionSpec> {
                             extra_obstacles: extra,
                             ignore_scene: ignore,
                             cell: cell.clone(),
+                            goal_tolerance,
                         }
                     },
                 )

@@ -2,6 +2,7 @@
 //! library exactly as robots and perception nodes drive it. Every await is under a timeout.
 
 mod access;
+mod arrival;
 mod bad_input;
 mod catch_up;
 mod hostile_compute;
