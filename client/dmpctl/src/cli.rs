@@ -429,10 +429,12 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
                     problems.push(format!("{id}: {} late setpoints", r.late_setpoints));
                 }
             }
+            let (robots, runs) = report.robots_and_runs();
             let line = format!(
-                "{}: {} robots, collision: {}, {}; wrote {}",
+                "{}: {}, {}, collision: {}, {}; wrote {}",
                 report.sim,
-                report.robots.len(),
+                plural(robots, "robot"),
+                plural(runs, "run"),
                 report.collision,
                 if problems.is_empty() { "no problem".to_string() } else { problems.join("; ") },
                 a.out.display()
@@ -440,6 +442,11 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
             gate(line, problems)
         }
     }
+}
+
+/// `1 robot`, `3 robots`.
+fn plural(n: usize, what: &str) -> String {
+    format!("{n} {what}{}", if n == 1 { "" } else { "s" })
 }
 
 fn summary_line(file: &Path, summary: &RunSummary, out: &Path) -> String {

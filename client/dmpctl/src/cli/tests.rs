@@ -310,3 +310,10 @@ fn a_zenoh_command_that_cannot_ask_the_server_goes_on_with_the_default_cell() {
     let e = run(c).unwrap_err();
     assert!(matches!(e, DmpctlError::Client(ClientError::Zenoh(_))), "{e:?}");
 }
+
+#[test]
+fn summary_lines_count_in_the_singular_and_the_plural() {
+    assert_eq!(plural(1, "robot"), "1 robot");
+    assert_eq!(plural(3, "run"), "3 runs");
+    assert_eq!(plural(0, "run"), "0 runs");
+}

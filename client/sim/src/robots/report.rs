@@ -92,6 +92,14 @@ impl SimReport {
         self.problems_allowing(false)
     }
 
+    /// How many robots and how many runs the report holds: its entries are `<robot>/<run>`, so that one arm that
+    /// makes three motions is one robot and three runs.
+    pub fn robots_and_runs(&self) -> (usize, usize) {
+        let robots: std::collections::BTreeSet<&str> =
+            self.robots.keys().map(|k| k.split_once('/').map_or(k.as_str(), |(robot, _)| robot)).collect();
+        (robots.len(), self.robots.len())
+    }
+
     /// [`SimReport::problems`], leaving out the collisions when `allow_collision` (a run meant to collide).
     pub fn problems_allowing(&self, allow_collision: bool) -> Vec<String> {
         let mut p = Vec::new();
