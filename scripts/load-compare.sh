@@ -18,7 +18,7 @@ one() {
   for _ in $(seq 100); do (echo >/dev/tcp/127.0.0.1/50152) 2>/dev/null && break; sleep 0.1; done
   t0=$(awk '{print $14+$15}' "/proc/$pid/stat")
   /usr/bin/time -f "%U %S" -o "$dir/gtime" "$generator" --server http://127.0.0.1:50152 load --robots "$n" \
-    --rate 1000 --segment-ms 10 --duration 10 >"$dir/load.json" 2>"$dir/load.err"
+    --rate 1000 --segment-s 0.01 --duration-s 10 >"$dir/load.json" 2>"$dir/load.err"
   t1=$(awk '{print $14+$15}' "/proc/$pid/stat")
   rss=$(awk '/VmHWM/{print $2}' "/proc/$pid/status")
   kill -INT "$pid"

@@ -220,10 +220,10 @@ pub struct PlanArgs {
     #[command(flatten)]
     pub motion: MotionArgs,
     /// Length of the plan, seconds [default: 1.2 tau].
-    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    #[arg(long = "duration-s", alias = "duration", value_name = "S", value_parser = positive, allow_hyphen_values = true)]
     pub duration: Option<f64>,
     /// Step, seconds [default: 0.001].
-    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    #[arg(long = "dt-s", alias = "dt", value_name = "S", value_parser = positive, allow_hyphen_values = true)]
     pub dt: Option<f64>,
     /// Output directory (created).
     #[arg(long)]
@@ -240,16 +240,22 @@ pub struct StreamArgs {
     #[arg(long)]
     pub realtime: bool,
     /// Step, seconds [default: 0.001].
-    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    #[arg(long = "dt-s", alias = "dt", value_name = "S", value_parser = positive, allow_hyphen_values = true)]
     pub dt: Option<f64>,
     /// Segment length, seconds [default: 0.01].
-    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    #[arg(long = "segment-s", alias = "segment", value_name = "S", value_parser = positive, allow_hyphen_values = true)]
     pub segment: Option<f64>,
     /// Real-time lookahead, seconds [default: 0.05].
-    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    #[arg(long = "lookahead-s", alias = "lookahead", value_name = "S", value_parser = positive, allow_hyphen_values = true)]
     pub lookahead: Option<f64>,
     /// Stop after this long, seconds [default: at the goal, or 3 tau].
-    #[arg(long = "max-duration", value_parser = positive, allow_hyphen_values = true)]
+    #[arg(
+        long = "max-duration-s",
+        alias = "max-duration",
+        value_name = "S",
+        value_parser = positive,
+        allow_hyphen_values = true
+    )]
     pub max_duration: Option<f64>,
     /// Output directory (created).
     #[arg(long)]

@@ -53,7 +53,19 @@ async fn server_commands_against_the_server() {
 
     let said = run_at(
         &url,
-        &["plan", "--robot", "r", "--name", "p", "--goal", "2,-1", "--duration", "1.5", "--out", &d("plan")],
+        &[
+            "plan",
+            "--robot",
+            "r",
+            "--name",
+            "p",
+            "--goal",
+            "2,-1",
+            "--duration-s",
+            "1.5",
+            "--out",
+            &d("plan"),
+        ],
     )
     .await
     .unwrap();
@@ -74,7 +86,7 @@ async fn server_commands_against_the_server() {
             "p",
             "--goal",
             "2,-1",
-            "--max-duration",
+            "--max-duration-s",
             "1.5",
             "--out",
             &d("stream"),
@@ -103,7 +115,7 @@ async fn server_commands_against_the_server() {
         "0.05",
         "--goal-speed-tolerance",
         "0.5",
-        "--max-duration",
+        "--max-duration-s",
         "5",
         "--out",
         &d("loose"),

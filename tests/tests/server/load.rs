@@ -61,11 +61,11 @@ async fn a_hundred_concurrent_streams_complete_and_a_leaving_client_frees_its_st
 async fn a_smoke_load_streams_twenty_robots_in_two_cells() {
     let dir = tempfile::tempdir().unwrap();
     let (handle, _client) = serve(dir.path()).await;
-    let out = dir.path().join("load.json");
+    let out = dir.path().join("load");
     let args = dmp_sim::load::LoadArgs {
         robots: 20,
         rate: 1000.0,
-        segment_ms: 10.0,
+        segment_s: 0.01,
         duration: 2.0,
         scene_updates: 5.0,
         out: Some(out.clone()),
@@ -78,7 +78,8 @@ async fn a_smoke_load_streams_twenty_robots_in_two_cells() {
     let json = serde_json::to_value(&report).unwrap();
     println!("{}", serde_json::to_string_pretty(&json).unwrap());
     assert_eq!(
-        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(&out).unwrap()).unwrap(),
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(out.join("load.json")).unwrap())
+            .unwrap(),
         json
     );
     for key in [
@@ -137,7 +138,7 @@ async fn a_load_against_a_secured_server_streams_each_robot_as_itself() {
         robots: 6,
         cell_size: 3,
         rate: 1000.0,
-        segment_ms: 10.0,
+        segment_s: 0.01,
         duration: 1.0,
         tokens: Some(set.path().to_path_buf()),
         ..Default::default()

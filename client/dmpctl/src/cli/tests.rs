@@ -78,9 +78,9 @@ fn load_takes_its_flags_and_the_global_server() {
         "20",
         "--rate",
         "500",
-        "--segment-ms",
-        "20",
-        "--duration",
+        "--segment-s",
+        "0.02",
+        "--duration-s",
         "3",
         "--scene-updates",
         "5",
@@ -89,7 +89,7 @@ fn load_takes_its_flags_and_the_global_server() {
         "--dim",
         "2",
         "--out",
-        "r.json",
+        "r",
     ]);
     assert_eq!(
         (c.server.as_deref(), c.zenoh_connect.as_slice()),
@@ -99,11 +99,11 @@ fn load_takes_its_flags_and_the_global_server() {
     let expected = dmp_sim::load::LoadArgs {
         robots: 20,
         rate: 500.0,
-        segment_ms: 20.0,
+        segment_s: 0.02,
         duration: 3.0,
         scene_updates: 5.0,
         dim: 2,
-        out: Some(PathBuf::from("r.json")),
+        out: Some(PathBuf::from("r")),
         ..Default::default()
     };
     assert_eq!(a, expected);
@@ -111,17 +111,29 @@ fn load_takes_its_flags_and_the_global_server() {
     assert_eq!(a, dmp_sim::load::LoadArgs::default());
     // The server's adaptive step (at most 30 ms, tolerance 3e-6) unless told otherwise; a zero tolerance asks
     // for a fixed RK4 step, and a zero step for the server's default.
-    assert_eq!((a.integration_step_ms, a.integration_tolerance), (30.0, 3e-6));
+    assert_eq!((a.integration_step_s, a.integration_tolerance), (0.03, 3e-6));
     let Command::Load(a) =
-        parse(&["load", "--integration-step-ms", "5", "--integration-tolerance", "0"]).command
+        parse(&["load", "--integration-step-s", "0.005", "--integration-tolerance", "0"]).command
     else {
         panic!()
     };
-    assert_eq!((a.integration_step_ms, a.integration_tolerance), (5.0, 0.0));
+    assert_eq!((a.integration_step_s, a.integration_tolerance), (0.005, 0.0));
     assert!(a.validate().is_ok());
     let Command::Load(a) = parse(&["load", "--integration-step-ms", "0"]).command else { panic!() };
-    assert_eq!(a.integration_step_ms, 0.0);
-    assert!(a.validate().is_ok());
+    assert_eq!(a.validate().unwrap().args.integration_step_s, 0.0);
+    // The old spellings in milliseconds still work, hidden, and mean the same seconds.
+    let Command::Load(a) = parse(&["load", "--segment-ms", "20", "--duration", "3"]).command else {
+        panic!()
+    };
+    let p = a.validate().unwrap();
+    assert_eq!((p.args.segment_s, p.args.segment_ms, p.args.duration), (0.02, None, 3.0));
+    assert!(refused(&["load", "--segment-ms", "20", "--segment-s", "0.02"]).contains("--segment"));
+    let mut cmd = <Cli as clap::CommandFactory>::command();
+    let help = cmd.find_subcommand_mut("load").unwrap().render_long_help().to_string();
+    assert!(
+        help.contains("--segment-s") && !help.contains("--segment-ms") && !help.contains("-ms"),
+        "{help}"
+    );
     let Command::Load(a) = parse(&["load", "--integration-tolerance", "0.5"]).command else { panic!() };
     assert!(a.validate().unwrap_err().to_string().contains("--integration-tolerance"));
     assert!(refused(&["load", "--robots", "many"]).contains("--robots"));
@@ -316,4 +328,27 @@ fn summary_lines_count_in_the_singular_and_the_plural() {
     assert_eq!(plural(1, "robot"), "1 robot");
     assert_eq!(plural(3, "run"), "3 runs");
     assert_eq!(plural(0, "run"), "0 runs");
+}
+
+#[test]
+fn durations_are_in_seconds_with_the_old_spellings_hidden() {
+    let new =
+        ["stream", "--robot", "r", "--name", "p", "--dt-s", "0.002", "--segment-s", "0.02", "--out", "o"];
+    let old = ["stream", "--robot", "r", "--name", "p", "--dt", "0.002", "--segment", "0.02", "--out", "o"];
+    for args in [&new[..], &old[..]] {
+        let Command::Stream(a) = parse(args).command else { panic!() };
+        assert_eq!((a.dt, a.segment), (Some(0.002), Some(0.02)), "{args:?}");
+    }
+    let mut cmd = <Cli as clap::CommandFactory>::command();
+    let help = cmd.find_subcommand_mut("stream").unwrap().render_long_help().to_string();
+    for flag in ["--dt-s", "--segment-s", "--lookahead-s", "--max-duration-s"] {
+        assert!(help.contains(flag), "{flag} missing from\n{help}");
+    }
+    assert!(!help.contains("--segment ") && !help.contains("--max-duration "), "{help}");
+    let Command::Plan(a) =
+        parse(&["plan", "--robot", "r", "--name", "p", "--duration-s", "2", "--out", "o"]).command
+    else {
+        panic!()
+    };
+    assert_eq!(a.duration, Some(2.0));
 }

@@ -1,6 +1,6 @@
 //! The bound in the load's own situation: a robot of a load cell, streamed with the server's adaptive step
 //! (Dormand–Prince 5(4), at most 30 ms, tolerance 3e-6: what `dmpctl load` asks for by default) or a fixed RK4 step
-//! of 5 ms (`--integration-tolerance 0 --integration-step-ms 5`), with quintic Hermite output at 1 kHz, stays within
+//! of 5 ms (`--integration-tolerance 0 --integration-step-s 0.005`), with quintic Hermite output at 1 kHz, stays within
 //! 1e-3 of the engine's RK4 at 1 ms, past the cell's five fixed obstacles and its nine cell-mates, with the server's
 //! default avoidance for both and a new goal halfway. The cell-mates drive their own primitives (without avoiding
 //! anything, so that their motion is the same in both runs) and are seen as the server sees them: a state every
@@ -25,7 +25,7 @@ const DT: f64 = 1e-3;
 /// The load's default: the adaptive step, at most 30 ms.
 const ADAPTIVE: (usize, Option<f64>) = (30, Some(super::DEFAULT_INTEGRATION_TOLERANCE));
 // The step this test checks is the load's default.
-const _: () = assert!(super::DEFAULT_INTEGRATION_STEP_MS * 1e-3 == ADAPTIVE.0 as f64 * DT);
+const _: () = assert!(super::DEFAULT_INTEGRATION_STEP_S == ADAPTIVE.0 as f64 * DT);
 /// A fixed RK4 step of 5 ms.
 const FIXED: (usize, Option<f64>) = (5, None);
 /// Seconds simulated: two legs of `tau`, the second to the robot's start.

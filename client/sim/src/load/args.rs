@@ -7,7 +7,7 @@ use crate::error::SimError;
 
 const DEFAULT_ROBOTS: usize = 100;
 const DEFAULT_RATE: f64 = 1000.0;
-const DEFAULT_SEGMENT_MS: f64 = 10.0;
+const DEFAULT_SEGMENT_S: f64 = 0.01;
 const DEFAULT_DURATION: f64 = 10.0;
 const DEFAULT_CELL_SIZE: usize = 10;
 const DEFAULT_DIM: usize = 3;
@@ -22,7 +22,7 @@ pub const MAX_DEFAULT_CONNECTIONS: usize = 8;
 pub const STREAMS_PER_CONNECTION: usize = 125;
 /// The largest internal step the load asks the server for by default, milliseconds (its adaptive step; a fixed
 /// RK4 step is at most one segment).
-pub const DEFAULT_INTEGRATION_STEP_MS: f64 = 30.0;
+pub const DEFAULT_INTEGRATION_STEP_S: f64 = 0.03;
 /// The local error tolerance of the server's adaptive step the load asks for by default: a load robot stays within
 /// 1e-3 of the engine's RK4 at 1 ms with it, for fewer evaluations of the field than a fixed 5 ms RK4 step
 /// (`accuracy.rs` checks both; the deviations measured are in BENCHMARKS.md).
@@ -38,11 +38,20 @@ pub struct LoadArgs {
     /// Setpoints per second per robot (dt = 1 / rate).
     #[arg(long, default_value_t = DEFAULT_RATE, value_name = "HZ", allow_hyphen_values = true)]
     pub rate: f64,
-    /// Segment length, milliseconds (a whole number of setpoints).
-    #[arg(long = "segment-ms", default_value_t = DEFAULT_SEGMENT_MS, value_name = "MS", allow_hyphen_values = true)]
-    pub segment_ms: f64,
+    /// Segment length, seconds (a whole number of setpoints).
+    #[arg(long = "segment-s", default_value_t = DEFAULT_SEGMENT_S, value_name = "S", allow_hyphen_values = true)]
+    pub segment_s: f64,
+    /// The segment length in milliseconds: the old spelling of `--segment-s`, kept hidden.
+    #[arg(
+        long = "segment-ms",
+        hide = true,
+        value_name = "MS",
+        allow_hyphen_values = true,
+        conflicts_with = "segment_s"
+    )]
+    pub segment_ms: Option<f64>,
     /// Length of the measurement, seconds, from the first robot's start to the stops.
-    #[arg(long, default_value_t = DEFAULT_DURATION, value_name = "S", allow_hyphen_values = true)]
+    #[arg(long = "duration-s", alias = "duration", default_value_t = DEFAULT_DURATION, value_name = "S", allow_hyphen_values = true)]
     pub duration: f64,
     /// Obstacle updates per second over Zenoh, round-robin over the cells (0: none).
     #[arg(long = "scene-updates", default_value_t = 0.0, value_name = "HZ", allow_hyphen_values = true)]
@@ -56,19 +65,28 @@ pub struct LoadArgs {
     /// The primitives' time scale, seconds; each robot changes its goal every tau.
     #[arg(long, default_value_t = DEFAULT_TAU, value_name = "S", allow_hyphen_values = true)]
     pub tau: f64,
-    /// The server's largest internal step, milliseconds, with the output points interpolated exactly (quintic
-    /// Hermite) in between. With `--integration-tolerance 0` it is a fixed RK4 step (at most one segment; 5 ms
+    /// The server's largest internal step, seconds, with the output points interpolated exactly (quintic
+    /// Hermite) in between. With `--integration-tolerance 0` it is a fixed RK4 step (at most one segment; 0.005 s
     /// keeps a load robot within 1e-3 of RK4 at 1 ms, `load/accuracy.rs`); 0 asks for the server's default.
     #[arg(
-        long = "integration-step-ms",
-        default_value_t = DEFAULT_INTEGRATION_STEP_MS,
-        value_name = "MS",
+        long = "integration-step-s",
+        default_value_t = DEFAULT_INTEGRATION_STEP_S,
+        value_name = "S",
         allow_hyphen_values = true
     )]
-    pub integration_step_ms: f64,
+    pub integration_step_s: f64,
+    /// The internal step in milliseconds: the old spelling of `--integration-step-s`, kept hidden.
+    #[arg(
+        long = "integration-step-ms",
+        hide = true,
+        value_name = "MS",
+        allow_hyphen_values = true,
+        conflicts_with = "integration_step_s"
+    )]
+    pub integration_step_ms: Option<f64>,
     /// The server's adaptive internal step: the local error tolerance of its Dormand–Prince 5(4) steps, with
-    /// `--integration-step-ms` the largest step (`load/accuracy.rs` checks the default against RK4 at 1 ms);
-    /// 0 asks for a fixed RK4 step of `--integration-step-ms`. At most 0.01.
+    /// `--integration-step-s` the largest step (`load/accuracy.rs` checks the default against RK4 at 1 ms);
+    /// 0 asks for a fixed RK4 step of `--integration-step-s`. At most 0.01.
     #[arg(
         long = "integration-tolerance",
         default_value_t = DEFAULT_INTEGRATION_TOLERANCE,
@@ -86,8 +104,8 @@ pub struct LoadArgs {
     /// Prefix of the cells (`<prefix>-<c>`) and robots (`<prefix>-<c>-<k>`).
     #[arg(long, default_value = DEFAULT_PREFIX)]
     pub prefix: String,
-    /// Also write the JSON report to this file.
-    #[arg(long, value_name = "FILE")]
+    /// Also write the JSON report to `DIR/load.json` (the directory is created).
+    #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// A secured server: each robot streams as its own identity, with the token in `DIR/<robot-id>.token` (as
     /// `dmp-server access init` writes them); set-up and monitoring use the command's own credentials.
@@ -100,13 +118,15 @@ impl Default for LoadArgs {
         Self {
             robots: DEFAULT_ROBOTS,
             rate: DEFAULT_RATE,
-            segment_ms: DEFAULT_SEGMENT_MS,
+            segment_s: DEFAULT_SEGMENT_S,
+            segment_ms: None,
             duration: DEFAULT_DURATION,
             scene_updates: 0.0,
             cell_size: DEFAULT_CELL_SIZE,
             dim: DEFAULT_DIM,
             tau: DEFAULT_TAU,
-            integration_step_ms: DEFAULT_INTEGRATION_STEP_MS,
+            integration_step_s: DEFAULT_INTEGRATION_STEP_S,
+            integration_step_ms: None,
             integration_tolerance: DEFAULT_INTEGRATION_TOLERANCE,
             connections: None,
             threads: DEFAULT_THREADS,
@@ -147,7 +167,19 @@ fn in_range(flag: &str, x: f64, lo: f64, hi: f64, unit: &str) -> Result<(), SimE
 impl LoadArgs {
     /// Checks every flag (the error names it) and derives the run's parameters.
     pub fn validate(&self) -> Result<Params, SimError> {
-        in_range("--integration-step-ms", self.integration_step_ms, 0.0, 100.0, "")?;
+        // The old spellings in milliseconds become the seconds they stand for.
+        let mut args = self.clone();
+        if let Some(ms) = args.segment_ms.take() {
+            args.segment_s = ms * 1e-3;
+        }
+        if let Some(ms) = args.integration_step_ms.take() {
+            args.integration_step_s = ms * 1e-3;
+        }
+        args.validate_seconds()
+    }
+
+    fn validate_seconds(self) -> Result<Params, SimError> {
+        in_range("--integration-step-s", self.integration_step_s, 0.0, 0.1, " s")?;
         // The server's own bound (it refuses a looser tolerance too).
         in_range("--integration-tolerance", self.integration_tolerance, 0.0, 1e-2, "")?;
         if !(1..=100_000).contains(&self.robots) {
@@ -155,16 +187,14 @@ impl LoadArgs {
         }
         in_range("--rate", self.rate, 10.0, 10_000.0, " Hz")?;
         let dt = 1.0 / self.rate;
-        in_range("--segment-ms", self.segment_ms, 0.0, 10_000.0, " ms")?;
-        let points = self.segment_ms * 1e-3 / dt;
+        in_range("--segment-s", self.segment_s, 0.0, 10.0, " s")?;
+        let points = self.segment_s / dt;
         if points.round() < 1.0 || (points - points.round()).abs() > 1e-6 {
             return Err(bad(
-                "--segment-ms",
+                "--segment-s",
                 format!(
-                    "{} ms is not a whole number (at least one) of setpoints of {} ms (--rate {})",
-                    self.segment_ms,
-                    dt * 1e3,
-                    self.rate
+                    "{} s is not a whole number (at least one) of setpoints of {} s (--rate {})",
+                    self.segment_s, dt, self.rate
                 ),
             ));
         }
@@ -210,7 +240,7 @@ impl LoadArgs {
             cells.min(MAX_DEFAULT_CONNECTIONS).max(self.robots.div_ceil(STREAMS_PER_CONNECTION))
         });
         let stagger_s = (self.duration / 4.0).min(MAX_STAGGER_S);
-        Ok(Params { args: self.clone(), cells, connections, dt, stagger_s })
+        Ok(Params { args: self, cells, connections, dt, stagger_s })
     }
 }
 
@@ -237,8 +267,8 @@ mod tests {
             ("--robots", |a| a.robots = 0),
             ("--rate", |a| a.rate = f64::NAN),
             ("--rate", |a| a.rate = -5.0),
-            ("--segment-ms", |a| a.segment_ms = 0.5),
-            ("--segment-ms", |a| a.segment_ms = 10.5),
+            ("--segment-s", |a| a.segment_s = 0.0005),
+            ("--segment-s", |a| a.segment_ms = Some(10.5)),
             ("--duration", |a| a.duration = 0.0),
             ("--duration", |a| a.duration = 2000.0),
             ("--scene-updates", |a| a.scene_updates = -1.0),
@@ -254,6 +284,7 @@ mod tests {
         }
         assert!(check(|a| a.connections = Some(0)).unwrap_err().starts_with("--connections"));
         // 2 ms segments at 500 Hz are one setpoint each.
-        assert!(check(|a| (a.rate, a.segment_ms) = (500.0, 2.0)).is_ok());
+        assert!(check(|a| (a.rate, a.segment_s) = (500.0, 0.002)).is_ok());
+        assert!(check(|a| (a.rate, a.segment_ms) = (500.0, Some(2.0))).is_ok());
     }
 }

@@ -53,7 +53,7 @@ use tokio::task::JoinSet;
 use tokio::time::Instant;
 
 pub use self::args::{
-    DEFAULT_INTEGRATION_STEP_MS, DEFAULT_INTEGRATION_TOLERANCE, DEFAULT_THREADS, LoadArgs,
+    DEFAULT_INTEGRATION_STEP_S, DEFAULT_INTEGRATION_TOLERANCE, DEFAULT_THREADS, LoadArgs,
     MAX_DEFAULT_CONNECTIONS, Params, STREAMS_PER_CONNECTION,
 };
 use self::report::{ErrorCount, LATENESS_DEFINITION, LoadReport};
@@ -159,8 +159,8 @@ pub async fn run_with(
         None => None,
     };
     eprintln!(
-        "dmpctl load: {} robots in {} cells over {} connections, {} Hz, {} ms segments, {} s",
-        a.robots, p.cells, p.connections, a.rate, a.segment_ms, a.duration
+        "dmpctl load: {} robots in {} cells over {} connections, {} Hz, {} s segments, {} s",
+        a.robots, p.cells, p.connections, a.rate, p.args.segment_s, a.duration
     );
     let publisher = if a.scene_updates > 0.0 {
         let default = [DEFAULT_ZENOH.to_string()];
@@ -285,7 +285,7 @@ pub async fn run_with(
         cells: p.cells,
         cell_size: a.cell_size,
         rate_hz: a.rate,
-        segment_ms: a.segment_ms,
+        segment_ms: p.args.segment_s * 1e3,
         duration_s: a.duration,
         scene_updates_hz: a.scene_updates,
         dim: a.dim,
@@ -332,9 +332,11 @@ pub async fn run_with(
         generator_cpu_percent: watched.own_cpu_percent(),
         errors: errors.sorted(),
     };
-    if let Some(path) = &a.out {
+    if let Some(dir) = &a.out {
         let json = serde_json::to_string_pretty(&report).unwrap_or_default();
-        std::fs::write(path, json + "\n").map_err(|source| SimError::Io { path: path.clone(), source })?;
+        std::fs::create_dir_all(dir).map_err(|source| SimError::Io { path: dir.clone(), source })?;
+        let path = dir.join("load.json");
+        std::fs::write(&path, json + "\n").map_err(|source| SimError::Io { path, source })?;
     }
     Ok(report)
 }

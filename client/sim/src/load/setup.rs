@@ -98,11 +98,11 @@ pub fn start_request(p: &Params, r: &RobotPlan, cell: &str) -> v1::ExecuteReques
             ..Default::default()
         }),
         dt: p.dt,
-        segment_s: p.args.segment_ms * 1e-3,
+        segment_s: p.args.segment_s,
         pacing: v1::Pacing::Realtime as i32,
         lookahead_s: 0.0,
         max_duration_s: p.args.duration + MAX_DURATION_SLACK_S,
-        integration_step_s: p.args.integration_step_ms * 1e-3,
+        integration_step_s: p.args.integration_step_s,
         integration_tolerance: p.args.integration_tolerance,
         take_over: false,
     }
