@@ -110,7 +110,7 @@ impl Execution {
         let last_time = self.out_t - dt;
         p.outcome = if self.stopping && self.at_rest() {
             Outcome::Stopped
-        } else if worst == Outcome::Running && !self.holding && self.arrived() {
+        } else if worst == Outcome::Running && !self.holding && self.goal_met_since.is_some() {
             Outcome::GoalReached
         } else if n > 0 && last_time >= self.end_time - 0.5 * dt {
             Outcome::EndTime

@@ -13,6 +13,8 @@ impl Execution {
         check_vector("goal", &goal, self.primitive.dim)?;
         self.rebase();
         self.motion.goal = goal;
+        // Arrival is judged afresh against the new goal, from the next point on.
+        self.goal_met_since = None;
         Ok(())
     }
 

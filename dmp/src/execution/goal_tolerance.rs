@@ -60,7 +60,7 @@ impl Execution {
     }
 
     /// The time since which every member has been at its goal and at rest, at every output point handed out up to
-    /// the last one; `None` when they are not at the last one.
+    /// the last one; `None` when they are not at the last one, or the goal changed since.
     pub fn goal_met_since(&self) -> Option<f64> {
         self.goal_met_since
     }
