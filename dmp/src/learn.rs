@@ -195,5 +195,6 @@ pub fn learn(demo: &Demonstration, config: &LearnConfig) -> Result<Primitive> {
         start,
         goal,
         weights,
+        orientation: None,
     })
 }

@@ -60,5 +60,5 @@ pub use orientation::{
     OrientationDemonstration, OrientationMotion, OrientationPrimitive, OrientationRun, OrientationSample,
     OrientationTrajectory, rollout_orientation,
 };
-pub use primitive::Primitive;
+pub use primitive::{OrientationChart, Primitive};
 pub use rollout::{Rollout, Trajectory, rollout};

@@ -32,6 +32,43 @@ pub struct Primitive {
     pub goal: Vec<f64>,
     /// Weights, `weights[p][i]`, `d x (N + 1)`.
     pub weights: Vec<Vec<f64>>,
+    /// A pose primitive: its last three dimensions are the orientation's rotation vector in this chart
+    /// ([`OrientationChart`]); `None` for a position-only primitive.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientation: Option<OrientationChart>,
+}
+
+/// The orientation of a pose primitive: its last three dimensions are the rotation vector
+/// `y = log(q ⊗ q̄_ref)` of the orientation `q` in the chart at `reference` (Koutras and Doulgeri's formulation,
+/// [`crate::orientation`]). A learned pose primitive has its chart at the demonstration's last orientation, so the
+/// goal of those dimensions is `0`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OrientationChart {
+    /// `q_ref`, `[x, y, z, w]`: a unit quaternion.
+    pub reference: [f64; 4],
+}
+
+impl OrientationChart {
+    /// Checks that `reference` is a unit quaternion within `1e-6` (the rule of
+    /// `orientation::quaternion::from_xyzw`).
+    pub fn validate(&self) -> Result<(), InvalidInput> {
+        let q = self.reference;
+        if q.iter().any(|v| !v.is_finite()) {
+            return Err(InvalidInput::new(
+                "orientation.reference",
+                "must be four finite numbers (x, y, z, w)",
+            ));
+        }
+        let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if (norm - 1.0).abs() > 1e-6 {
+            return Err(InvalidInput::new(
+                "orientation.reference",
+                format!("must be a unit quaternion (x, y, z, w): its norm is {norm}, more than 1e-6 from 1"),
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl Primitive {
@@ -59,6 +96,7 @@ impl Primitive {
             start,
             goal,
             weights: vec![vec![0.0; n_basis + 1]; dim],
+            orientation: None,
         };
         p.validate()?;
         Ok(p)
@@ -120,6 +158,21 @@ impl Primitive {
                 ensure_finite(|| format!("weights[{p}][{i}]"), *w)?;
             }
         }
+        if let Some(chart) = &self.orientation {
+            chart.validate()?;
+            if d < 3 {
+                return Err(InvalidInput::new(
+                    "dim",
+                    format!("a pose primitive has at least the 3 orientation dimensions, found {d}"),
+                )
+                .into());
+            }
+        }
         Ok(())
+    }
+
+    /// The dimension of the position part: `dim` less the 3 orientation dimensions of a pose primitive.
+    pub fn position_dim(&self) -> usize {
+        if self.orientation.is_some() { self.dim.saturating_sub(3) } else { self.dim }
     }
 }

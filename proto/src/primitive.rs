@@ -19,6 +19,7 @@ pub fn primitive_to_proto(p: &dmp::Primitive) -> v1::Primitive {
         start: p.start.clone(),
         goal: p.goal.clone(),
         weights: p.weights.iter().flatten().copied().collect(),
+        orientation_reference: p.orientation.map(|o| o.reference.to_vec()).unwrap_or_default(),
     }
 }
 
@@ -48,6 +49,16 @@ pub fn primitive_from_proto(p: &v1::Primitive) -> Result<dmp::Primitive, WireErr
         start: p.start.clone(),
         goal: p.goal.clone(),
         weights: p.weights.chunks(n + 1).map(<[f64]>::to_vec).collect(),
+        orientation: match p.orientation_reference.as_slice() {
+            [] => None,
+            &[x, y, z, w] => Some(dmp::OrientationChart { reference: [x, y, z, w] }),
+            other => {
+                return Err(WireError::new(
+                    "orientation_reference",
+                    format!("must be empty or 4 numbers (x, y, z, w), found {}", other.len()),
+                ));
+            }
+        },
     };
     prim.validate()?;
     check_primitive_ranges(&prim)?;

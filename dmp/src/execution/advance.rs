@@ -100,6 +100,7 @@ impl Execution {
             }
         }
         p.ignored = self.ignored.take_pending();
+        self.fill_orientations(&mut p);
         let worst = if !p.contacts.is_empty() || !p.cellmate_contacts.is_empty() {
             Outcome::Collision
         } else if !p.stalls.is_empty() {

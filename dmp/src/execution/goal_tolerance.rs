@@ -5,7 +5,10 @@
 //! when every member has arrived at the last point of a stretch; [`Execution::goal_met_since`] is the time of the
 //! first point of the unbroken run of points, up to there, at which every member had arrived.
 //!
-//! The defaults ([`GoalTolerance::DEFAULT`]: 1 mm and 1 mm/s) are tight on purpose: a robot handed its last
+//! A pose run's orientation has arrived when the angle between it and the goal orientation is at most `angle` and
+//! `|ω| <= angular_speed`.
+//!
+//! The defaults ([`GoalTolerance::DEFAULT`]: 1 mm and 1 mm/s, 1 mrad and 1 mrad/s) are tight on purpose: a robot handed its last
 //! setpoint at 1 mm/s stops with a velocity step of at most that. A demonstration that ends while still moving
 //! (the paper's curve ends at about 3.3 m/s) passes its goal at `t = tau` and comes back to it, so it arrives well
 //! after `tau`; a looser `speed` ends such a run earlier, with a larger step.
@@ -20,15 +23,30 @@ pub struct GoalTolerance {
     pub position: f64,
     /// Largest speed, in the demonstration's units per second.
     pub speed: f64,
+    /// A pose run: largest angle to the goal orientation, radians.
+    pub angle: f64,
+    /// A pose run: largest angular speed `|ω|`, rad/s.
+    pub angular_speed: f64,
 }
 
 impl GoalTolerance {
-    /// 1 mm (1e-3) and 1 mm/s (1e-3).
-    pub const DEFAULT: Self = Self { position: 1e-3, speed: 1e-3 };
+    /// 1 mm (1e-3) and 1 mm/s (1e-3); 1 mrad (0.057°) and 1 mrad/s.
+    pub const DEFAULT: Self = Self { position: 1e-3, speed: 1e-3, angle: 1e-3, angular_speed: 1e-3 };
 
-    /// Both finite and greater than zero.
+    /// The default angular tolerance with this position and speed.
+    pub const fn linear(position: f64, speed: f64) -> Self {
+        Self { position, speed, ..Self::DEFAULT }
+    }
+
+    /// Every field finite and greater than zero.
     pub fn validate(&self) -> Result<(), InvalidInput> {
-        for (field, v) in [("position", self.position), ("speed", self.speed)] {
+        let fields = [
+            ("position", self.position),
+            ("speed", self.speed),
+            ("angle", self.angle),
+            ("angular_speed", self.angular_speed),
+        ];
+        for (field, v) in fields {
             if !(v.is_finite() && v > 0.0) {
                 return Err(InvalidInput::new(
                     field,
@@ -72,7 +90,7 @@ impl Execution {
             let dist2: f64 = m.dims.iter().map(|&i| (x[i] - self.motion.goal[i]).powi(2)).sum();
             let speed2: f64 = m.dims.iter().map(|&i| xd[i].powi(2)).sum();
             dist2 <= tol.position * tol.position && speed2 <= tol.speed * tol.speed
-        })
+        }) && self.orientation_within_tolerance(x, xd)
     }
 
     /// Follows [`Execution::goal_met_since`] over the `n` points of a stretch starting at `start_time`. Holding

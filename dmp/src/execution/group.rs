@@ -37,6 +37,13 @@ pub fn join_group(members: &[GroupMember<'_>], tau: Option<f64>) -> Result<(Prim
             )
             .into());
         }
+        if p.orientation.is_some() {
+            return Err(InvalidInput::new(
+                format!("members[{i}].primitive"),
+                "a pose primitive (with orientation) runs alone, not in a group",
+            )
+            .into());
+        }
         if p.dim != f.dim {
             return Err(InvalidInput::new(
                 format!("members[{i}].primitive"),

@@ -26,6 +26,7 @@ mod group;
 mod history;
 mod hold;
 mod ignored;
+mod pose;
 mod stepping;
 
 use crate::avoidance::Avoidance;
@@ -41,6 +42,7 @@ pub use self::group::{GroupMember, join_group};
 use self::history::History;
 use self::ignored::Ignored;
 pub use self::ignored::IgnoredObstacle;
+pub use self::pose::OrientationPoints;
 pub use self::stepping::{IntegrationCost, MAX_STIFF_STEP, Stepping, check_stability};
 
 /// The default distance to the goal under which a robot has arrived ([`GoalTolerance::DEFAULT`]).
@@ -128,6 +130,8 @@ pub struct Stretch {
     pub stalls: Vec<(usize, Stall)>,
     /// Obstacles (and cell-mates) the run stopped avoiding since the last stretch, and why: each is reported once.
     pub ignored: Vec<IgnoredObstacle>,
+    /// A pose run's orientations at the points (empty otherwise).
+    pub orientation: OrientationPoints,
 }
 
 /// One run of a primitive on one phase: the state machine that the offline rollout and the server's streams step.
@@ -191,6 +195,9 @@ pub struct Execution {
     /// Obstacles left out of the run, and the reports not yet handed out.
     ignored: Ignored,
     cost: IntegrationCost,
+    /// A pose run: the chart of its last three dimensions.
+    #[cfg_attr(not(feature = "orientation"), allow(dead_code))]
+    chart: Option<pose::Chart>,
 }
 
 impl Execution {
@@ -208,6 +215,22 @@ impl Execution {
     ) -> Result<Self> {
         motion.validate(primitive.dim).map_err(|e| e.within("motion"))?;
         stepping.validate()?;
+        let chart = pose::chart_of(&primitive)?;
+        let mut scene = scene;
+        if chart.is_some() {
+            if !scene.agents.is_empty() {
+                return Err(crate::InvalidInput::new(
+                    "robots",
+                    "a pose primitive runs alone (its robot owns the position dimensions)",
+                )
+                .into());
+            }
+            scene.agents = vec![Agent {
+                id: "robot".into(),
+                dims: (0..primitive.position_dim()).collect(),
+                footprint: None,
+            }];
+        }
         check_stability(&primitive.k, stepping.internal_step(), motion.tau, "tau")?;
         let integrator = Integrator::new(&primitive)?;
         let dim = primitive.dim;
@@ -254,6 +277,7 @@ impl Execution {
             goal_met_since: None,
             ignored: Ignored::default(),
             cost: IntegrationCost::default(),
+            chart,
             primitive,
             stepping,
         })

@@ -35,9 +35,11 @@
 //! | the learned primitive, learning | [`primitive`] |
 //! | a run, stepped by the caller | [`run`] |
 //! | full rollouts | [`mod@rollout`] |
+//! | pose primitives (position and orientation on one phase), learning and replay | [`pose`] |
 
 pub mod demonstration;
 pub mod jacobian;
+pub mod pose;
 pub mod primitive;
 pub mod quaternion;
 pub mod rollout;

@@ -59,11 +59,8 @@ fn minimum_jerk() -> Primitive {
 #[test]
 fn the_goal_is_reached_within_a_stretch_of_the_first_point_within_tolerance() {
     let mut previous = f64::INFINITY;
-    for tol in [
-        GoalTolerance::DEFAULT,
-        GoalTolerance { position: 1e-3, speed: 1e-2 },
-        GoalTolerance { position: 1e-2, speed: 1e-1 },
-    ] {
+    for tol in [GoalTolerance::DEFAULT, GoalTolerance::linear(1e-3, 1e-2), GoalTolerance::linear(1e-2, 1e-1)]
+    {
         let mut e = run(&PAPER, 1.0, tol);
         let (outcome, x, xd) = to_the_end(&mut e);
         assert_eq!(outcome, Outcome::GoalReached, "{tol:?}");
@@ -95,7 +92,7 @@ fn a_demonstration_that_ends_at_rest_arrives_at_about_tau() {
 
 #[test]
 fn a_rollback_before_the_arrival_forgets_it_and_finds_it_again() {
-    let mut e = run(&PAPER, 1.0, GoalTolerance { position: 1e-3, speed: 1e-2 });
+    let mut e = run(&PAPER, 1.0, GoalTolerance::linear(1e-3, 1e-2));
     let (outcome, ..) = to_the_end(&mut e);
     assert_eq!(outcome, Outcome::GoalReached);
     let since = e.goal_met_since().unwrap();
@@ -109,9 +106,9 @@ fn a_rollback_before_the_arrival_forgets_it_and_finds_it_again() {
 #[test]
 fn a_tolerance_that_is_not_positive_is_refused_with_its_field() {
     let mut e = run(&PAPER, 1.0, GoalTolerance::DEFAULT);
-    let err = e.set_goal_tolerance(GoalTolerance { position: 0.0, speed: 1e-3 }).unwrap_err();
+    let err = e.set_goal_tolerance(GoalTolerance::linear(0.0, 1e-3)).unwrap_err();
     assert_eq!(err.field, "goal_tolerance.position");
-    let err = e.set_goal_tolerance(GoalTolerance { position: 1e-3, speed: f64::NAN }).unwrap_err();
+    let err = e.set_goal_tolerance(GoalTolerance::linear(1e-3, f64::NAN)).unwrap_err();
     assert_eq!(err.field, "goal_tolerance.speed");
     assert_eq!(e.goal_tolerance(), GoalTolerance::DEFAULT);
 }

@@ -4,5 +4,6 @@
 mod derivatives;
 mod double_cover;
 mod fixtures;
+mod pose_runs;
 mod refusals;
 mod replay;
