@@ -17,7 +17,7 @@
 use std::pin::Pin;
 use std::time::Duration;
 
-use dmp_proto::learning::demonstration_to_proto;
+use dmp_proto::learning::pose_demonstration_to_proto;
 use dmp_proto::primitive::{primitive_from_proto, primitive_to_proto};
 use dmp_proto::v1;
 use dmp_proto::v1::motion_service_client::MotionServiceClient;
@@ -216,7 +216,21 @@ impl DmpClient {
         rows: &[Vec<f64>],
         parameters: v1::LearnParameters,
     ) -> Result<v1::PrimitiveRecord, ClientError> {
-        let demonstration = demonstration_to_proto(t, rows)?;
+        self.learn_pose(robot, name, t, rows, &[], parameters).await
+    }
+
+    /// Learns a pose primitive from positions and one orientation `[x, y, z, w]` per sample (none: a position
+    /// primitive) as the next version of `(robot, name)`.
+    pub async fn learn_pose(
+        &self,
+        robot: &str,
+        name: &str,
+        t: &[f64],
+        rows: &[Vec<f64>],
+        orientations: &[[f64; 4]],
+        parameters: v1::LearnParameters,
+    ) -> Result<v1::PrimitiveRecord, ClientError> {
+        let demonstration = pose_demonstration_to_proto(t, rows, orientations)?;
         let request = v1::LearnRequest {
             robot_id: robot.into(),
             name: name.into(),

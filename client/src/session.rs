@@ -29,7 +29,18 @@ impl SessionSender {
 
     /// Changes the goal, from the current state.
     pub async fn set_goal(&self, goal: Vec<f64>) -> Result<(), ClientError> {
-        self.send(Message::SetGoal(v1::SetGoal { goal })).await
+        self.send(Message::SetGoal(v1::SetGoal { goal, ..Default::default() })).await
+    }
+
+    /// Changes a pose run's goal, from the current state: the position (empty keeps it) and the orientation
+    /// (`[x, y, z, w]`; `None` keeps it).
+    pub async fn set_pose_goal(
+        &self,
+        goal: Vec<f64>,
+        orientation: Option<[f64; 4]>,
+    ) -> Result<(), ClientError> {
+        let goal_orientation = orientation.map(|q| q.to_vec()).unwrap_or_default();
+        self.send(Message::SetGoal(v1::SetGoal { goal, goal_orientation })).await
     }
 
     /// Changes tau (larger is slower), from the current state.
@@ -89,6 +100,15 @@ impl Session {
     /// Changes the goal.
     pub async fn set_goal(&self, goal: Vec<f64>) -> Result<(), ClientError> {
         self.sender.set_goal(goal).await
+    }
+
+    /// Changes a pose run's goal ([`SessionSender::set_pose_goal`]).
+    pub async fn set_pose_goal(
+        &self,
+        goal: Vec<f64>,
+        orientation: Option<[f64; 4]>,
+    ) -> Result<(), ClientError> {
+        self.sender.set_pose_goal(goal, orientation).await
     }
 
     /// Changes tau.

@@ -133,6 +133,7 @@ fn primitive(d: usize, dt: f64) -> impl Strategy<Value = v1::Primitive> {
                 start: ends[..d].to_vec(),
                 goal: ends[d..].to_vec(),
                 weights,
+                ..Default::default()
             })
         },
     )

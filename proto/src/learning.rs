@@ -7,6 +7,22 @@ use crate::v1;
 
 /// The message of a demonstration: times `t` and one row of positions per time, all rows of one dimension.
 pub fn demonstration_to_proto(t: &[f64], rows: &[Vec<f64>]) -> Result<v1::Demonstration, WireError> {
+    pose_demonstration_to_proto(t, rows, &[])
+}
+
+/// The message of a pose demonstration: [`demonstration_to_proto`] with one orientation `[x, y, z, w]` per time
+/// (none for a position-only demonstration).
+pub fn pose_demonstration_to_proto(
+    t: &[f64],
+    rows: &[Vec<f64>],
+    orientations: &[[f64; 4]],
+) -> Result<v1::Demonstration, WireError> {
+    if !orientations.is_empty() && orientations.len() != t.len() {
+        return Err(WireError::new(
+            "demonstration.orientations",
+            format!("has {} orientations for {} times", orientations.len(), t.len()),
+        ));
+    }
     let dim = rows.first().map_or(0, Vec::len);
     if t.len() != rows.len() {
         return Err(WireError::new(
@@ -24,6 +40,32 @@ pub fn demonstration_to_proto(t: &[f64], rows: &[Vec<f64>]) -> Result<v1::Demons
         t: t.to_vec(),
         positions: rows.iter().flatten().copied().collect(),
         dim: dim as u32,
+        orientations: orientations.iter().flatten().copied().collect(),
+    })
+}
+
+/// The orientations of a demonstration message, checked (unit quaternions, one per time); `None` without any.
+pub fn orientations_from_proto(
+    d: &v1::Demonstration,
+) -> Result<Option<dmp::OrientationDemonstration>, WireError> {
+    if d.orientations.is_empty() {
+        return Ok(None);
+    }
+    if d.orientations.len() != 4 * d.t.len() {
+        return Err(WireError::new(
+            "demonstration.orientations",
+            format!(
+                "must have 4 values (x, y, z, w) per time, {} entries, found {}",
+                4 * d.t.len(),
+                d.orientations.len()
+            ),
+        ));
+    }
+    let q = d.orientations.chunks_exact(4).map(|q| [q[0], q[1], q[2], q[3]]).collect();
+    dmp::OrientationDemonstration::new(d.t.clone(), q).map(Some).map_err(|e| {
+        // The engine names the samples `demonstration.q[i]`; on the wire they are the orientation rows.
+        let e = WireError::from(e);
+        WireError::new(e.field.replacen("demonstration.q", "demonstration.orientations", 1), e.rule)
     })
 }
 

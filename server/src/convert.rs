@@ -104,7 +104,12 @@ mod tests {
         assert!(
             demonstration_from_proto(&d, &limits).unwrap_err().to_string().starts_with("demonstration.dim")
         );
-        let d = v1::Demonstration { dim: 1, t: vec![0.0; limits.max_samples + 1], positions: vec![] };
+        let d = v1::Demonstration {
+            dim: 1,
+            t: vec![0.0; limits.max_samples + 1],
+            positions: vec![],
+            ..Default::default()
+        };
         assert!(matches!(demonstration_from_proto(&d, &limits), Err(ServerError::ResourceExhausted(_))));
         let many = v1::LearnParameters { n_basis: limits.max_basis as u32 + 1, ..Default::default() };
         let e = learn_config_from_proto(Some(&many), &limits).unwrap_err();

@@ -208,6 +208,7 @@ mod tests {
             position: vec![x, 0.0, 0.0],
             velocity: vec![0.0; 3],
             footprint: Some(v1::Superquadric { semi_axes: vec![0.2; 3], exponents: vec![] }),
+            ..Default::default()
         }
     }
 

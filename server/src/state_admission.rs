@@ -86,6 +86,7 @@ mod tests {
             position: vec![x, 0.0],
             velocity: vec![0.0, v],
             footprint: None,
+            ..Default::default()
         }
     }
 

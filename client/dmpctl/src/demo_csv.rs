@@ -3,7 +3,8 @@
 //! The first column is the time, the others are positions. An optional header names the columns (`t,x1,x2` or any
 //! names after `t`); when it has columns named `x1..xd` (e.g. a `trajectory.csv` written by `dmpctl`, whose other
 //! columns are velocities and accelerations), only those are read. Blank lines and lines starting with `#` are
-//! skipped.
+//! skipped. A header with the columns `qx,qy,qz,qw` (wherever they sit) gives an orientation per sample, a unit
+//! quaternion, for a pose primitive; they are not positions.
 
 use std::path::Path;
 
@@ -16,7 +17,12 @@ pub struct CsvDemonstration {
     pub t: Vec<f64>,
     /// Positions, one row per time.
     pub x: Vec<Vec<f64>>,
+    /// Orientations `[x, y, z, w]`, one per time, or none.
+    pub q: Vec<[f64; 4]>,
 }
+
+/// The quaternion columns' names, in the wire's order.
+const QUATERNION_COLUMNS: [&str; 4] = ["qx", "qy", "qz", "qw"];
 
 /// Parses CSV text; `path` only names the source in errors, which give the line and column (from 1).
 pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstration, DmpctlError> {
@@ -30,6 +36,7 @@ pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstrati
         .peekable();
     // Which columns hold positions: all after the first, or the header's `x1..xd`.
     let mut columns: Option<Vec<usize>> = None;
+    let mut q_columns: Option<[usize; 4]> = None;
     let mut width = None;
     if let Some(&(n, first)) = lines.peek() {
         let cells: Vec<&str> = first.split(',').map(str::trim).collect();
@@ -41,15 +48,33 @@ pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstrati
                     "the header needs a time column and at least one position".into(),
                 ));
             }
-            // Columns named x1, x2, ... (in that order of names, wherever they sit), else all after the time.
+            // Orientation columns: all four or none.
+            let q: Vec<Option<usize>> =
+                QUATERNION_COLUMNS.iter().map(|name| cells.iter().position(|c| c == name)).collect();
+            match q.iter().filter(|c| c.is_some()).count() {
+                0 => {}
+                4 => q_columns = Some([0, 1, 2, 3].map(|i| q[i].unwrap_or_default())),
+                _ => {
+                    return Err(err(
+                        format!("line {n}"),
+                        "an orientation needs all four columns qx, qy, qz, qw".into(),
+                    ));
+                }
+            }
+            let is_q = |c: usize| q_columns.is_some_and(|qc| qc.contains(&c));
+            // Columns named x1, x2, ... (in that order of names, wherever they sit), else all after the time
+            // that are not the orientation's.
             let xs: Vec<usize> = (1..)
                 .map_while(|j| cells[1..].iter().position(|c| *c == format!("x{j}")).map(|i| i + 1))
                 .collect();
-            columns = Some(if xs.is_empty() { (1..cells.len()).collect() } else { xs });
+            columns = Some(if xs.is_empty() { (1..cells.len()).filter(|&c| !is_q(c)).collect() } else { xs });
+            if columns.as_ref().is_some_and(Vec::is_empty) {
+                return Err(err(format!("line {n}"), "the header names no position column".into()));
+            }
             width = Some(cells.len());
         }
     }
-    let (mut t, mut x) = (Vec::new(), Vec::new());
+    let (mut t, mut x, mut q) = (Vec::new(), Vec::new(), Vec::new());
     for (n, line) in lines {
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
         let w = *width.get_or_insert(cells.len());
@@ -72,11 +97,14 @@ pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstrati
         t.push(values[0]);
         let cols = columns.get_or_insert_with(|| (1..w).collect());
         x.push(cols.iter().map(|&c| values[c]).collect());
+        if let Some(qc) = q_columns {
+            q.push(qc.map(|c| values[c]));
+        }
     }
     if t.len() < 2 {
         return Err(err("(document)".into(), format!("needs at least 2 samples, found {}", t.len())));
     }
-    Ok(CsvDemonstration { t, x })
+    Ok(CsvDemonstration { t, x, q })
 }
 
 /// Reads and parses a CSV demonstration.

@@ -244,6 +244,7 @@ async fn run_robot_group(
                         ignore_scene: true,
                         cell: String::new(),
                         goal_tolerance: None,
+                        ..Default::default()
                     }),
                 }
             })

@@ -30,14 +30,14 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> DmpctlError + '_ {
 
 /// `learn`: one demonstration (a scenario's, or a CSV file's) to the next version of `(robot, name)`.
 pub async fn learn(client: &DmpClient, a: &LearnArgs) -> Result<String, DmpctlError> {
-    let (t, x, mut params) = match &a.source {
+    let (t, x, q, mut params) = match &a.source {
         LearnSource { scenario: Some(path), .. } => {
             let s = load_scenario(path)?;
-            (s.demonstration.t, s.demonstration.x, learn_parameters_to_proto(&s.dmp))
+            (s.demonstration.t, s.demonstration.x, s.demonstration.q, learn_parameters_to_proto(&s.dmp))
         }
         LearnSource { csv: Some(path), .. } => {
             let d = load_demonstration_csv(path)?;
-            (d.t, d.x, v1::LearnParameters::default())
+            (d.t, d.x, d.q, v1::LearnParameters::default())
         }
         _ => return Err(DmpctlError::argument("--scenario / --csv", "give one of them")),
     };
@@ -54,19 +54,30 @@ pub async fn learn(client: &DmpClient, a: &LearnArgs) -> Result<String, DmpctlEr
         params.alpha = alpha;
     }
     let samples = t.len();
-    let r = client.learn(&a.robot, &a.name, &t, &x, params).await?;
+    let r = client.learn_pose(&a.robot, &a.name, &t, &x, &q, params).await?;
     let p = record_primitive(&r)?;
-    Ok(to_json(&json!({
+    let n = p.position_dim();
+    let mut out = json!({
         "robot_id": r.robot_id,
         "name": r.name,
         "version": r.version,
         "samples": samples,
-        "dim": p.dim,
+        "dim": n,
         "n_basis": p.n_basis,
         "tau": p.tau,
-        "start": p.start,
-        "goal": p.goal,
-    })))
+        "start": p.start[..n],
+        "goal": p.goal[..n],
+    });
+    if let (Some(chart), Some(o)) = (dmp::orientation::pose::chart_of(&p).ok().flatten(), out.as_object_mut())
+    {
+        let q = |v: &[f64]| {
+            let y = nalgebra::Vector3::from_column_slice(&v[n..]);
+            dmp::orientation::quaternion::to_xyzw(&dmp::orientation::pose::from_chart(&chart, &y))
+        };
+        o.insert("start_orientation".into(), json!(q(&p.start)));
+        o.insert("goal_orientation".into(), json!(q(&p.goal)));
+    }
+    Ok(to_json(&out))
 }
 
 /// `list`: one line per primitive of the robot.
@@ -122,6 +133,7 @@ pub fn motion_spec(m: &MotionArgs) -> v1::MotionSpec {
             v1::GoalTolerance {
                 position: m.goal_tolerance.unwrap_or(0.0),
                 speed: m.goal_speed_tolerance.unwrap_or(0.0),
+                ..Default::default()
             }
         }),
         ..Default::default()

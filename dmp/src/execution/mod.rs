@@ -218,18 +218,19 @@ impl Execution {
         let chart = pose::chart_of(&primitive)?;
         let mut scene = scene;
         if chart.is_some() {
-            if !scene.agents.is_empty() {
-                return Err(crate::InvalidInput::new(
-                    "robots",
-                    "a pose primitive runs alone (its robot owns the position dimensions)",
-                )
-                .into());
+            // The run's one robot owns the position dimensions: the orientation is not a place in the scene.
+            let position = (0..primitive.position_dim()).collect();
+            match scene.agents.as_mut_slice() {
+                [] => scene.agents = vec![Agent { id: "robot".into(), dims: position, footprint: None }],
+                [robot] => robot.dims = position,
+                _ => {
+                    return Err(crate::InvalidInput::new(
+                        "robots",
+                        "a pose primitive runs alone, not in a group (its robot owns the position dimensions)",
+                    )
+                    .into());
+                }
             }
-            scene.agents = vec![Agent {
-                id: "robot".into(),
-                dims: (0..primitive.position_dim()).collect(),
-                footprint: None,
-            }];
         }
         check_stability(&primitive.k, stepping.internal_step(), motion.tau, "tau")?;
         let integrator = Integrator::new(&primitive)?;

@@ -41,13 +41,17 @@ fn default_avoidance() -> Avoidance {
     Avoidance::NONE
 }
 
-/// Sample times and positions.
+/// Sample times and positions, and optionally orientations.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DemonstrationSpec {
     /// Increasing sample times.
     pub t: Vec<f64>,
     /// One row of `d` positions per sample.
     pub x: Vec<Vec<f64>>,
+    /// Optional: one orientation `[x, y, z, w]` (a unit quaternion) per sample, for a pose primitive. The offline
+    /// runs use the positions only.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub q: Vec<[f64; 4]>,
 }
 
 /// A number, or one number per dimension.

@@ -29,6 +29,9 @@ pub fn advance_cancellable(
         all.x.extend_from_slice(&p.x);
         all.xd.extend_from_slice(&p.xd);
         all.xdd.extend_from_slice(&p.xdd);
+        all.orientation.q.extend_from_slice(&p.orientation.q);
+        all.orientation.omega.extend_from_slice(&p.orientation.omega);
+        all.orientation.omega_dot.extend_from_slice(&p.orientation.omega_dot);
         all.contacts.extend(p.contacts.into_iter().map(|(i, c)| (i + done, c)));
         all.cellmate_contacts.extend(p.cellmate_contacts.into_iter().map(|(i, c)| (i + done, c)));
         all.stalls.extend(p.stalls);

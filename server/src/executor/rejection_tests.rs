@@ -68,7 +68,7 @@ async fn a_rejection_reaches_the_robot_within_a_refill_and_the_run_goes_on() {
             // A rejection from the session's reader, and a goal the engine refuses (of the wrong length).
             ctl_tx.send(Control::Rejected(warning("set_tau.tau"))).await.unwrap();
             pending.push(("set_tau.tau".into(), now));
-            ctl_tx.send(Control::SetGoal(vec![0.5])).await.unwrap();
+            ctl_tx.send(Control::SetGoal(vec![0.5], None)).await.unwrap();
             pending.push(("set_goal.goal".into(), now));
         }
         if seg.status == v1::SegmentStatus::GoalReached as i32 && !after_the_end_sent {

@@ -12,7 +12,7 @@ pub type Batch = Vec<v1::Segment>;
 /// `start_unix` is the wall time of run time zero (real time).
 pub fn member_segments(
     run: &ServedRun,
-    p: Stretch,
+    mut p: Stretch,
     sequence: u64,
     status: v1::SegmentStatus,
     start_unix: Option<f64>,
@@ -24,21 +24,29 @@ pub fn member_segments(
         v1::SegmentStatus::GoalReached => e.goal_met_since().unwrap_or(0.0),
         _ => 0.0,
     };
-    let segment = |robot_id: &str, dim: usize, positions, velocities, accelerations| v1::Segment {
-        robot_id: robot_id.to_string(),
-        sequence,
-        start_time: p.start_time,
-        dt: e.dt(),
-        dim: dim as u32,
-        positions,
-        velocities,
-        accelerations,
-        status: status as i32,
-        scene_version: run.scene_version,
-        start_unix_s: start_unix.map(|s| s + p.start_time).unwrap_or(0.0),
-        warnings: Vec::new(),
-        scene_stale: false,
-        goal_reached_time,
+    // A pose run has one member, the robot owning the position dimensions.
+    let mut orientation = Some(std::mem::take(&mut p.orientation));
+    let mut segment = |robot_id: &str, dim: usize, positions, velocities, accelerations| {
+        let o = orientation.take().unwrap_or_default();
+        v1::Segment {
+            robot_id: robot_id.to_string(),
+            sequence,
+            start_time: p.start_time,
+            dt: e.dt(),
+            dim: dim as u32,
+            positions,
+            velocities,
+            accelerations,
+            status: status as i32,
+            scene_version: run.scene_version,
+            start_unix_s: start_unix.map(|s| s + p.start_time).unwrap_or(0.0),
+            warnings: Vec::new(),
+            scene_stale: false,
+            goal_reached_time,
+            orientations: o.q,
+            angular_velocities: o.omega,
+            angular_accelerations: o.omega_dot,
+        }
     };
     match e.members() {
         [m] if m.dims.len() == d => vec![segment(&m.id, d, p.x, p.xd, p.xdd)],

@@ -92,7 +92,7 @@ pub fn compute(run: &mut ServedRun, step: Step, job: &JobContext<'_>) -> Result<
     for c in &step.commands {
         let e = &mut run.execution;
         let (command, applied) = match c {
-            Control::SetGoal(g) => ("set_goal", e.set_goal(g.clone())),
+            Control::SetGoal(g, q) => ("set_goal", e.set_pose_goal((!g.is_empty()).then(|| g.clone()), *q)),
             Control::SetTau(tau) => ("set_tau", e.set_tau(*tau)),
             Control::Pause => {
                 e.set_holding(true);
@@ -167,6 +167,9 @@ fn member_states(
                 position: m.dims.iter().filter_map(|&i| x.get(i).copied()).collect(),
                 velocity: m.dims.iter().filter_map(|&i| xd.get(i).copied()).collect(),
                 footprint: footprint.clone(),
+                // A pose run (one member): its orientation and angular velocity at the point.
+                orientation: p.orientation.q.get(..4).map(<[f64]>::to_vec).unwrap_or_default(),
+                angular_velocity: p.orientation.omega.get(..3).map(<[f64]>::to_vec).unwrap_or_default(),
             };
             (state, m.footprint.clone())
         })

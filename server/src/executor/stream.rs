@@ -52,8 +52,8 @@ pub struct StreamConfig {
 /// A command of a session.
 #[derive(Debug, Clone)]
 pub enum Control {
-    /// New goal.
-    SetGoal(Vec<f64>),
+    /// New goal: the position (empty keeps it) and a pose run's orientation (`[x, y, z, w]`, `None` keeps it).
+    SetGoal(Vec<f64>, Option<[f64; 4]>),
     /// New tau.
     SetTau(f64),
     /// Hold position.

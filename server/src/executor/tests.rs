@@ -72,7 +72,7 @@ async fn real_time_segments_arrive_before_they_are_due_and_a_goal_change_superse
         }
         if goal_sent_at.is_none() && seg.start_time >= 0.5 {
             goal_sent_at = Some(now);
-            ctl_tx.send(Control::SetGoal(vec![0.5, 0.5])).await.unwrap();
+            ctl_tx.send(Control::SetGoal(vec![0.5, 0.5], None)).await.unwrap();
         }
         last_end = seg.start_time + seg.dt * (seg.positions.len() / 2) as f64;
         last = Some(seg);

@@ -26,7 +26,7 @@ use crate::executing::Claim;
 use crate::executor::ignored::push_obstacle_warnings;
 use crate::executor::pacing::{MAX_REFILL, history_len, refill_segments};
 use crate::executor::plan::advance_cancellable;
-use crate::executor::segments::Batch;
+use crate::executor::segments::{Batch, member_segments};
 use crate::executor::served_run::ServedRun;
 use crate::executor::stream::{Admitted, Control, StreamConfig, run_stream};
 use crate::executor::stream_memory::StreamBytes;
@@ -68,7 +68,7 @@ impl MotionServiceImpl {
         stepping: Stepping,
         history: usize,
     ) -> Result<ServedRun, ServerError> {
-        let dim = r.primitive.dim;
+        let dim = r.primitive.position_dim();
         let member = Agent { id: r.robot_id, dims: (0..dim).collect(), footprint: r.footprint };
         let mut run = ServedRun::new(
             r.primitive,
@@ -79,6 +79,9 @@ impl MotionServiceImpl {
             history,
         )?;
         run.execution.set_goal_tolerance(r.goal_tolerance)?;
+        if let Some(chart) = r.chart {
+            run.execution.set_orientation_chart(chart)?;
+        }
         Ok(run)
     }
 
@@ -236,35 +239,12 @@ impl MotionService for MotionServiceImpl {
         let mut stretch = stretch?;
         let mut warnings = Vec::new();
         push_obstacle_warnings(&mut stretch.ignored, &mut warnings);
-        let (execution, scene_version) = (run.execution, run.scene_version);
-        let collisions: Vec<String> = execution.touched().iter().cloned().collect();
+        let collisions: Vec<String> = run.execution.touched().iter().cloned().collect();
         let stalled = !stretch.stalls.is_empty();
-        let goal_reached_time = match stretch.outcome {
-            dmp::Outcome::GoalReached => execution.goal_met_since().unwrap_or(0.0),
-            _ => 0.0,
-        };
         info!(robot = %robot_id, steps, collisions = collisions.len(), stalled, "planned");
-        Ok(Response::new(v1::PlanResponse {
-            trajectory: Some(v1::Segment {
-                robot_id,
-                sequence: 0,
-                start_time: 0.0,
-                dt,
-                dim: execution.dim() as u32,
-                status: segment_status(stretch.outcome) as i32,
-                positions: stretch.x,
-                velocities: stretch.xd,
-                accelerations: stretch.xdd,
-                scene_version,
-                start_unix_s: 0.0,
-                warnings: Vec::new(),
-                scene_stale: false,
-                goal_reached_time,
-            }),
-            collisions,
-            stalled,
-            warnings,
-        }))
+        let status = segment_status(stretch.outcome);
+        let trajectory = member_segments(&run, stretch, 0, status, None).into_iter().next();
+        Ok(Response::new(v1::PlanResponse { trajectory, collisions, stalled, warnings }))
     }
 
     type ExecuteStream = SegmentStream;
@@ -318,8 +298,8 @@ impl MotionService for MotionServiceImpl {
             .config(r.motion.tau, &self.state.config, urgency)
             .map_err(|e| e.within("start"))?;
         let robot_id = r.robot_id.clone();
-        let dim = r.primitive.dim;
-        self.check_message_size("start.segment_s", cfg.segment_points * dim)?;
+        let (dim, pose) = (r.primitive.position_dim(), r.chart.is_some());
+        self.check_message_size("start.segment_s", cfg.segment_points * r.primitive.dim)?;
         let cell = r.cell.clone();
         let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await.map_err(|e| e.within("start"))?;
         audit!(caller, "session", cell = cell.name(), robot = %robot_id, take_over = req.take_over);
@@ -332,6 +312,7 @@ impl MotionService for MotionServiceImpl {
         let commands = SessionCommands::new(
             robot_id.clone(),
             dim,
+            pose,
             limits.workspace_m,
             self.state.state_admission.clone(),
             self.state.clock,
@@ -350,7 +331,9 @@ impl MotionService for MotionServiceImpl {
                     Control::Rejected(w) => {
                         debug!(field = %w.field, reason = %w.reason, "session message rejected")
                     }
-                    Control::SetGoal(goal) => audit!(caller, "set goal", robot = %robot_id, ?goal),
+                    Control::SetGoal(goal, orientation) => {
+                        audit!(caller, "set goal", robot = %robot_id, ?goal, ?orientation)
+                    }
                     Control::SetTau(tau) => audit!(caller, "set tau", robot = %robot_id, tau),
                     Control::Pause => audit!(caller, "pause", robot = %robot_id),
                     Control::Resume => audit!(caller, "resume", robot = %robot_id),
@@ -436,7 +419,12 @@ impl MotionService for MotionServiceImpl {
         // Every member within its own tolerance: the tightest of each.
         let goal_tolerance =
             resolved.iter().map(|r| r.goal_tolerance).fold(resolved[0].goal_tolerance, |a, b| {
-                GoalTolerance { position: a.position.min(b.position), speed: a.speed.min(b.speed) }
+                GoalTolerance {
+                    position: a.position.min(b.position),
+                    speed: a.speed.min(b.speed),
+                    angle: a.angle.min(b.angle),
+                    angular_speed: a.angular_speed.min(b.angular_speed),
+                }
             });
         let members =
             agents.into_iter().zip(resolved.into_iter().map(|r| r.footprint_proto)).collect::<Vec<_>>();

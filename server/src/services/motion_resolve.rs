@@ -46,6 +46,8 @@ pub(super) struct ResolvedMotion {
     pub(super) footprint_proto: Option<v1::Superquadric>,
     /// "At the goal and at rest".
     pub(super) goal_tolerance: GoalTolerance,
+    /// A pose run: the chart of its orientation dimensions ([`dmp::orientation::pose::pose_motion`]).
+    pub(super) chart: Option<nalgebra::UnitQuaternion<f64>>,
 }
 
 impl MotionServiceImpl {
@@ -75,7 +77,8 @@ impl MotionServiceImpl {
         let what = format!("{}/{}", spec.robot_id, spec.primitive);
         let limits = &self.state.config.limits;
         let primitive = stored_primitive(&proto, limits, &what).map_err(|e| e.within(prefix))?;
-        let d = primitive.dim;
+        // The position's dimensions (a pose primitive's orientation comes in its own fields).
+        let d = primitive.position_dim();
         let given_or_default = |field: &str, v: &[f64], default: &[f64]| -> Result<Vec<f64>, ServerError> {
             if v.is_empty() {
                 Ok(default.to_vec())
@@ -84,12 +87,13 @@ impl MotionServiceImpl {
                 Ok(v.to_vec())
             }
         };
-        let start = given_or_default("start", &spec.start, &primitive.start)?;
-        let goal = given_or_default("goal", &spec.goal, &primitive.goal)?;
+        let start = given_or_default("start", &spec.start, &primitive.start[..d])?;
+        let goal = given_or_default("goal", &spec.goal, &primitive.goal[..d])?;
         check_in_workspace(&format!("{prefix}.start"), &start, limits.workspace_m)?;
         check_in_workspace(&format!("{prefix}.goal"), &goal, limits.workspace_m)?;
         let tau = if spec.tau == 0.0 { primitive.tau } else { spec.tau };
         check_tau(&format!("{prefix}.tau"), tau)?;
+        let (motion, chart) = pose(&primitive, Motion { start, goal, tau }, spec, prefix)?;
         let defaults = &self.state.config.defaults;
         let obstacles = avoidance_from_proto(spec.avoidance.as_ref(), defaults.avoidance)
             .map_err(|e| e.within(&format!("{prefix}.avoidance")))?;
@@ -122,13 +126,51 @@ impl MotionServiceImpl {
             robot_id: spec.robot_id.clone(),
             cell,
             primitive,
-            motion: Motion { start, goal, tau },
+            motion,
             avoidance: RunAvoidance { obstacles, robots, extra, ignore_scene: spec.ignore_scene },
             footprint,
             footprint_proto: spec.footprint.clone(),
             goal_tolerance: goal_tolerance(spec.goal_tolerance.as_ref(), prefix)?,
+            chart,
         })
     }
+}
+
+/// The motion of a pose primitive, with its start and goal orientations (the primitive's where not given), and its
+/// chart; a position primitive's motion as it is, refusing orientations.
+fn pose(
+    p: &Primitive,
+    position: Motion,
+    spec: &v1::MotionSpec,
+    prefix: &str,
+) -> Result<(Motion, Option<nalgebra::UnitQuaternion<f64>>), ServerError> {
+    let quaternion = |field: &str, v: &[f64]| -> Result<Option<[f64; 4]>, ServerError> {
+        match v {
+            [] => Ok(None),
+            &[x, y, z, w] => Ok(Some([x, y, z, w])),
+            other => Err(ServerError::invalid(
+                format!("{prefix}.{field}"),
+                format!("must be empty or 4 numbers (x, y, z, w), found {}", other.len()),
+            )),
+        }
+    };
+    let start = quaternion("start_orientation", &spec.start_orientation)?;
+    let goal = quaternion("goal_orientation", &spec.goal_orientation)?;
+    if p.orientation.is_none() {
+        if let Some(field) = [(start, "start_orientation"), (goal, "goal_orientation")]
+            .iter()
+            .find_map(|(q, field)| q.map(|_| *field))
+        {
+            return Err(ServerError::invalid(
+                format!("{prefix}.{field}"),
+                "the primitive has no orientation (it was learned from positions only)",
+            ));
+        }
+        return Ok((position, None));
+    }
+    let m = dmp::orientation::pose::pose_motion(p, position, start, goal)
+        .map_err(|e| ServerError::invalid(format!("{prefix}.{}", e.field), e.rule))?;
+    Ok((m.motion, Some(m.chart)))
 }
 
 /// The request's goal tolerance, a field left 0 (or the whole message unset) taking its default.
@@ -139,6 +181,8 @@ fn goal_tolerance(t: Option<&v1::GoalTolerance>, prefix: &str) -> Result<GoalTol
     let tolerance = GoalTolerance {
         position: or_default(t.position, default.position),
         speed: or_default(t.speed, default.speed),
+        angle: or_default(t.angle, default.angle),
+        angular_speed: or_default(t.angular_speed, default.angular_speed),
     };
     tolerance.validate().map_err(|e| e.within(&format!("{prefix}.goal_tolerance")))?;
     Ok(tolerance)

@@ -113,8 +113,9 @@ impl PrimitiveServiceImpl {
                 config.n_basis + 1
             )));
         }
+        let orientations = dmp_proto::learning::orientations_from_proto(demo).map_err(ServerError::from)?;
         let demo = demonstration_from_proto(demo, limits).map_err(learn_field)?;
-        let (samples, dim) = (demo.times().len(), demo.dim());
+        let (samples, dim) = (demo.times().len(), demo.dim() + if orientations.is_some() { 3 } else { 0 });
         // The least squares of samples x (N + 1) Gaussians, and the forcing targets in every dimension.
         let (s, b) = (samples as f64, (config.n_basis + 1) as f64);
         let _budget = self.state.compute.admission.batch(s * b * b + s * b * dim as f64, "demonstration")?;
@@ -128,7 +129,11 @@ impl PrimitiveServiceImpl {
             .compute
             .batch
             .run(move |job| {
-                let primitive = dmp::learn(&demo, &config).map_err(|e| match e {
+                let learned = match &orientations {
+                    Some(o) => dmp::orientation::pose::learn_pose(&demo, o, &config),
+                    None => dmp::learn(&demo, &config),
+                };
+                let primitive = learned.map_err(|e| match e {
                     dmp::DmpError::Learning(reason) => ServerError::invalid("demonstration", reason),
                     other => learn_field(other.into()),
                 })?;
@@ -296,7 +301,7 @@ mod tests {
     fn demonstration() -> v1::Demonstration {
         let t: Vec<f64> = (0..100).map(|i| f64::from(i) / 99.0 + 0.001 * f64::from(i % 3)).collect();
         let positions = t.iter().flat_map(|t| [t * t, (3.0 * t).sin()]).collect();
-        v1::Demonstration { t, positions, dim: 2 }
+        v1::Demonstration { t, positions, dim: 2, ..Default::default() }
     }
 
     fn learn_request(robot: &str, name: &str) -> Request<v1::LearnRequest> {

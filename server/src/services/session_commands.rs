@@ -19,6 +19,8 @@ use crate::state_admission::StateAdmission;
 pub struct SessionCommands {
     robot_id: String,
     dim: usize,
+    /// A pose run: goals may carry an orientation.
+    pose: bool,
     workspace_m: f64,
     admission: StateAdmission,
     clock: Clock,
@@ -30,17 +32,20 @@ impl SessionCommands {
     pub fn new(
         robot_id: String,
         dim: usize,
+        pose: bool,
         workspace_m: f64,
         admission: StateAdmission,
         clock: Clock,
     ) -> Self {
-        Self { robot_id, dim, workspace_m, admission, clock }
+        Self { robot_id, dim, pose, workspace_m, admission, clock }
     }
 
     /// The command of one message (None: an empty message), or the warning that rejects it.
     pub fn control(&self, message: Option<Message>) -> Control {
         match message {
-            Some(Message::SetGoal(g)) => self.goal(g.goal).unwrap_or_else(|e| rejected("set_goal", &e)),
+            Some(Message::SetGoal(g)) => {
+                self.goal(g.goal, &g.goal_orientation).unwrap_or_else(|e| rejected("set_goal", &e))
+            }
             Some(Message::SetTau(t)) => match check_tau("tau", t.tau) {
                 Ok(()) => Control::SetTau(t.tau),
                 Err(e) => rejected("set_tau", &e),
@@ -62,10 +67,32 @@ impl SessionCommands {
         }
     }
 
-    fn goal(&self, goal: Vec<f64>) -> Result<Control, WireError> {
-        check_vector("goal", &goal, self.dim)?;
-        check_in_workspace("goal", &goal, self.workspace_m)?;
-        Ok(Control::SetGoal(goal))
+    fn goal(&self, goal: Vec<f64>, orientation: &[f64]) -> Result<Control, WireError> {
+        let orientation = match orientation {
+            [] => None,
+            _ if !self.pose => {
+                return Err(WireError::new(
+                    "goal_orientation",
+                    "the run has no orientation (a position primitive)",
+                ));
+            }
+            &[x, y, z, w] => {
+                dmp::orientation::quaternion::from_xyzw("goal_orientation", [x, y, z, w])?;
+                Some([x, y, z, w])
+            }
+            other => {
+                return Err(WireError::new(
+                    "goal_orientation",
+                    format!("must be empty or 4 numbers (x, y, z, w), found {}", other.len()),
+                ));
+            }
+        };
+        // An orientation alone keeps the position goal.
+        if !(goal.is_empty() && orientation.is_some()) {
+            check_vector("goal", &goal, self.dim)?;
+            check_in_workspace("goal", &goal, self.workspace_m)?;
+        }
+        Ok(Control::SetGoal(goal, orientation))
     }
 
     /// The robot's measured state, named after the session's robot: published, or rejected (malformed, or of
@@ -106,6 +133,7 @@ mod tests {
         SessionCommands::new(
             "r1".into(),
             3,
+            false,
             limits.workspace_m,
             StateAdmission::new(&limits),
             Clock::system(),
@@ -127,14 +155,17 @@ mod tests {
             position: vec![x, 0.0, 0.0],
             velocity: vec![0.0; 3],
             footprint: None,
+            ..Default::default()
         }
     }
 
     #[test]
     fn valid_commands_pass() {
         let c = commands();
-        assert!(matches!(c.control(Some(Message::SetGoal(v1::SetGoal { goal: vec![1.0, -2.0, 9.5] }))),
-            Control::SetGoal(g) if g == [1.0, -2.0, 9.5]));
+        assert!(
+            matches!(c.control(Some(Message::SetGoal(v1::SetGoal { goal: vec![1.0, -2.0, 9.5], ..Default::default() }))),
+            Control::SetGoal(g, None) if g == [1.0, -2.0, 9.5])
+        );
         assert!(matches!(c.control(Some(Message::SetTau(v1::SetTau { tau: 2.0 }))), Control::SetTau(2.0)));
         assert!(matches!(c.control(Some(Message::Pause(v1::Pause {}))), Control::Pause));
         assert!(matches!(c.control(Some(Message::Resume(v1::Resume {}))), Control::Resume));
@@ -149,7 +180,8 @@ mod tests {
     #[test]
     fn bad_commands_are_rejected_naming_the_field() {
         let c = commands();
-        let goal = |goal: Vec<f64>| c.control(Some(Message::SetGoal(v1::SetGoal { goal })));
+        let goal =
+            |goal: Vec<f64>| c.control(Some(Message::SetGoal(v1::SetGoal { goal, ..Default::default() })));
         let tau = |tau: f64| c.control(Some(Message::SetTau(v1::SetTau { tau })));
         let rejected = |field: &str| (Kind::CommandRejected, field.to_owned());
         assert_eq!(rejection(goal(vec![0.0, 0.0, f64::NAN])), rejected("set_goal.goal[2]"));

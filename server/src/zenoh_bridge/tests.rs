@@ -197,6 +197,7 @@ async fn robot_states_arrive_and_leave() {
         position: vec![0.1, 0.2, 0.3],
         velocity: vec![1.0, 0.0, 0.0],
         footprint: Some(v1::Superquadric { semi_axes: vec![0.1; 3], exponents: vec![] }),
+        ..Default::default()
     };
     within("put", publisher.put(codec::encode(&state)).encoding(Encoding::APPLICATION_PROTOBUF))
         .await

@@ -38,8 +38,9 @@ pub fn motion_spec() -> BoxedStrategy<v1::MotionSpec> {
                 any::<bool>(),
                 prop_oneof![
                     Just(None),
-                    (zero_or(around(0.001, 1.0)), zero_or(around(0.001, 1.0)))
-                        .prop_map(|(position, speed)| Some(v1::GoalTolerance { position, speed })),
+                    (zero_or(around(0.001, 1.0)), zero_or(around(0.001, 1.0))).prop_map(
+                        |(position, speed)| Some(v1::GoalTolerance { position, speed, ..Default::default() })
+                    ),
                 ],
             )
                 .prop_map(
@@ -67,6 +68,7 @@ pub fn motion_spec() -> BoxedStrategy<v1::MotionSpec> {
                             ignore_scene: ignore,
                             cell: cell.clone(),
                             goal_tolerance,
+                            ..Default::default()
                         }
                     },
                 )
@@ -145,7 +147,7 @@ pub fn session_message() -> BoxedStrategy<v1::SessionRequest> {
         3 => crate::values::robot_state(&["r1", "r2"]).prop_map(|s| Some(M::State(s))),
         3 => prop_oneof![Just(2usize), Just(3usize)]
             .prop_flat_map(|d| nums(d, around(-1.0, 2.0)))
-            .prop_map(|goal| Some(M::SetGoal(v1::SetGoal { goal }))),
+            .prop_map(|goal| Some(M::SetGoal(v1::SetGoal { goal, ..Default::default() }))),
         2 => around(0.2, 3.0).prop_map(|tau| Some(M::SetTau(v1::SetTau { tau }))),
         2 => Just(Some(M::Pause(v1::Pause {}))),
         2 => Just(Some(M::Resume(v1::Resume {}))),

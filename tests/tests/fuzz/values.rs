@@ -192,6 +192,7 @@ pub fn robot_state(ids: &'static [&'static str]) -> BoxedStrategy<v1::RobotState
                     position,
                     velocity,
                     footprint,
+                    ..Default::default()
                 })
         })
         .boxed()
@@ -225,6 +226,7 @@ pub fn primitive() -> BoxedStrategy<v1::Primitive> {
                         start,
                         goal,
                         weights,
+                        ..Default::default()
                     },
                 )
         })
@@ -240,7 +242,7 @@ pub fn demonstration() -> BoxedStrategy<v1::Demonstration> {
                 1 => nums(samples, num(wild)),
             ];
             (times, nums(samples * d, num(wild)), prop_oneof![9 => Just(d as u32), 1 => 0..=9u32])
-                .prop_map(|(t, positions, dim)| v1::Demonstration { t, positions, dim })
+                .prop_map(|(t, positions, dim)| v1::Demonstration { t, positions, dim, ..Default::default() })
         })
         .boxed()
 }

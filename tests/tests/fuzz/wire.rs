@@ -174,6 +174,7 @@ fn fuzz_robot_states() {
         position: vec![0.1, 0.2, 0.3],
         velocity: vec![0.0; 3],
         footprint: Some(v1::Superquadric { semi_axes: vec![0.2; 3], exponents: vec![1.0, 2.0, 1.0] }),
+        ..Default::default()
     };
     let seeds =
         vec![codec::encode(&state), codec::encode(&v1::RobotState { robot_id: String::new(), ..state })];
@@ -312,6 +313,7 @@ fn fuzz_messages_to_engine() {
                 t: vec![0.0, 0.5, 1.0],
                 positions: vec![0.0, 0.5, 1.0],
                 dim: 1,
+                ..Default::default()
             }),
             parameters: Some(v1::LearnParameters { n_basis: 5, k: vec![100.0], d: vec![], alpha: 4.0 }),
         }),

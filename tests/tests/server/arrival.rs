@@ -48,8 +48,8 @@ async fn a_stream_reports_when_its_goal_tolerance_was_first_met() {
     let mut ends = Vec::new();
     for (tolerance, tol) in [
         (None, (1e-3, 1e-3)),
-        (Some(v1::GoalTolerance { position: 0.0, speed: 1e-2 }), (1e-3, 1e-2)),
-        (Some(v1::GoalTolerance { position: 1e-2, speed: 0.1 }), (1e-2, 0.1)),
+        (Some(v1::GoalTolerance { position: 0.0, speed: 1e-2, ..Default::default() }), (1e-3, 1e-2)),
+        (Some(v1::GoalTolerance { position: 1e-2, speed: 0.1, ..Default::default() }), (1e-2, 0.1)),
     ] {
         let segs = segments(&client, tolerance).await;
         let last = segs.last().unwrap();
@@ -70,7 +70,7 @@ async fn a_stream_reports_when_its_goal_tolerance_was_first_met() {
     assert!(ends[2] < ends[0], "{ends:?}");
     // A tolerance that cannot be met is refused, naming its field.
     let mut motion = spec("r", "curve");
-    motion.goal_tolerance = Some(v1::GoalTolerance { position: 1e-3, speed: -1.0 });
+    motion.goal_tolerance = Some(v1::GoalTolerance { position: 1e-3, speed: -1.0, ..Default::default() });
     let e =
         within("execute", client.execute(v1::ExecuteRequest { motion: Some(motion), ..Default::default() }))
             .await

@@ -89,8 +89,12 @@ async fn a_learn_whose_client_left_is_not_stored() {
     until("the plan runs", || batch.counters().running.load(Ordering::Acquire) == 1).await;
     let samples = 5_000;
     let t: Vec<f64> = (0..samples).map(|i| i as f64 * 1e-3).collect();
-    let demonstration =
-        v1::Demonstration { positions: t.iter().flat_map(|t| [t.sin(), t.cos()]).collect(), t, dim: 2 };
+    let demonstration = v1::Demonstration {
+        positions: t.iter().flat_map(|t| [t.sin(), t.cos()]).collect(),
+        t,
+        dim: 2,
+        ..Default::default()
+    };
     let learn = |name: &str| v1::LearnRequest {
         robot_id: "r".into(),
         name: name.into(),
@@ -135,8 +139,12 @@ async fn a_learn_cancelled_while_it_runs_is_not_stored() {
     // while it runs.
     let samples = 30_000;
     let t: Vec<f64> = (0..samples).map(|i| i as f64 * 1e-3).collect();
-    let demonstration =
-        v1::Demonstration { positions: t.iter().flat_map(|t| [t.sin(), t.cos()]).collect(), t, dim: 2 };
+    let demonstration = v1::Demonstration {
+        positions: t.iter().flat_map(|t| [t.sin(), t.cos()]).collect(),
+        t,
+        dim: 2,
+        ..Default::default()
+    };
     let request = v1::LearnRequest {
         robot_id: "r".into(),
         name: "cancelled".into(),

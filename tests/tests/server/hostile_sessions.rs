@@ -57,11 +57,18 @@ async fn bad_session_commands_are_rejected_and_the_run_reaches_its_goal() {
         position: vec![0.0; 3],
         velocity: vec![0.0; 3],
         footprint: None,
+        ..Default::default()
     };
     let bad = [
-        (Some(Message::SetGoal(v1::SetGoal { goal: vec![0.0, 0.0, f64::NAN] })), "set_goal.goal[2]"),
-        (Some(Message::SetGoal(v1::SetGoal { goal: vec![0.0, 0.0] })), "set_goal.goal"),
-        (Some(Message::SetGoal(v1::SetGoal { goal: vec![0.0, 5000.0, 0.0] })), "set_goal.goal[1]"),
+        (
+            Some(Message::SetGoal(v1::SetGoal { goal: vec![0.0, 0.0, f64::NAN], ..Default::default() })),
+            "set_goal.goal[2]",
+        ),
+        (Some(Message::SetGoal(v1::SetGoal { goal: vec![0.0, 0.0], ..Default::default() })), "set_goal.goal"),
+        (
+            Some(Message::SetGoal(v1::SetGoal { goal: vec![0.0, 5000.0, 0.0], ..Default::default() })),
+            "set_goal.goal[1]",
+        ),
         (Some(Message::SetTau(v1::SetTau { tau: 1e-300 })), "set_tau.tau"),
         (Some(Message::SetTau(v1::SetTau { tau: 0.0 })), "set_tau.tau"),
         (None, "message"),
@@ -113,6 +120,7 @@ fn phantom(id: &str, stamp_unix_s: f64) -> v1::RobotState {
         position: vec![0.5, 0.25],
         velocity: vec![0.0, 0.0],
         footprint: Some(v1::Superquadric { semi_axes: vec![0.2, 0.2], exponents: vec![] }),
+        ..Default::default()
     }
 }
 

@@ -54,6 +54,7 @@ fn state(id: &str) -> Vec<u8> {
         position: vec![0.5, 0.25],
         velocity: vec![0.0, 0.0],
         footprint: Some(v1::Superquadric { semi_axes: vec![0.2, 0.2], exponents: vec![] }),
+        ..Default::default()
     })
 }
 
