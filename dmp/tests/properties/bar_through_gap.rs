@@ -1,23 +1,24 @@
-//! The experiment of obstacle-aware orientation (`dmp::tool`): a 0.6 m bar, held at its middle, carried down
-//! through the 0.3 m gap between two vertical pegs (0.4 m tall, 5 cm radius, axes 0.4 m apart), starting across
-//! the gap, 10° off square: it cannot pass without turning.
+//! The experiment of obstacle-aware orientation (`dmp::tool`): a 0.6 m bar, held at its middle, carried through
+//! the 0.3 m gap between two vertical pegs (5 cm radius, axes 0.4 m apart), starting across the gap, 10° off
+//! square: it cannot pass without turning.
 //!
 //! - Position-only avoidance (a point robot, the pegs inflated by the bar's half-length, as the paper does with a
-//!   held object) cannot pass: the inflated pegs close the gap and hold it above them.
+//!   held object) cannot pass: the inflated pegs close the gap and hold it in front of them.
 //! - The tool-aware run (the same method on 25 control points along the bar, the pegs inflated by the bar's
 //!   half-thickness and the spacing of the points) turns the bar, passes, and turns it back to its goal
 //!   orientation; the clearance of the true bar (a 0.6 x 0.02 x 0.02 m box) to the true pegs (cylinders),
 //!   measured with parry3d at every 1 ms step, stays positive.
 //!
-//! The bar passes along the pegs' axes: the peg tops push the bar's points up and outward, and the outward parts
-//! turn a bar that is not square about the vertical further from square (the balance square across is unstable).
-//! Carried horizontally between the same pegs (tall enough not to go over), the bar does not pass: the pegs push
-//! back where the bar meets them first, which turns it square to its motion (a stable balance), and the run
-//! stalls in front of the gap. Repulsive terms alone do not thread a long tool into a gap head-on.
+//! Carried level (the [`LEVEL`] layout, pegs 1 m tall), the bar passes with the paper's dynamic volumetric
+//! potential, which steers each point's velocity around the peg it approaches; with the static volumetric
+//! potential the pegs only push back where the bar meets them first, which turns it square to its motion (a stable
+//! balance), and the run stalls in front of the gap. Carried down along the pegs ([`DOWN`], pegs 0.4 m tall), the
+//! peg tops push the bar's points up and outward, which turns a bar that is not square further from square, and
+//! both volumetric potentials pass.
 //!
-//! Both roll out with [`dmp::Integrator`] on one 6-D primitive (position, then the rotation vector of the chart
-//! anchored at the goal orientation), learned from straight minimum-jerk demonstrations. The figures are printed
-//! (`cargo test -p dmp --test properties bar_through_gap -- --nocapture`).
+//! Each run rolls out with [`dmp::Integrator`] on one 6-D primitive (position, then the rotation vector of the
+//! chart anchored at the goal orientation), learned from straight minimum-jerk demonstrations. The figures are
+//! printed (`cargo test -p dmp --test properties bar_through_gap -- --nocapture`).
 
 use std::sync::LazyLock;
 
@@ -41,14 +42,51 @@ const HALF_LENGTH: f64 = 0.3;
 const HALF_THICKNESS: f64 = 0.01;
 /// The pegs: radius 5 cm, 0.4 m tall, axes 0.4 m apart (a 0.3 m gap), centred at `z = 0`.
 const PEG_RADIUS: f64 = 0.05;
-const PEG_HALF_HEIGHT: f64 = 0.2;
 const PEG_Y: f64 = 0.2;
 /// Extra room so that each superquadric isopotential holds its true peg's cylinder, inflated.
 const RADIAL_ROOM: f64 = 0.015;
 const AXIAL_ROOM: f64 = 0.025;
-/// Start and goal of the bar's middle: above and below the pegs.
-const START: [f64; 3] = [0.0, 0.0, 0.8];
-const GOAL: [f64; 3] = [0.0, 0.0, -0.8];
+
+/// Where the pegs stand and where the bar's middle goes.
+#[derive(Debug, Clone, Copy)]
+struct Layout {
+    /// Half the pegs' height.
+    peg_half_height: f64,
+    /// Start and goal of the bar's middle.
+    start: [f64; 3],
+    goal: [f64; 3],
+    /// How far the pegs reach along the motion from their centres.
+    pegs_extent: f64,
+}
+
+/// The experiment: pegs 0.4 m tall, the bar carried down from above them to below.
+const DOWN: Layout =
+    Layout { peg_half_height: 0.2, start: [0.0, 0.0, 0.8], goal: [0.0, 0.0, -0.8], pegs_extent: 0.2 };
+
+/// The same gap met horizontally: pegs 1 m tall, the bar carried level between them.
+const LEVEL: Layout =
+    Layout { peg_half_height: 0.5, start: [-0.8, 0.0, 0.0], goal: [0.8, 0.0, 0.0], pegs_extent: PEG_RADIUS };
+
+impl Layout {
+    fn direction(&self) -> Vector3<f64> {
+        (Vector3::from(self.goal) - Vector3::from(self.start)).normalize()
+    }
+
+    /// How far the bar's middle has gone past the pegs' centre plane along the motion.
+    fn progress(&self, p: &Vector3<f64>) -> f64 {
+        p.dot(&self.direction())
+    }
+
+    /// Whether the whole bar is past the pegs, whatever its orientation.
+    fn passed(&self, p: &Vector3<f64>) -> bool {
+        self.progress(p) > self.pegs_extent + HALF_LENGTH
+    }
+
+    /// Whether the bar's middle is held in front of the pegs, `margin` before their near side.
+    fn held_before(&self, p: &Vector3<f64>, margin: f64) -> bool {
+        self.progress(p) < -self.pegs_extent - margin
+    }
+}
 /// Duration of the demonstrations, the run's `tau`, and the step.
 const TAU: f64 = 3.0;
 const DT: f64 = 1e-3;
@@ -56,8 +94,8 @@ const DT: f64 = 1e-3;
 const DURATION: f64 = 3.0 * TAU;
 
 /// The bar's orientation at the start and the goal: its long axis (tool x) along the world y axis, across the gap,
-/// turned 10° about the vertical. Exactly square (90°) the two pegs' moments cancel by symmetry: an unstable
-/// balance, where the run stalls (see `squarely_across_the_bar_first_stalls`).
+/// turned 10° about the vertical. Exactly square (90°), carried down, the two pegs' moments cancel by symmetry: an
+/// unstable balance, where the run stalls (see `squarely_across_the_bar_first_stalls`).
 fn across() -> UnitQuaternion<f64> {
     yawed(100.0)
 }
@@ -72,15 +110,16 @@ fn min_jerk(u: f64) -> f64 {
     u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
 }
 
-/// The 6-D primitive: a position primitive learned from a straight minimum-jerk move from [`START`] to [`GOAL`],
-/// and an orientation primitive learned from holding [`across`], concatenated (same basis, `alpha` and `tau`). In
+/// The 6-D primitive of a layout: a position primitive learned from a straight minimum-jerk move from its start to
+/// its goal, and an orientation primitive learned from holding [`across`], concatenated (same basis, `alpha` and `tau`). In
 /// the chart anchored at the held orientation the demonstration is `y = 0` throughout, so the same primitive holds
 /// any orientation it is anchored at.
-static PRIMITIVE: LazyLock<Primitive> = LazyLock::new(|| {
+fn primitive(layout: &Layout) -> Primitive {
+    let Layout { start, goal, .. } = *layout;
     let times: Vec<f64> = (0..=(TAU / DT).round() as usize).map(|k| k as f64 * DT).collect();
     let positions = times
         .iter()
-        .map(|&t| (0..3).map(|i| START[i] + (GOAL[i] - START[i]) * min_jerk(t / TAU)).collect())
+        .map(|&t| (0..3).map(|i| start[i] + (goal[i] - start[i]) * min_jerk(t / TAU)).collect())
         .collect();
     let position =
         learn(&Demonstration::new(times.clone(), positions).unwrap(), &LearnConfig::paper()).unwrap();
@@ -100,16 +139,19 @@ static PRIMITIVE: LazyLock<Primitive> = LazyLock::new(|| {
         weights: [position.weights.clone(), o.weights].concat(),
         ..position
     }
-});
+}
+
+static DOWN_PRIMITIVE: LazyLock<Primitive> = LazyLock::new(|| primitive(&DOWN));
+static LEVEL_PRIMITIVE: LazyLock<Primitive> = LazyLock::new(|| primitive(&LEVEL));
 
 /// The pegs' isopotentials: rounded cylinders (exponents 1, 1, 4) holding the true peg inflated by `margin`.
-fn pegs(margin: f64) -> Vec<Obstacle> {
+fn pegs(layout: &Layout, margin: f64) -> Vec<Obstacle> {
     [-PEG_Y, PEG_Y]
         .iter()
         .enumerate()
         .map(|(i, &y)| {
             let r = PEG_RADIUS + margin + RADIAL_ROOM;
-            let h = PEG_HALF_HEIGHT + margin + AXIAL_ROOM;
+            let h = layout.peg_half_height + margin + AXIAL_ROOM;
             let shape = Superquadric::new(vec![r, r, h], vec![1.0, 1.0, 4.0]).unwrap();
             Obstacle::new(format!("peg{i}"), Shape::Superquadric(shape), vec![0.0, y, 0.0], None, None)
                 .unwrap()
@@ -124,11 +166,11 @@ fn bar_tool() -> Tool {
 }
 
 /// The clearance of the true bar at `(p, q)` to the true pegs (parry3d; 0 when they touch or overlap).
-fn clearance(p: &Vector3<f64>, q: &UnitQuaternion<f64>) -> f64 {
+fn clearance(layout: &Layout, p: &Vector3<f64>, q: &UnitQuaternion<f64>) -> f64 {
     let bar = Cuboid::new(Vector::new(HALF_LENGTH, HALF_THICKNESS, HALF_THICKNESS));
     let axis = q.scaled_axis();
     let bar_pose = Pose::new(Vector::new(p.x, p.y, p.z), Vector::new(axis.x, axis.y, axis.z));
-    let peg = Cylinder::new(PEG_HALF_HEIGHT, PEG_RADIUS);
+    let peg = Cylinder::new(layout.peg_half_height, PEG_RADIUS);
     [-PEG_Y, PEG_Y]
         .iter()
         .map(|&y| {
@@ -160,13 +202,14 @@ struct Run {
     non_finite: bool,
 }
 
-/// Rolls the primitive out from [`START`] to [`GOAL`] holding `q_ref`, under `perturbation`.
+/// Rolls the layout's primitive out from its start to its goal holding `q_ref`, under `perturbation`.
 fn roll_out(
+    layout: &Layout,
     perturbation: &mut dyn Perturbation,
     q_ref: UnitQuaternion<f64>,
     isopotentials: &[Obstacle],
 ) -> Run {
-    let p = &*PRIMITIVE;
+    let p: &Primitive = if layout.start == DOWN.start { &DOWN_PRIMITIVE } else { &LEVEL_PRIMITIVE };
     let mut integrator = Integrator::new(p).unwrap();
     let motion = Motion { start: p.start.clone(), goal: p.goal.clone(), tau: TAU };
     let mut state = State::at_rest(&motion.start);
@@ -194,13 +237,13 @@ fn roll_out(
         }
         let pose = ToolPose::from_state(&state.x, &state.xd, &q_ref);
         let q = exp(&pose.chart) * q_ref;
-        run.min_clearance = run.min_clearance.min(clearance(&pose.position, &q));
+        run.min_clearance = run.min_clearance.min(clearance(layout, &pose.position, &q));
         run.max_turn_deg = run.max_turn_deg.max(angle_between(&q, &q_ref).to_degrees());
         for o in isopotentials {
             let d = signed_distance_world(o, pose.position.as_slice(), state.t);
             run.min_isopotential_distance = run.min_isopotential_distance.min(d);
         }
-        if run.passed_at.is_none() && pose.position.z < -PEG_HALF_HEIGHT - HALF_LENGTH {
+        if run.passed_at.is_none() && layout.passed(&pose.position) {
             run.passed_at = Some(state.t);
         }
         if let Some(s) = stall.update(state.t, &state.x, &state.xd, &motion.goal)
@@ -209,7 +252,7 @@ fn roll_out(
             run.stalled_at = Some(s.detected_at);
             run.stall_position = Some(pose.position);
         }
-        run.final_position_error = (pose.position - Vector3::from(GOAL)).norm();
+        run.final_position_error = (pose.position - Vector3::from(layout.goal)).norm();
         run.final_position = pose.position;
         if state.t > DURATION - 1.0 {
             run.last_second_speed = run.last_second_speed.max(pose.velocity.norm() / TAU);
@@ -228,71 +271,93 @@ fn methods() -> [Method; 2] {
 
 /// The point robot: the pegs inflated by the bar's half-length, acting on the position dimensions only (the run's
 /// one robot owns dimensions 0..3; the orientation holds).
-fn position_only(method: Method) -> RepulsiveField {
-    let mut scene = Scene::with_obstacles(pegs(HALF_LENGTH), Avoidance::new(method), 50);
+fn position_only(layout: &Layout, method: Method) -> RepulsiveField {
+    let mut scene = Scene::with_obstacles(pegs(layout, HALF_LENGTH), Avoidance::new(method), 50);
     scene.agents = vec![Agent { id: "bar".into(), dims: vec![0, 1, 2], footprint: None }];
     RepulsiveField::new(scene, 6).unwrap()
 }
 
-fn tool_aware(method: Method, q_ref: UnitQuaternion<f64>) -> ToolField {
+fn tool_aware(layout: &Layout, method: Method, q_ref: UnitQuaternion<f64>) -> ToolField {
     let tool = bar_tool();
     let margin = tool.sampling().reach(tool.shape()).unwrap();
-    ToolField::new(tool, Scene::with_obstacles(pegs(margin), Avoidance::new(method), 50), q_ref).unwrap()
+    ToolField::new(tool, Scene::with_obstacles(pegs(layout, margin), Avoidance::new(method), 50), q_ref)
+        .unwrap()
 }
 
-/// The point robot never passes: the inflated pegs close the gap. With the static potential it stalls above
-/// them; with the dynamic one, which acts only while the robot approaches, it keeps bouncing on the isopotential
-/// at a few cm/s, so the speed-based stall detector does not fire, and it makes no progress either.
+/// The point robot never passes: the inflated pegs close the gap. With the static potential it stalls in front of
+/// them; with the dynamic one, which acts only while the robot approaches, it may keep bouncing on the
+/// isopotential at a few cm/s, so that the speed-based stall detector does not fire, and it makes no progress
+/// either.
 #[test]
-fn position_only_avoidance_is_held_above_the_gap() {
-    for method in methods() {
-        let run = roll_out(&mut position_only(method), across(), &pegs(HALF_LENGTH));
-        eprintln!("bar_through_gap position-only {}: {run:?}", method.name());
-        let name = method.name();
-        assert!(!run.non_finite);
-        assert!(run.passed_at.is_none(), "{name}: it never passes");
-        assert!(run.final_position.z > PEG_HALF_HEIGHT + HALF_LENGTH, "{name}: held above the pegs, {run:?}");
-        assert!(run.min_clearance > 0.0, "{name}: the bar never touches a peg");
-        assert!(run.min_isopotential_distance > 0.0, "{name}: nor enters the inflated pegs");
-        match method {
-            Method::StaticVolumetric(_) => {
+fn position_only_avoidance_is_held_in_front_of_the_gap() {
+    for layout in [LEVEL, DOWN] {
+        for method in methods() {
+            let run =
+                roll_out(&layout, &mut position_only(&layout, method), across(), &pegs(&layout, HALF_LENGTH));
+            eprintln!("bar_through_gap position-only {layout:?} {}: {run:?}", method.name());
+            let name = method.name();
+            assert!(!run.non_finite);
+            assert!(run.passed_at.is_none(), "{name}: it never passes");
+            assert!(
+                layout.held_before(&run.final_position, 0.0),
+                "{name}: held in front of the pegs, {run:?}"
+            );
+            assert!(run.min_clearance > 0.0, "{name}: the bar never touches a peg");
+            assert!(run.min_isopotential_distance > 0.0, "{name}: nor enters the inflated pegs");
+            if let Method::StaticVolumetric(_) = method {
                 let at = run.stall_position.expect("the static potential stalls");
-                assert!(at.z > PEG_HALF_HEIGHT + HALF_LENGTH, "{name}: stalled at {at:?}");
-            }
-            _ => {
-                assert!(run.stalled_at.is_none(), "{name}: reported as a stall after all; update the doc");
-                assert!(run.last_second_speed > StallConfig::default().speed_tol, "{name}: still moving");
+                assert!(layout.held_before(&at, 0.0), "{name}: stalled at {at:?}");
             }
         }
     }
 }
 
-/// Exactly square to the gap, the two pegs' moments cancel: the bar is balanced (unstably), and the tool-aware
-/// run stalls above the gap (a local minimum, as the paper's conclusions say of points). Only the rounding of the
-/// symmetric control points breaks the balance, seconds later, and what it does then is not asserted; the bar
-/// never touches a peg either way.
+/// The experiment: carried level with the paper's dynamic potential, the bar turns to thread the gap and passes;
+/// carried down along the pegs, it does so with either volumetric potential. Then it turns back to its goal
+/// orientation and arrives.
+#[test]
+fn the_tool_aware_run_turns_the_bar_and_passes_without_touching() {
+    for (layout, method) in [(LEVEL, methods()[1]), (DOWN, methods()[0]), (DOWN, methods()[1])] {
+        let run = roll_out(&layout, &mut tool_aware(&layout, method, across()), across(), &[]);
+        eprintln!("bar_through_gap tool-aware {layout:?} {}: {run:?}", method.name());
+        let name = method.name();
+        assert!(!run.non_finite);
+        assert!(run.min_clearance > 0.0, "{name}: the true bar touches a peg");
+        assert!(run.passed_at.is_some(), "{name}: it does not pass");
+        // From 100° to the x axis, the bar clears pegs met level only below 72.5° (or above 107.5°).
+        assert!(run.max_turn_deg > 27.5, "{name}: it passes by turning");
+        assert!(run.final_position_error < 1e-2, "{name}: {run:?}");
+        assert!(run.final_orientation_error_deg < 1.0, "{name}: {run:?}");
+    }
+}
+
+/// Carried level with the static potential, the bar does not pass: the pegs push back where it meets them first,
+/// which turns it square to its motion (a stable balance), and the run stalls in front of the gap, without
+/// touching. The dynamic potential, which also steers each point's velocity sideways, does not stop there.
+#[test]
+fn carried_level_with_the_static_potential_the_bar_turns_square_and_stalls() {
+    let method = methods()[0];
+    let run = roll_out(&LEVEL, &mut tool_aware(&LEVEL, method, across()), across(), &[]);
+    eprintln!("bar_through_gap tool-aware {LEVEL:?} {}: {run:?}", method.name());
+    assert!(!run.non_finite);
+    assert!(run.passed_at.is_none(), "{run:?}");
+    let at = run.stall_position.expect("a stall is reported");
+    assert!(LEVEL.held_before(&at, 0.0), "{run:?}");
+    assert!(run.final_orientation_error_deg > 5.0, "turned toward square (90°) from 100°: {run:?}");
+    assert!(run.min_clearance > 0.0, "{run:?}");
+}
+
+/// Exactly square to the gap and carried down along the pegs, the two pegs' moments cancel: the bar is balanced
+/// (unstably), and the tool-aware run stalls above the gap (a local minimum, as the paper's conclusions say of
+/// points). Only the rounding of the symmetric control points breaks the balance, seconds later, and what it does
+/// then is not asserted; the bar never touches a peg either way.
 #[test]
 fn squarely_across_the_bar_first_stalls() {
     let method = methods()[0];
-    let run = roll_out(&mut tool_aware(method, yawed(90.0)), yawed(90.0), &[]);
-    eprintln!("bar_through_gap tool-aware square {}: {run:?}", method.name());
+    let run = roll_out(&DOWN, &mut tool_aware(&DOWN, method, yawed(90.0)), yawed(90.0), &[]);
+    eprintln!("bar_through_gap tool-aware square {DOWN:?} {}: {run:?}", method.name());
     let at = run.stall_position.expect("a stall is reported");
-    assert!(at.z > PEG_HALF_HEIGHT, "stalled above the pegs, at {at:?}");
+    assert!(DOWN.held_before(&at, 0.0), "stalled above the pegs, at {at:?}");
     assert!(run.min_clearance > 0.0);
     assert!(!run.non_finite);
-}
-
-#[test]
-fn the_tool_aware_run_turns_the_bar_and_passes_without_touching() {
-    for method in methods() {
-        let run = roll_out(&mut tool_aware(method, across()), across(), &[]);
-        eprintln!("bar_through_gap tool-aware {}: {run:?}", method.name());
-        assert!(!run.non_finite);
-        assert!(run.min_clearance > 0.0, "{}: the true bar touches a peg", method.name());
-        assert!(run.passed_at.is_some(), "{}: it does not pass", method.name());
-        // From 100° to the vertical, the bar clears the pegs only below 72.5° (or above 107.5°) from the x axis.
-        assert!(run.max_turn_deg > 27.5, "{}: it passes by turning", method.name());
-        assert!(run.final_position_error < 1e-2, "{}", method.name());
-        assert!(run.final_orientation_error_deg < 1.0, "{}", method.name());
-    }
 }
