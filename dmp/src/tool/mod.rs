@@ -38,6 +38,14 @@
 //! Inside an obstacle, each point's term is the scene field's (with `C` floored, capped); `F` and the angular
 //! term are capped at [`crate::field::DEFAULT_MAX_PERTURBATION`] too.
 //!
+//! # Limits
+//! Repulsion turns a tool only where the moments point the right way. A long tool met head-on by a gap narrower
+//! than it is pushed back where it touches first, which turns it square to its motion: with the static potentials
+//! that balance is stable and the run stalls in front of the gap; the dynamic volumetric potential, which also
+//! steers each point's velocity around what it approaches, threads it (the experiment in
+//! `dmp/tests/properties/bar_through_gap.rs`). A tool exactly square to a symmetric gap feels no moment at all: a
+//! local minimum, reported as a stall like the paper's.
+//!
 //! | concept | file |
 //! | --- | --- |
 //! | control points: surface or axis samples | [`sampling`] |

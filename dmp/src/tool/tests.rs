@@ -124,7 +124,7 @@ fn static_method(pick: bool, gain: f64) -> Method {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 48, max_global_rejects: 4096, failure_persistence: None, ..ProptestConfig::default() })]
 
     #[test]
     fn static_force_and_moment_are_minus_the_derivatives_of_the_summed_potential(
@@ -351,4 +351,39 @@ fn refusals_name_the_field() {
     let mut out = [0.0; 3];
     f.add(0.0, &[0.4, 0.1, 0.0], &[0.0; 3], 1.0, &mut out);
     assert_eq!(out, [0.0; 3]);
+}
+
+/// Each of the five methods pushes and turns a tool that moves toward an obstacle off its centre line.
+#[test]
+fn every_method_pushes_and_turns_the_tool() {
+    let obstacle = Obstacle::new(
+        "o",
+        Shape::Superquadric(Superquadric::ellipsoid(vec![0.1, 0.1, 0.1]).unwrap()),
+        vec![0.5, 0.2, 0.0],
+        None,
+        None,
+    )
+    .unwrap();
+    // The bar across the x axis (tool x along world y), its middle at the origin, moving along +x: its +y half
+    // heads for the obstacle.
+    let q = exp(&Vector3::new(0.0, 0.0, std::f64::consts::FRAC_PI_2));
+    let x = state(&Vector3::new(0.3, 0.0, 0.0), &q);
+    let mut v = [0.0; 6];
+    v[0] = 1.0;
+    for method in [
+        Method::StaticPoint(StaticPoint { eta: 1.0, p0: 0.3 }),
+        Method::DynamicPoint(DynamicPoint { lambda: 2.0, beta: 2.0 }),
+        Method::SteeringAngle(SteeringAngle { gamma: 20.0, beta: 3.0 }),
+        Method::StaticVolumetric(StaticVolumetric { a: 10.0, eta: 1.0 }),
+        Method::DynamicVolumetric(DynamicVolumetric { lambda: 10.0, beta: 2.0, eta: 0.5 }),
+    ] {
+        let scene = Scene::with_obstacles(vec![obstacle.clone()], Avoidance::new(method), SAMPLES);
+        let mut f = ToolField::new(bar(ControlPoints::axis()), scene, q_ref()).unwrap();
+        let w = f.wrench(0.0, &x, &v, 1.0);
+        assert!(w.force.norm() > 1e-6, "{}: {w:?}", method.name());
+        assert!(w.moment.norm() > 1e-6, "{}: {w:?}", method.name());
+        let mut out = [0.0; 6];
+        f.add(0.0, &x, &v, 1.0, &mut out);
+        assert!(out[3..].iter().any(|o| o.abs() > 1e-6), "{}: {out:?}", method.name());
+    }
 }
