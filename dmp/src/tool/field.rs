@@ -29,7 +29,8 @@ pub struct Wrench {
 /// Each control point is a robot of [`RepulsiveField`]: the same five methods, the same relative velocity of
 /// moving obstacles, the same floor on `C` inside an obstacle and the same cap on each point's term. The summed
 /// force and the angular term are each capped at [`DEFAULT_MAX_PERTURBATION`] too, so no state with finite entries
-/// gives a term that is not finite.
+/// gives a term that is not finite (`J(y)⁻¹` grows without bound as `|y|` nears `2π`, where the chart ends; the
+/// cap holds there).
 #[derive(Debug, Clone)]
 pub struct ToolField {
     field: RepulsiveField,

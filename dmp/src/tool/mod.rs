@@ -23,10 +23,12 @@
 //!   `M = sum_i a_i × phi_i`, `I_w = R I Rᵀ` and `I = (1 / N) sum_i (|r_i|² 1 - r_i r_iᵀ)` ([`inertia`]).
 //!
 //! These are the Newton–Euler equations of a rigid body of unit mass spread evenly over the control points, each
-//! pulled by its `phi_i`: `F` is the acceleration of the origin (times `tau²`, as in the paper's term) and
-//! `I_w⁻¹ M` the angular acceleration `tau² ω̇` (in rad: `phi` is in m, `M` in m², `I` in m²), which
-//! `ω̇ = J(y) ÿ + J̇ ẏ` maps to the chart as `tau² ÿ = J(y)⁻¹ tau² ω̇` (the `J̇ ẏ` part belongs to the
-//! orientation DMP's own motion, not to the coupling; the gyroscopic `ω × I ω` is left out likewise). The inertia
+//! pulled by its `phi_i`, written about the tool origin `p`: `F` is the acceleration of the origin (times `tau²`,
+//! as in the paper's term) and `I_w⁻¹ M` the angular acceleration `tau² ω̇` (in rad: `phi` is in m, `M` in m², `I`
+//! in m²), which `ω̇ = J(y) ÿ + J̇ ẏ` maps to the chart as `tau² ÿ = J(y)⁻¹ tau² ω̇`. Left out, as a Cartesian
+//! impedance about a robot's tool centre point leaves them out: the `J̇ ẏ` part (it belongs to the orientation
+//! DMP's own motion, not to the coupling), the gyroscopic `ω × I ω`, and the coupling of translation and rotation
+//! when the points' centroid is not at `p` (a tool held off its middle). The inertia
 //! normalises the moment: a moment in m² becomes an angle, so the orientation gains `K`, `D` (per radian) and the
 //! coupling meet in the same units, whatever the tool's size. Where `I` is singular (a tool sampled on its axis:
 //! no moment about the axis exists) its pseudo-inverse is used.
