@@ -98,10 +98,10 @@ impl ControlPoints {
     /// `|y_i| <= a_i`) lies of some control point: the half-thickness (largest other semi-axis, times `sqrt 2` for
     /// the box's corner) plus half the spacing. An isopotential that holds every point within this distance of an
     /// obstacle keeps the whole tool off the obstacle while every control point stays outside it: the paper's
-    /// inflation by the held object's size, made for the axis. (Adding it to the semi-axes is the paper's way, and
-    /// holds that set for ellipsoids; the corners of a box-like superquadric need a little more room, as the pegs
-    /// of `dmp/tests/properties/bar_through_gap.rs` get.) `None` for surface samples: the gaps between them are
-    /// not bounded here.
+    /// inflation by the held object's size, made for the axis. (Adding it to the semi-axes, the paper's way, holds
+    /// that set exactly for a ball only; elongated and box-like shapes need more room, as the pegs of
+    /// `dmp/tests/properties/bar_through_gap.rs` get.) `None` for surface samples: the gaps between them are not
+    /// bounded here.
     pub fn reach(&self, shape: &Shape) -> Option<f64> {
         match *self {
             ControlPoints::Surface { .. } => None,
