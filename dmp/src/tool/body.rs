@@ -82,6 +82,14 @@ impl Tool {
 /// # Formula
 /// `I = (1 / N) sum_i (|r_i|² 1 - r_i r_iᵀ)`: symmetric, positive semi-definite; `I ω` is the angular momentum of
 /// the points turning at `ω`. In m² (per unit mass).
+///
+/// ```
+/// use dmp::tool::inertia;
+/// use nalgebra::Vector3;
+/// // The two tips of a 0.6 m bar along x: nothing about x, 0.09 m² about y and z.
+/// let i = inertia(&[Vector3::new(-0.3, 0.0, 0.0), Vector3::new(0.3, 0.0, 0.0)]);
+/// assert!(i[(0, 0)].abs() < 1e-15 && (i[(1, 1)] - 0.09).abs() < 1e-15 && (i[(2, 2)] - 0.09).abs() < 1e-15);
+/// ```
 pub fn inertia(points: &[Vector3<f64>]) -> Matrix3<f64> {
     let mut m = Matrix3::zeros();
     for r in points {
