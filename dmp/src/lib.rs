@@ -18,6 +18,7 @@
 //! | rollouts, stalls | [`mod@rollout`], [`stall`] |
 //! | the ranges that keep every term finite | [`ranges`] |
 //! | orientation DMPs on unit quaternions (feature `orientation`) | [`orientation`] |
+//! | a held tool: repulsive terms on its control points drive position and orientation | [`tool`] |
 
 pub mod avoidance;
 pub mod basis;
@@ -42,6 +43,8 @@ pub mod ranges;
 pub mod rollout;
 pub mod scenario;
 pub mod stall;
+#[cfg(feature = "orientation")]
+pub mod tool;
 
 pub use avoidance::{Avoidance, Method};
 pub use error::{DmpError, InvalidInput, Result};

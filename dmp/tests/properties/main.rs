@@ -5,6 +5,7 @@
 //! Measured numbers are printed with `eprintln!` (`cargo test -p dmp --test properties -- --nocapture`).
 
 mod arrival;
+mod bar_through_gap;
 mod changing_the_motion;
 mod fixtures;
 mod guard_rails;
