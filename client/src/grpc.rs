@@ -216,7 +216,8 @@ impl DmpClient {
         rows: &[Vec<f64>],
         parameters: v1::LearnParameters,
     ) -> Result<v1::PrimitiveRecord, ClientError> {
-        self.learn_pose(robot, name, t, rows, &[], parameters).await
+        // Boxed: the request's future would otherwise sit twice on the caller's stack.
+        Box::pin(self.learn_pose(robot, name, t, rows, &[], parameters)).await
     }
 
     /// Learns a pose primitive from positions and one orientation `[x, y, z, w]` per sample (none: a position

@@ -279,6 +279,12 @@ pub fn run(cli: Cli) -> Result<String, DmpctlError> {
 
 /// Runs a parsed command line inside a multi-threaded tokio runtime.
 pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
+    // On the heap: the commands' futures together are larger than a test thread's or a worker's stack allows in
+    // a debug build.
+    Box::pin(dispatch(cli)).await
+}
+
+async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
     let options =
         cli.connect.options(std::env::var(TOKEN_ENV).ok(), |w| eprintln!("dmpctl: warning: {w}"))?;
     let default_server = if options.tls.is_some() { "https://127.0.0.1:50051" } else { DEFAULT_SERVER };
@@ -310,7 +316,8 @@ pub async fn run_async(cli: Cli) -> Result<String, DmpctlError> {
             }
         },
         Command::Scenario(ScenarioCommand::Bench { file, repeat }) => bench(file, *repeat),
-        Command::Learn(a) => server_commands::learn(&connect().await?, a).await,
+        // Boxed, as the other large commands: one future per command, not the largest of all on the stack.
+        Command::Learn(a) => Box::pin(server_commands::learn(&connect().await?, a)).await,
         Command::List { robot } => server_commands::list(&connect().await?, robot).await,
         Command::Show { robot, name, version } => {
             server_commands::show(&connect().await?, robot, name, *version).await

@@ -87,6 +87,8 @@ impl Execution {
         // as a whole.
         self.field.contacts_along(p.start_time, dt, &p.x, n, &mut p.contacts);
         self.cellmates.contacts_along(p.start_time, dt, &p.x, n, &mut p.cellmate_contacts);
+        #[cfg(feature = "orientation")]
+        self.tool_contacts(p.start_time, &p.x, n, &mut p.contacts, &mut p.cellmate_contacts);
         for (fi, contacts) in [&p.contacts, &p.cellmate_contacts].into_iter().enumerate() {
             let f = if fi == 0 { &self.field } else { &self.cellmates };
             for (_, c) in contacts {

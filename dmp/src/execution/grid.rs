@@ -57,7 +57,13 @@ impl Execution {
             hold_step(&self.primitive, self.motion.tau, s, h, &mut self.knot0.xdd);
             hold_acc(&self.primitive, self.motion.tau, &s.xd, &mut k1.xdd);
         } else {
-            let mut both = FieldSum { field: &mut self.field, mates: &mut self.cellmates, diagnosis };
+            let mut both = FieldSum::new(
+                &mut self.field,
+                &mut self.cellmates,
+                diagnosis,
+                self.tool.as_ref(),
+                self.chart.as_ref(),
+            );
             let known = self.acc0_current;
             self.integrator.step_from(&self.motion, &mut both, s, h, &mut self.knot0.xdd, known);
             self.cost.steps += 1;
@@ -94,7 +100,13 @@ impl Execution {
         loop {
             let h = points as f64 * self.stepping.dt;
             let diagnosis = diagnosis.as_deref_mut();
-            let mut both = FieldSum { field: &mut self.field, mates: &mut self.cellmates, diagnosis };
+            let mut both = FieldSum::new(
+                &mut self.field,
+                &mut self.cellmates,
+                diagnosis,
+                self.tool.as_ref(),
+                self.chart.as_ref(),
+            );
             let err = self.integrator.step_dormand_prince(
                 &self.motion,
                 &mut both,

@@ -84,10 +84,30 @@ pub(super) struct FieldSum<'a> {
     pub(super) field: &'a mut RepulsiveField,
     pub(super) mates: &'a mut RepulsiveField,
     pub(super) diagnosis: Option<&'a mut Diagnosis>,
+    /// A pose run's tool and chart: both fields act on its control points ([`super::tool`]).
+    #[cfg_attr(not(feature = "orientation"), allow(dead_code))]
+    pub(super) tool: Option<(&'a super::pose::HeldTool, &'a super::pose::Chart)>,
+}
+
+impl<'a> FieldSum<'a> {
+    pub(super) fn new(
+        field: &'a mut RepulsiveField,
+        mates: &'a mut RepulsiveField,
+        diagnosis: Option<&'a mut Diagnosis>,
+        tool: Option<&'a super::pose::HeldTool>,
+        chart: Option<&'a super::pose::Chart>,
+    ) -> Self {
+        Self { field, mates, diagnosis, tool: tool.zip(chart) }
+    }
 }
 
 impl Perturbation for FieldSum<'_> {
     fn add(&mut self, t: f64, x: &[f64], v: &[f64], tau: f64, out: &mut [f64]) {
+        #[cfg(feature = "orientation")]
+        if let Some((tool, chart)) = self.tool {
+            super::tool::add_on_tool(self.field, self.mates, tool, chart, t, x, v, tau, out);
+            return;
+        }
         if let Some(d) = self.diagnosis.as_deref_mut()
             && d.obstacles.is_empty()
             && d.robots.is_empty()

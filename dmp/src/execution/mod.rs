@@ -28,6 +28,8 @@ mod hold;
 mod ignored;
 mod pose;
 mod stepping;
+#[cfg(feature = "orientation")]
+mod tool;
 
 use crate::avoidance::Avoidance;
 use crate::dense::{Interpolant, Knot};
@@ -198,6 +200,9 @@ pub struct Execution {
     /// A pose run: the chart of its last three dimensions.
     #[cfg_attr(not(feature = "orientation"), allow(dead_code))]
     chart: Option<pose::Chart>,
+    /// A pose run's tool: the field acts on its control points ([`crate::tool`]).
+    #[cfg_attr(not(feature = "orientation"), allow(dead_code))]
+    tool: Option<pose::HeldTool>,
 }
 
 impl Execution {
@@ -279,6 +284,7 @@ impl Execution {
             ignored: Ignored::default(),
             cost: IntegrationCost::default(),
             chart,
+            tool: None,
             primitive,
             stepping,
         })

@@ -24,6 +24,12 @@ pub(super) type Chart = nalgebra::UnitQuaternion<f64>;
 #[cfg(not(feature = "orientation"))]
 pub(super) type Chart = std::convert::Infallible;
 
+/// A tool held by a pose run ([`crate::tool`]), or nothing.
+#[cfg(feature = "orientation")]
+pub(super) type HeldTool = crate::tool::Tool;
+#[cfg(not(feature = "orientation"))]
+pub(super) type HeldTool = std::convert::Infallible;
+
 /// The chart of a primitive: its own (a learned pose primitive's is at its goal).
 pub(super) fn chart_of(p: &Primitive) -> Result<Option<Chart>> {
     #[cfg(feature = "orientation")]

@@ -95,8 +95,7 @@ impl ToolField {
 
     /// The angular term in chart coordinates for a moment `M` at `pose`: `J(y)⁻¹ R I⁻¹ Rᵀ M` (module formula).
     pub fn angular_term(&self, pose: &ToolPose, moment: &Vector3<f64>) -> Vector3<f64> {
-        let r = &pose.rotation;
-        log_jacobian(&pose.chart) * (r * (self.tool.inertia_inverse() * (r.transpose() * moment)))
+        angular_term(&self.tool, pose, moment)
     }
 }
 
@@ -118,9 +117,16 @@ impl Perturbation for ToolField {
     }
 }
 
+/// The angular term in chart coordinates for a moment `M` on `tool` at `pose`: `J(y)⁻¹ R I⁻¹ Rᵀ M` (module
+/// formula).
+pub fn angular_term(tool: &Tool, pose: &ToolPose, moment: &Vector3<f64>) -> Vector3<f64> {
+    let r = &pose.rotation;
+    log_jacobian(&pose.chart) * (r * (tool.inertia_inverse() * (r.transpose() * moment)))
+}
+
 /// `v` scaled down to norm `max` when longer; a vector that is not finite (the sums of capped terms never are,
 /// unless the state is not) becomes zero, as a term with no direction.
-fn cap(v: Vector3<f64>, max: f64) -> Vector3<f64> {
+pub fn cap(v: Vector3<f64>, max: f64) -> Vector3<f64> {
     let n = v.norm();
     if !n.is_finite() {
         Vector3::zeros()

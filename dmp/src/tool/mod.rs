@@ -61,7 +61,7 @@ pub mod kinematics;
 pub mod sampling;
 
 pub use body::{Tool, inertia};
-pub use field::{POSE_DIM, ToolField, Wrench};
+pub use field::{POSE_DIM, ToolField, Wrench, angular_term, cap};
 pub use kinematics::{PointMotion, ToolPose};
 pub use sampling::ControlPoints;
 

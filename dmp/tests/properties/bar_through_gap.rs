@@ -361,3 +361,56 @@ fn squarely_across_the_bar_first_stalls() {
     assert!(run.min_clearance > 0.0);
     assert!(!run.non_finite);
 }
+
+/// The one execution engine carries the tool as the integrator above does: with the tool attached
+/// ([`dmp::Execution::set_tool`]) the run's field acts on the control points, and the served and offline paths
+/// step the same run. RK4 at the same step: the states agree to rounding, the bar passes and no contact is judged
+/// on its control points.
+#[test]
+fn the_execution_carries_the_tool_as_the_integrator_does() {
+    use dmp::execution::CellMateAvoidance;
+    use dmp::{Execution, OrientationChart, Stepping};
+    let (layout, method) = (LEVEL, methods()[1]);
+    let mut p = LEVEL_PRIMITIVE.clone();
+    p.orientation = Some(OrientationChart { reference: to_xyzw(&across()) });
+    let tool = bar_tool();
+    let margin = tool.sampling().reach(tool.shape()).unwrap();
+    let scene = Scene::with_obstacles(pegs(&layout, margin), Avoidance::new(method), 50);
+    let motion = Motion { start: p.start.clone(), goal: p.goal.clone(), tau: TAU };
+    let mut e =
+        Execution::new(p.clone(), motion.clone(), scene, CellMateAvoidance::NONE, Stepping::rk4(DT), 0)
+            .unwrap();
+    e.set_tool(Some(tool)).unwrap();
+    // The integrator's states at every step (the execution's first point is the start itself).
+    let mut field = tool_aware(&layout, method, across());
+    let mut integrator = Integrator::new(&p).unwrap();
+    let mut state = State::at_rest(&motion.start);
+    let mut acc = vec![0.0; 6];
+    let mut expected = vec![state.x.clone()];
+    for _ in 0..(DURATION / DT).round() as usize - 1 {
+        integrator.step(&motion, &mut field, &mut state, DT, &mut acc);
+        expected.push(state.x.clone());
+    }
+    let mut got = Vec::new();
+    let mut contacts = 0;
+    while got.len() < expected.len() {
+        let s = e.advance(500.min(expected.len() - got.len())).unwrap();
+        contacts += s.contacts.len();
+        got.extend(s.x.chunks_exact(6).map(<[f64]>::to_vec));
+    }
+    let worst = got
+        .iter()
+        .zip(&expected)
+        .flat_map(|(a, b)| a.iter().zip(b).map(|(a, b)| (a - b).abs()))
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-9, "the execution departs from the integrator by {worst}");
+    assert_eq!(contacts, 0, "no control point enters a peg's isopotential");
+    let end = Vector3::from_column_slice(&got.last().unwrap()[..3]);
+    assert!(layout.passed(&end), "the bar passes: {end:?}");
+    // A position primitive cannot hold a tool.
+    let mut plain = p.clone();
+    plain.orientation = None;
+    let mut e =
+        Execution::new(plain, motion, Scene::empty(), CellMateAvoidance::NONE, Stepping::rk4(DT), 0).unwrap();
+    assert_eq!(e.set_tool(Some(bar_tool())).unwrap_err().field, "tool");
+}
