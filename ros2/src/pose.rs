@@ -74,6 +74,14 @@ impl Rigid {
         Rigid { t: [self.t[0] + r[0], self.t[1] + r[1], self.t[2] + r[2]], q: hamilton(self.q, other.q) }
     }
 
+    /// The inverse transform: `self.inverse().then(self)` is the identity.
+    pub fn inverse(&self) -> Rigid {
+        let [x, y, z, w] = self.q;
+        let inv = Rigid { t: [0.0; 3], q: [-x, -y, -z, w] };
+        let t = inv.rotate(self.t);
+        Rigid { t: [-t[0], -t[1], -t[2]], q: inv.q }
+    }
+
     /// A point of this frame in the outer frame.
     pub fn apply(&self, p: [f64; 3]) -> [f64; 3] {
         let r = self.rotate(p);
@@ -132,6 +140,8 @@ mod tests {
         let twice = r.then(&r);
         assert!(close(twice.apply([1.0, 0.0, 0.0]), r.apply(r.apply([1.0, 0.0, 0.0]))));
         assert!(close(twice.rotate([1.0, 0.0, 0.0]), [-1.0, 0.0, 0.0]));
+        let back = r.inverse().then(&r);
+        assert!(close(back.t, [0.0; 3]) && close(back.rotate([0.3, 0.2, 0.1]), [0.3, 0.2, 0.1]));
     }
 
     #[test]

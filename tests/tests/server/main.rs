@@ -14,6 +14,8 @@ mod matches_the_engine;
 mod metrics;
 mod primitives;
 mod python_clients;
+mod ros2_bridge;
+mod ros2_golden;
 mod scene_over_zenoh;
 mod sessions_and_groups;
 mod stale_scene;
