@@ -8,9 +8,13 @@
 //! | the messages, one module per ROS package | [`msgs`] |
 //! | rotations and poses: quaternions, composition, rotation matrices | [`pose`] |
 //! | `<domain>/<topic>/<type>/<hash>` keys, and the type names and hashes | [`keys`] |
+//! | the attachment of every sample: sequence number, source timestamp, publisher GID | [`attachment`] |
+//! | the liveliness tokens that list a node and its publishers in ROS 2's graph, and GIDs | [`liveliness`] |
 
+pub mod attachment;
 pub mod cdr;
 pub mod keys;
+pub mod liveliness;
 pub mod msgs;
 pub mod pose;
 

@@ -47,6 +47,26 @@ impl Rigid {
         Ok(Self { t, q: q.map(|v| v / n) })
     }
 
+    /// The transform of a rotation matrix (row-major rows, columns the frame's axes, assumed orthonormal) and a
+    /// translation: the quaternion by Shepperd's method (from the largest of `w`, `x`, `y`, `z`).
+    pub fn from_matrix(t: [f64; 3], m: [[f64; 3]; 3]) -> Self {
+        let tr = m[0][0] + m[1][1] + m[2][2];
+        let q = if tr > 0.0 {
+            let s = 2.0 * (1.0 + tr).sqrt();
+            [(m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s, 0.25 * s]
+        } else if m[0][0] > m[1][1] && m[0][0] > m[2][2] {
+            let s = 2.0 * (1.0 + m[0][0] - m[1][1] - m[2][2]).sqrt();
+            [0.25 * s, (m[0][1] + m[1][0]) / s, (m[0][2] + m[2][0]) / s, (m[2][1] - m[1][2]) / s]
+        } else if m[1][1] > m[2][2] {
+            let s = 2.0 * (1.0 + m[1][1] - m[0][0] - m[2][2]).sqrt();
+            [(m[0][1] + m[1][0]) / s, 0.25 * s, (m[1][2] + m[2][1]) / s, (m[0][2] - m[2][0]) / s]
+        } else {
+            let s = 2.0 * (1.0 + m[2][2] - m[0][0] - m[1][1]).sqrt();
+            [(m[0][2] + m[2][0]) / s, (m[1][2] + m[2][1]) / s, 0.25 * s, (m[1][0] - m[0][1]) / s]
+        };
+        Self { t, q }
+    }
+
     /// The transform of a message's pose.
     pub fn from_pose(p: &Pose, field: &str) -> Result<Self, PoseError> {
         let Point { x, y, z } = p.position;
@@ -140,6 +160,12 @@ mod tests {
         let twice = r.then(&r);
         assert!(close(twice.apply([1.0, 0.0, 0.0]), r.apply(r.apply([1.0, 0.0, 0.0]))));
         assert!(close(twice.rotate([1.0, 0.0, 0.0]), [-1.0, 0.0, 0.0]));
+        for q in [r.q, twice.q, [0.3, -0.5, 0.1, 0.8]] {
+            let a = Rigid::new([0.0; 3], q, "q").unwrap();
+            let b = Rigid::from_matrix([0.0; 3], a.matrix());
+            let m = (a.matrix(), b.matrix());
+            assert!((0..3).all(|i| close(m.0[i], m.1[i])), "{q:?}");
+        }
         let back = r.inverse().then(&r);
         assert!(close(back.t, [0.0; 3]) && close(back.rotate([0.3, 0.2, 0.1]), [0.3, 0.2, 0.1]));
     }

@@ -7,6 +7,7 @@
 //! | --- | --- | --- |
 //! | `/collision_object` | `moveit_msgs/msg/CollisionObject` | objects' shapes as obstacles ([`collision`], [`shapes`]) |
 //! | configured | `nav2_dynamic_msgs/msg/ObstacleArray` | tracked boxes, moving ([`obstacle_array`]) |
+//! | out: `/dmp/<cell>/markers` | `visualization_msgs/msg/MarkerArray` | each cell's obstacles for RViz ([`markers`]) |
 //!
 //! A message whose `header.frame_id` is neither the cell's frame (`ros2.frame`, `world`) nor a frame of
 //! `ros2.static_transforms` is refused; so is one that does not decode or breaks a rule. Every refusal is logged
@@ -15,6 +16,7 @@
 
 pub mod collision;
 pub mod config;
+pub mod markers;
 pub mod obstacle_array;
 pub mod shapes;
 
@@ -137,6 +139,8 @@ impl Inbox {
 pub struct Ros2Bridge {
     subscribers: Vec<Subscriber<()>>,
     counters: Arc<Ros2Counters>,
+    markers: tokio::task::JoinHandle<()>,
+    stop: tokio_util::sync::CancellationToken,
 }
 
 impl Ros2Bridge {
@@ -156,7 +160,7 @@ impl Ros2Bridge {
         let counters = Arc::new(Ros2Counters::default());
         let inbox = Arc::new(Inbox {
             config: config.clone(),
-            cells,
+            cells: cells.clone(),
             clock,
             objects: Mutex::default(),
             tracks: Mutex::default(),
@@ -179,7 +183,10 @@ impl Ros2Bridge {
             info!(%key, cell = %topic.cell, "ros2 topic subscribed");
             subscribers.push(sub);
         }
-        Ok(Self { subscribers, counters })
+        let stop = tokio_util::sync::CancellationToken::new();
+        let markers =
+            markers::spawn(session.clone(), domain, config.frame.clone(), cells, clock, stop.clone());
+        Ok(Self { subscribers, counters, markers, stop })
     }
 
     /// What the bridge took and refused so far.
@@ -187,8 +194,12 @@ impl Ros2Bridge {
         self.counters.clone()
     }
 
-    /// Undeclares the subscribers, waiting for running callbacks.
+    /// Stops the markers' publisher and undeclares the subscribers, waiting for running callbacks.
     pub async fn close(self) {
+        self.stop.cancel();
+        if let Err(e) = self.markers.await {
+            warn!(error = %e, "ros2 markers task failed");
+        }
         let subscribers = self.subscribers;
         let done = tokio::task::spawn_blocking(move || {
             for s in subscribers {

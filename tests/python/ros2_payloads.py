@@ -6,6 +6,9 @@
     ros2_payloads.py MSG_DIR hashes    `<type> <RIHS01 hash>` of the types the server publishes (Jazzy)
     ros2_payloads.py MSG_DIR encode    one JSON line per case: name, type, cdr (hex), value (as rosbags reads it back)
     ros2_payloads.py MSG_DIR decode    reads JSON lines {name, type, cdr} and writes {name, value}
+    ros2_payloads.py MSG_DIR attachment SEQ TIME
+                                       rmw_zenoh's attachment (int64, int64, 16 bytes 0..15 as a sequence) in
+                                       eclipse-zenoh's zenoh-ext serialization, as hex
 
 The types rosbags does not ship (moveit_msgs, object_recognition_msgs, nav2_dynamic_msgs) are registered from the
 .msg files of MSG_DIR.
@@ -154,6 +157,11 @@ def main():
             case = json.loads(line)
             value = plain(ts, ts.deserialize_cdr(bytes.fromhex(case["cdr"]), case["type"]))
             print(json.dumps({"name": case["name"], "value": value}), flush=True)
+    elif mode == "attachment":
+        import zenoh.ext as ze
+
+        seq, stamp = int(sys.argv[3]), int(sys.argv[4])
+        print(ze.z_serialize((ze.Int64(seq), ze.Int64(stamp), [ze.UInt8(i) for i in range(16)])).to_bytes().hex())
     else:
         sys.exit(f"unknown mode {mode}")
 

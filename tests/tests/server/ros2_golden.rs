@@ -17,10 +17,11 @@ use serde_json::{Value, json};
 use super::python_clients::{python, workspace};
 
 fn payloads(mode: &str, stdin: &str) -> Vec<String> {
+    let mut args = mode.split(' ');
     let mut child = Command::new(python())
         .arg(workspace().join("tests/python/ros2_payloads.py"))
         .arg(workspace().join("ros2/msg"))
-        .arg(mode)
+        .args(&mut args)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
@@ -93,6 +94,17 @@ fn the_msg_files_are_rosbags_humble_and_jazzy_definitions() {
     assert!(lines.len() >= 40, "{lines:?}");
     let bad: Vec<&String> = lines.iter().filter(|l| !l.starts_with("ok ")).collect();
     assert!(bad.is_empty(), "{bad:?}");
+}
+
+#[test]
+fn the_attachment_is_zenoh_ext_serialization() {
+    let a = dmp_ros2::attachment::Attachment {
+        sequence_number: 42,
+        source_timestamp: -1_764_100_000_123_456_789,
+        source_gid: std::array::from_fn(|i| i as u8),
+    };
+    let lines = payloads("attachment 42 -1764100000123456789", "");
+    assert_eq!(lines, vec![hex::encode(a.encode())]);
 }
 
 #[test]
