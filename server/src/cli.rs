@@ -71,6 +71,10 @@ pub struct Args {
     /// `access_control` replaces the generated one.
     #[arg(long, value_name = "FILE")]
     pub zenoh_config: Option<PathBuf>,
+    /// Take ROS 2 topics over rmw_zenoh in this ROS domain (`ROS_DOMAIN_ID`): MoveIt's `/collision_object` and the
+    /// topics of the file's `[ros2]` section [default: off].
+    #[arg(long, value_name = "N")]
+    pub ros2_domain: Option<u32>,
     /// Run without Zenoh (gRPC only).
     #[arg(long)]
     pub no_zenoh: bool,
@@ -172,6 +176,10 @@ pub fn load_config(args: &Args) -> anyhow::Result<Config> {
     if args.no_zenoh {
         config.zenoh.disabled = true;
     }
+    if args.ros2_domain.is_some() {
+        config.ros2.domain = args.ros2_domain;
+    }
+    config.ros2.check().map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(config)
 }
 

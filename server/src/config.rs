@@ -33,6 +33,8 @@ pub struct Config {
     pub scene: SceneConfig,
     /// TLS, the access file, and what may listen beyond loopback ([`crate::exposure`]).
     pub security: SecurityConfig,
+    /// ROS 2 over rmw_zenoh ([`crate::ros2`]); off unless its domain is set.
+    pub ros2: crate::ros2::config::Ros2Config,
 }
 
 /// TLS and access control. Without an access file and TLS the server listens on loopback only, unless `insecure`.
@@ -66,6 +68,7 @@ impl Default for Config {
             compute: ComputeConfig::default(),
             scene: SceneConfig::default(),
             security: SecurityConfig::default(),
+            ros2: Default::default(),
         }
     }
 }

@@ -16,6 +16,7 @@
 //! | which robot states from outside a cell takes (stamp, workspace, speed) | [`state_admission`] |
 //! | one stream per executing robot of a cell, and taking over | [`executing`] |
 //! | the Zenoh session and the subscribers that feed the scene | [`zenoh_bridge`] |
+//! | ROS 2 over rmw_zenoh: MoveIt's collision objects and tracked obstacles into the scene | [`ros2`] |
 //! | the gRPC services, one file each | [`services`] |
 //! | served runs: the engine's execution paced into gRPC streams | [`executor`] |
 //! | many streams' segments in one write on a connection | [`write_batching`] |
@@ -41,6 +42,7 @@ pub mod exposure;
 pub mod memory;
 pub mod metrics;
 pub mod robots;
+pub mod ros2;
 pub mod run;
 pub mod services;
 pub mod staleness;

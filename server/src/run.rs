@@ -55,6 +55,7 @@ pub struct ServerHandle {
     pub metrics_addr: Option<SocketAddr>,
     state: Arc<AppState>,
     bridge_malformed: Option<Arc<std::sync::atomic::AtomicU64>>,
+    ros2: Option<Arc<crate::ros2::Ros2Counters>>,
     task: JoinHandle<Result<(), ServerError>>,
 }
 
@@ -79,6 +80,11 @@ impl ServerHandle {
             );
         }
         Ok(n)
+    }
+
+    /// What the ROS 2 bridge took and refused; none without `ros2.domain`.
+    pub fn ros2_counters(&self) -> Option<&Arc<crate::ros2::Ros2Counters>> {
+        self.ros2.as_ref()
     }
 
     /// Streams currently open (executions and watches).
@@ -149,6 +155,16 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         (Some(session), Some(bridge), robots, locs)
     };
     let bridge_malformed = bridge.as_ref().map(|b| b.malformed_counter());
+    let ros2_bridge = match (&session, &bridge_malformed, config.ros2.domain) {
+        (Some(s), Some(m), Some(_)) => {
+            Some(crate::ros2::Ros2Bridge::start(s, &config.ros2, cells.clone(), clock, m.clone()).await?)
+        }
+        (None, _, Some(_)) => {
+            return Err(ServerError::FailedPrecondition("ros2.domain needs Zenoh (not --no-zenoh)".into()));
+        }
+        _ => None,
+    };
+    let ros2 = ros2_bridge.as_ref().map(|b| b.counters());
 
     let compute = Compute::start(&config.compute)
         .map_err(|e| ServerError::Internal(format!("cannot start the compute threads: {e}")))?;
@@ -262,6 +278,9 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
                 Ok(())
             }
         };
+        if let Some(b) = ros2_bridge {
+            b.close().await;
+        }
         if let Some(b) = bridge {
             b.close().await;
         }
@@ -285,7 +304,7 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         insecure = state.exposure.insecure(),
         "serving"
     );
-    Ok(ServerHandle { grpc_addr, zenoh_locators, metrics_addr, state, bridge_malformed, task })
+    Ok(ServerHandle { grpc_addr, zenoh_locators, metrics_addr, state, bridge_malformed, ros2, task })
 }
 
 /// Runs the server until `shutdown` completes (the binary passes SIGINT or SIGTERM), then stops it cleanly. Each

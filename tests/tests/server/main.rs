@@ -15,6 +15,8 @@ mod metrics;
 mod poses;
 mod primitives;
 mod python_clients;
+mod ros2_bridge;
+mod ros2_golden;
 mod scene_over_zenoh;
 mod sessions_and_groups;
 mod stale_scene;

@@ -16,12 +16,12 @@ use dmp_tests::within;
 
 use crate::{line, secured_cell_a, until};
 
-fn workspace() -> PathBuf {
+pub(crate) fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_owned()
 }
 
 /// The Python with grpcio, grpcio-tools and eclipse-zenoh.
-fn python() -> PathBuf {
+pub(crate) fn python() -> PathBuf {
     let python = std::env::var_os("DMP_TEST_PYTHON")
         .map_or_else(|| workspace().join(".venv/bin/python"), PathBuf::from);
     assert!(
