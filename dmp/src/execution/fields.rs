@@ -18,6 +18,7 @@ impl Execution {
         self.rebase();
         let t = self.out_t;
         let sub = self.field.agent_dim();
+        let margin = self.tool_margin();
         let mut obstacles = Vec::new();
         let mut other_dim = Vec::new();
         for (o, age) in seen {
@@ -32,7 +33,8 @@ impl Execution {
             let mut now = vec![0.0; sub];
             o.center_at(age, &mut now);
             let c0: Vec<f64> = now.iter().zip(o.velocity()).map(|(c, v)| c - v * t).collect();
-            obstacles.push(o.with_center(c0));
+            let placed = o.with_center(c0);
+            obstacles.push(if margin > 0.0 { placed.inflated(margin)? } else { placed });
         }
         self.ignored.set_other_dim(other_dim, sub);
         obstacles.extend(self.scene.obstacles.iter().filter(|o| !self.ignored.is_dropped(o)).cloned());

@@ -140,3 +140,10 @@ mod with_orientation {
         }
     }
 }
+
+#[cfg(not(feature = "orientation"))]
+impl Execution {
+    pub(super) fn tool_margin(&self) -> f64 {
+        0.0
+    }
+}

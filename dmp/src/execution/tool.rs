@@ -11,9 +11,10 @@ use crate::integrate::Perturbation;
 use crate::tool::{Tool, ToolPose, angular_term, cap};
 
 impl Execution {
-    /// Holds `tool` (or nothing) from the next output point on: the obstacles and cell-mates act on its control
-    /// points, which turns the run's orientation ([`crate::tool`]), and contacts are judged on them. Only for a
-    /// pose run moving in 3-D; the error names `tool`.
+    /// Holds `tool` (or nothing): the obstacles and cell-mates act on its control points, which turns the run's
+    /// orientation ([`crate::tool`]), and contacts are judged on them. A tool sampled on its axis inflates every
+    /// obstacle by [`crate::tool::ControlPoints::reach`] (the run's own now, the cell's as they are set). Only for
+    /// a pose run moving in 3-D, before its first point; the error names `tool`.
     pub fn set_tool(&mut self, tool: Option<Tool>) -> Result<(), InvalidInput> {
         if tool.is_some() && (self.chart.is_none() || self.primitive.position_dim() != 3) {
             return Err(InvalidInput::new(
@@ -21,9 +22,27 @@ impl Execution {
                 "a tool needs a pose primitive (positions and orientations) moving in 3-D",
             ));
         }
+        if self.has_last || self.out_t != 0.0 {
+            return Err(InvalidInput::new("tool", "a tool is attached before the first point"));
+        }
         self.rebase();
         self.tool = tool;
+        let margin = self.tool_margin();
+        if margin > 0.0 {
+            let mut obstacles = Vec::with_capacity(self.scene.obstacles.len());
+            for o in &self.scene.obstacles {
+                obstacles.push(o.inflated(margin).map_err(|e| InvalidInput::new("tool", e.to_string()))?);
+            }
+            self.scene.obstacles = obstacles;
+            self.field = RepulsiveField::new(self.scene.clone(), self.primitive.dim)
+                .map_err(|e| InvalidInput::new("tool", e.to_string()))?;
+        }
         Ok(())
+    }
+
+    /// How much the obstacles are inflated for the tool: its axis samples' reach, 0 otherwise.
+    pub(super) fn tool_margin(&self) -> f64 {
+        self.tool.as_ref().and_then(|t| t.sampling().reach(t.shape())).unwrap_or(0.0)
     }
 
     /// The tool held, if any.

@@ -14,7 +14,7 @@ from .errors import ArgumentError, from_rpc
 from .obstacles import check_name, check_obstacle, obstacle_to_dict, obstacle_to_proto
 from .setpoints import ServerWarning, Setpoints, warning_of
 from .stream import Stream
-from .values import number, rows, vector
+from .values import number, quaternion, rows, vector
 from .zenoh_pub import SUBSCRIBER_WAIT_S, ObstaclePublisher
 
 class Plan(NamedTuple):
@@ -125,11 +125,13 @@ class Client:
         k: Union[None, float, Sequence[float]] = None,
         d: Union[None, float, Sequence[float]] = None,
         alpha: float = 0.0,
+        orientations: Any = None,
     ) -> types.PrimitiveRecord:
         """Learns a primitive from one demonstration and stores it as the next version of `(robot, name)`; returns
         the stored record once it is durable. `t` are the sample times (strictly increasing), `positions` one row
         per sample (a list of lists or a 2-D numpy array). `n_basis`, `k`, `d` (one value or one per dimension)
-        and `alpha` default to the server's (N = 50, K = 1050, critical damping, alpha = 4)."""
+        and `alpha` default to the server's (N = 50, K = 1050, critical damping, alpha = 4). `orientations`, one
+        unit quaternion (x, y, z, w) per sample, learns a pose primitive."""
         times = vector("t", t)
         flat, dim = rows("positions", positions)
         if len(flat) // dim != len(times):
@@ -143,10 +145,16 @@ class Client:
                 return []
             return [number(field, v)] if isinstance(v, (int, float)) else vector(field, v)
 
+        q: List[float] = []
+        if orientations is not None:
+            for i, row in enumerate(list(orientations.tolist() if hasattr(orientations, "tolist") else orientations)):
+                q.extend(quaternion(f"orientations[{i}]", row))
+            if len(q) != 4 * len(times):
+                raise ArgumentError("orientations", f"has {len(q) // 4} rows, t has {len(times)} samples")
         request = primitives.LearnRequest(
             robot_id=robot,
             name=name,
-            demonstration=types.Demonstration(t=times, positions=flat, dim=dim),
+            demonstration=types.Demonstration(t=times, positions=flat, dim=dim, orientations=q),
             parameters=types.LearnParameters(
                 n_basis=int(n_basis), k=gains("k", k), d=gains("d", d), alpha=number("alpha", alpha)
             ),
@@ -191,12 +199,15 @@ class Client:
         ignore_scene: bool = False,
         dt: float = 0.0,
         duration: float = 0.0,
+        goal_orientation: Optional[Sequence[float]] = None,
+        start_orientation: Optional[Sequence[float]] = None,
     ) -> Plan:
         """The whole trajectory of the primitive `(robot, name)` at once, around the cell's obstacles: its
         setpoints, the contacts met, whether it stalled, the server's warnings. `dt` defaults to 1 ms, `duration`
         to 1.2 tau."""
         request = motion.PlanRequest(
-            motion=self._motion_spec(robot, name, goal, start, tau, version, cell, ignore_scene),
+            motion=self._motion_spec(robot, name, goal, start, tau, version, cell, ignore_scene,
+                                     goal_orientation, start_orientation),
             dt=number("dt", dt),
             duration=number("duration", duration),
         )
@@ -206,7 +217,8 @@ class Client:
         return Plan(setpoints, list(r.collisions), r.stalled, [warning_of(w) for w in r.warnings],
                     r.trajectory.scene_version)
 
-    def _motion_spec(self, robot, name, goal, start, tau, version, cell, ignore_scene) -> motion.MotionSpec:
+    def _motion_spec(self, robot, name, goal, start, tau, version, cell, ignore_scene, goal_orientation=None,
+                     start_orientation=None) -> motion.MotionSpec:
         return motion.MotionSpec(
             robot_id=robot,
             primitive=name,
@@ -216,6 +228,9 @@ class Client:
             tau=number("tau", tau),
             ignore_scene=ignore_scene,
             cell=self._cell(cell),
+            goal_orientation=quaternion("goal_orientation", goal_orientation) if goal_orientation is not None else [],
+            start_orientation=(quaternion("start_orientation", start_orientation)
+                               if start_orientation is not None else []),
         )
 
     def stream(
@@ -236,15 +251,19 @@ class Client:
         max_duration_s: float = 0.0,
         take_over: bool = False,
         deadline_s: Optional[float] = None,
+        goal_orientation: Optional[Sequence[float]] = None,
+        start_orientation: Optional[Sequence[float]] = None,
     ) -> Stream:
         """Executes the primitive `(robot, name)` (latest `version` by default) as a session, and returns the
         `Stream`: iterate it for the setpoints in force (supersession applied), send it `set_goal`, `set_tau`,
         `pause`, `resume` or `stop` meanwhile. `goal`, `start` and `tau` default to the primitive's; `realtime`
         paces the segments (and the iteration) on the wall clock, otherwise they come as fast as they are read.
         `dt`, `segment_s`, `lookahead_s` and `max_duration_s` default to the server's (1 ms, 10 ms, 50 ms, until
-        the goal); `take_over` ends another stream of the robot; `deadline_s` bounds the whole call."""
+        the goal); `take_over` ends another stream of the robot; `deadline_s` bounds the whole call. A pose
+        primitive's `goal_orientation` and `start_orientation` (x, y, z, w) default to its own."""
         request = motion.ExecuteRequest(
-            motion=self._motion_spec(robot, name, goal, start, tau, version, cell, ignore_scene),
+            motion=self._motion_spec(robot, name, goal, start, tau, version, cell, ignore_scene, goal_orientation,
+                                     start_orientation),
             dt=number("dt", dt),
             segment_s=number("segment_s", segment_s),
             pacing=motion.PACING_REALTIME if realtime else motion.PACING_AS_FAST_AS_READ,

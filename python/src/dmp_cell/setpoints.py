@@ -34,6 +34,11 @@ class Setpoint(NamedTuple):
     acceleration: Tuple[float, ...]
     sequence: int
     due_unix_s: Optional[float] = None
+    #: A pose run: the orientation (x, y, z, w), the angular velocity and acceleration (world frame, rad/s and
+    #: rad/s²); empty tuples for a position run.
+    orientation: Tuple[float, ...] = ()
+    angular_velocity: Tuple[float, ...] = ()
+    angular_acceleration: Tuple[float, ...] = ()
 
 
 class ServerWarning(NamedTuple):
@@ -81,6 +86,10 @@ class Setpoints:
         self.velocities: List[Tuple[float, ...]] = []
         self.accelerations: List[Tuple[float, ...]] = []
         self.sequences: List[int] = []
+        #: A pose run's rows (empty tuples for a position run).
+        self.orientations: List[Tuple[float, ...]] = []
+        self.angular_velocities: List[Tuple[float, ...]] = []
+        self.angular_accelerations: List[Tuple[float, ...]] = []
         self.segments = 0
         self.last_status: Optional[str] = None
         #: Rows of earlier segments that later ones replaced.
@@ -109,6 +118,12 @@ class Setpoints:
                              ("accelerations", seg.accelerations)):
             if len(values) != rows * d or n % d:
                 raise bad(f"{name} has {len(values)} values, expected points x dim = {rows} x {d}")
+        pose = bool(seg.orientations)
+        for name, values, width in (("orientations", seg.orientations, 4),
+                                    ("angular_velocities", seg.angular_velocities, 3),
+                                    ("angular_accelerations", seg.angular_accelerations, 3)):
+            if pose and len(values) != rows * width:
+                raise bad(f"{name} has {len(values)} values, expected points x {width} = {rows * width}")
         if self.dim is not None and self.dim != d:
             raise bad(f"dim is {d}, earlier segments had {self.dim}")
         if rows == 0:
@@ -119,8 +134,10 @@ class Setpoints:
         self.dim = d
         keep = bisect.bisect_left(self.t, seg.start_time - SAME_TIME * seg.dt)
         self.rows_superseded += len(self.t) - keep
-        for column in (self.t, self.positions, self.velocities, self.accelerations, self.sequences):
+        for column in (self.t, self.positions, self.velocities, self.accelerations, self.sequences,
+                       self.orientations, self.angular_velocities, self.angular_accelerations):
             del column[keep:]
+        q, w, wd = list(seg.orientations), list(seg.angular_velocities), list(seg.angular_accelerations)
         x, v, a = list(seg.positions), list(seg.velocities), list(seg.accelerations)
         for k in range(rows):
             r = slice(k * d, (k + 1) * d)
@@ -129,6 +146,9 @@ class Setpoints:
             self.velocities.append(tuple(v[r]))
             self.accelerations.append(tuple(a[r]))
             self.sequences.append(seg.sequence)
+            self.orientations.append(tuple(q[4 * k:4 * k + 4]) if pose else ())
+            self.angular_velocities.append(tuple(w[3 * k:3 * k + 3]) if pose else ())
+            self.angular_accelerations.append(tuple(wd[3 * k:3 * k + 3]) if pose else ())
         self._note(seg)
         return keep
 
@@ -139,7 +159,7 @@ class Setpoints:
     def setpoint(self, i: int, due_unix_s: Optional[float] = None) -> Setpoint:
         """Row `i` as a `Setpoint`."""
         return Setpoint(self.t[i], self.positions[i], self.velocities[i], self.accelerations[i], self.sequences[i],
-                        due_unix_s)
+                        due_unix_s, self.orientations[i], self.angular_velocities[i], self.angular_accelerations[i])
 
     def __iter__(self):
         return (self.setpoint(i) for i in range(len(self.t)))

@@ -28,7 +28,7 @@ import grpc
 from .pb import motion, types
 from .errors import DmpError, from_rpc
 from .setpoints import ServerWarning, Setpoint, Setpoints, warning_of
-from .values import number, vector
+from .values import number, quaternion, vector
 
 log = logging.getLogger("dmp_cell")
 
@@ -123,9 +123,14 @@ class Stream:
             raise DmpError("the session has ended")
         self._requests.put(request)
 
-    def set_goal(self, goal: Sequence[float]) -> None:
-        """Changes the goal, from the current state (a list, a tuple or a numpy array)."""
-        self._send(motion.SessionRequest(set_goal=motion.SetGoal(goal=vector("goal", goal))))
+    def set_goal(self, goal: Optional[Sequence[float]], orientation: Optional[Sequence[float]] = None) -> None:
+        """Changes the goal, from the current state (a list, a tuple or a numpy array); a pose run's `orientation`
+        (x, y, z, w) too. `goal=None` with an orientation keeps the position goal."""
+        request = motion.SetGoal(
+            goal=vector("goal", goal) if goal is not None else [],
+            goal_orientation=quaternion("orientation", orientation) if orientation is not None else [],
+        )
+        self._send(motion.SessionRequest(set_goal=request))
 
     def set_tau(self, tau: float) -> None:
         """Changes tau (larger is slower), from the current state."""

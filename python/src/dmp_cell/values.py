@@ -57,3 +57,14 @@ def rows(field: str, values: Any) -> Tuple[List[float], int]:
     if dim is None:
         raise ArgumentError(field, "must not be empty")
     return flat, dim
+
+
+def quaternion(field: str, values: Any) -> List[float]:
+    """A unit quaternion (x, y, z, w): four finite floats whose norm is within 1e-6 of 1 (the server's rule)."""
+    q = vector(field, values)
+    if len(q) != 4:
+        raise ArgumentError(field, f"must be 4 numbers (x, y, z, w), found {len(q)}")
+    norm = math.sqrt(sum(v * v for v in q))
+    if abs(norm - 1.0) > 1e-6:
+        raise ArgumentError(field, f"must be a unit quaternion (x, y, z, w): its norm is {norm}")
+    return q

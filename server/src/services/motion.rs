@@ -82,6 +82,7 @@ impl MotionServiceImpl {
         if let Some(chart) = r.chart {
             run.execution.set_orientation_chart(chart)?;
         }
+        run.execution.set_tool(r.tool)?;
         Ok(run)
     }
 

@@ -48,6 +48,8 @@ pub(super) struct ResolvedMotion {
     pub(super) goal_tolerance: GoalTolerance,
     /// A pose run: the chart of its orientation dimensions ([`dmp::orientation::pose::pose_motion`]).
     pub(super) chart: Option<nalgebra::UnitQuaternion<f64>>,
+    /// A pose run's tool.
+    pub(super) tool: Option<dmp::tool::Tool>,
 }
 
 impl MotionServiceImpl {
@@ -131,6 +133,7 @@ impl MotionServiceImpl {
             footprint,
             footprint_proto: spec.footprint.clone(),
             goal_tolerance: goal_tolerance(spec.goal_tolerance.as_ref(), prefix)?,
+            tool: spec.tool.as_ref().map(|t| tool(t, chart.is_some(), d, prefix)).transpose()?,
             chart,
         })
     }
@@ -171,6 +174,44 @@ fn pose(
     let m = dmp::orientation::pose::pose_motion(p, position, start, goal)
         .map_err(|e| ServerError::invalid(format!("{prefix}.{}", e.field), e.rule))?;
     Ok((m.motion, Some(m.chart)))
+}
+
+/// The request's tool, for a pose primitive moving in 3-D; errors name `{prefix}.tool.*`.
+fn tool(t: &v1::Tool, pose: bool, dim: usize, prefix: &str) -> Result<dmp::tool::Tool, ServerError> {
+    use dmp::tool::ControlPoints;
+    use dmp::tool::sampling::{DEFAULT_AXIS_POINTS, DEFAULT_SURFACE_POINTS};
+    let field = |f: &str| format!("{prefix}.tool{f}");
+    if !pose || dim != 3 {
+        return Err(ServerError::invalid(
+            field(""),
+            "a tool needs a pose primitive (learned with orientations) moving in 3-D",
+        ));
+    }
+    let shape = t.shape.as_ref().ok_or_else(|| ServerError::invalid(field(".shape"), "is required"))?;
+    let shape = superquadric_to_shape(shape).map_err(|e| e.within(&field(".shape")))?;
+    let offset = match t.offset.as_slice() {
+        [] => [0.0; 3],
+        &[x, y, z] => [x, y, z],
+        other => {
+            return Err(ServerError::invalid(
+                field(".offset"),
+                format!("must be empty or 3 numbers, found {}", other.len()),
+            ));
+        }
+    };
+    let count = |default: usize| if t.control_points == 0 { default } else { t.control_points as usize };
+    let sampling = if t.axis {
+        ControlPoints::Axis { count: count(DEFAULT_AXIS_POINTS) }
+    } else {
+        ControlPoints::Surface { count: count(DEFAULT_SURFACE_POINTS) }
+    };
+    dmp::tool::Tool::new(shape, offset, sampling).map_err(|e| match e {
+        dmp::DmpError::Invalid(i) => ServerError::invalid(
+            format!("{prefix}.{}", i.field.replacen("tool.control_points.count", "tool.control_points", 1)),
+            i.rule,
+        ),
+        other => ServerError::invalid(field(""), other.to_string()),
+    })
 }
 
 /// The request's goal tolerance, a field left 0 (or the whole message unset) taking its default.
