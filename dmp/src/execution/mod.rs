@@ -20,18 +20,23 @@
 mod advance;
 mod changes;
 mod fields;
+mod goal_changes;
 mod goal_tolerance;
 mod grid;
 mod group;
 mod history;
 mod hold;
 mod ignored;
+mod limiter;
+mod limiting;
+mod limits;
 mod stepping;
 
 use crate::avoidance::Avoidance;
 use crate::dense::{Interpolant, Knot};
 use crate::error::Result;
 use crate::field::{Agent, Contact, RepulsiveField, Scene};
+use crate::integrate::goal_filter::{DEFAULT_GOAL_ALPHA, GoalFilter};
 use crate::integrate::{Integrator, Motion, State};
 use crate::primitive::Primitive;
 use crate::stall::{Stall, StallConfig, StallDetector};
@@ -41,6 +46,8 @@ pub use self::group::{GroupMember, join_group};
 use self::history::History;
 use self::ignored::Ignored;
 pub use self::ignored::IgnoredObstacle;
+use self::limiter::Limiter;
+pub use self::limiting::{LimitAction, Limits};
 pub use self::stepping::{IntegrationCost, MAX_STIFF_STEP, Stepping, check_stability};
 
 /// The default distance to the goal under which a robot has arrived ([`GoalTolerance::DEFAULT`]).
@@ -128,6 +135,8 @@ pub struct Stretch {
     pub stalls: Vec<(usize, Stall)>,
     /// Obstacles (and cell-mates) the run stopped avoiding since the last stretch, and why: each is reported once.
     pub ignored: Vec<IgnoredObstacle>,
+    /// What keeping the run's limits did in the stretch ([`Execution::set_limits`]): the most that happened.
+    pub limit: LimitAction,
 }
 
 /// One run of a primitive on one phase: the state machine that the offline rollout and the server's streams step.
@@ -191,6 +200,20 @@ pub struct Execution {
     /// Obstacles left out of the run, and the reports not yet handed out.
     ignored: Ignored,
     cost: IntegrationCost,
+    /// The filtered goal at the points of an `advance`, for the history; the one restored by a rollback.
+    stretch_g: Vec<f64>,
+    rollback_g: Vec<f64>,
+    /// The limits kept, and the limiter that keeps them.
+    limits: Limits,
+    limiter: Limiter,
+    /// Scratch: the limiter's last points.
+    recent: Vec<f64>,
+    /// Braking to rest (the limits could not be kept otherwise).
+    braking: bool,
+    /// `tau` as set, and the temporal coupling's factor on it (applied, and wanted).
+    base_tau: f64,
+    tau_scale: f64,
+    tau_scale_target: f64,
 }
 
 impl Execution {
@@ -209,7 +232,8 @@ impl Execution {
         motion.validate(primitive.dim).map_err(|e| e.within("motion"))?;
         stepping.validate()?;
         check_stability(&primitive.k, stepping.internal_step(), motion.tau, "tau")?;
-        let integrator = Integrator::new(&primitive)?;
+        let mut integrator = Integrator::new(&primitive)?;
+        *integrator.goal_filter_mut() = GoalFilter::new(DEFAULT_GOAL_ALPHA, &motion.goal);
         let dim = primitive.dim;
         let field = RepulsiveField::new(scene.clone(), dim)?;
         let cellmate_field = cellmate_field(field.agents(), cellmates, Vec::new(), dim)?;
@@ -221,7 +245,17 @@ impl Execution {
         let member_ids = field.agents().iter().map(|a| a.id.clone()).collect();
         let state = State::at_rest(&motion.start);
         let knot0 = Knot { t: 0.0, s: 1.0, x: state.x.clone(), xd: state.xd.clone(), xdd: vec![0.0; dim] };
+        let limiter = Limiter::new(Vec::new(), dim, stepping.dt, &knot0.x);
         Ok(Self {
+            stretch_g: Vec::new(),
+            rollback_g: Vec::new(),
+            limits: Limits::NONE,
+            limiter,
+            recent: Vec::new(),
+            braking: false,
+            base_tau: motion.tau,
+            tau_scale: 1.0,
+            tau_scale_target: 1.0,
             integrator,
             motion,
             scene,
@@ -289,7 +323,8 @@ impl Execution {
         self.stepping.dt
     }
 
-    /// The motion (start, goal, tau).
+    /// The motion (start, goal, tau). Its `tau` is the one in force: the one set times the temporal coupling's
+    /// factor ([`Execution::tau_scale`]).
     pub fn motion(&self) -> &Motion {
         &self.motion
     }
