@@ -57,7 +57,12 @@ impl Execution {
             hold_step(&self.primitive, self.motion.tau, s, h, &mut self.knot0.xdd);
             hold_acc(&self.primitive, self.motion.tau, &s.xd, &mut k1.xdd);
         } else {
-            let mut both = FieldSum { field: &mut self.field, mates: &mut self.cellmates, diagnosis };
+            let mut both = FieldSum {
+                field: &mut self.field,
+                blend: &mut self.blend,
+                mates: &mut self.cellmates,
+                diagnosis,
+            };
             let known = self.acc0_current;
             self.integrator.step_from(&self.motion, &mut both, s, h, &mut self.knot0.xdd, known);
             self.cost.steps += 1;
@@ -94,7 +99,12 @@ impl Execution {
         loop {
             let h = points as f64 * self.stepping.dt;
             let diagnosis = diagnosis.as_deref_mut();
-            let mut both = FieldSum { field: &mut self.field, mates: &mut self.cellmates, diagnosis };
+            let mut both = FieldSum {
+                field: &mut self.field,
+                blend: &mut self.blend,
+                mates: &mut self.cellmates,
+                diagnosis,
+            };
             let err = self.integrator.step_dormand_prince(
                 &self.motion,
                 &mut both,

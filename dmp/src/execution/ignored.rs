@@ -82,6 +82,8 @@ pub(super) struct Diagnosis {
 /// first, at every finite state the step evaluates, until one is found that is not finite.
 pub(super) struct FieldSum<'a> {
     pub(super) field: &'a mut RepulsiveField,
+    /// The fields the run's field is replacing ([`super::blend`]).
+    pub(super) blend: &'a mut super::blend::Blend,
     pub(super) mates: &'a mut RepulsiveField,
     pub(super) diagnosis: Option<&'a mut Diagnosis>,
 }
@@ -97,7 +99,7 @@ impl Perturbation for FieldSum<'_> {
             self.mates.nonfinite_obstacles(t, x, v, tau, &mut d.robots);
             d.t = t;
         }
-        self.field.add(t, x, v, tau, out);
+        self.blend.add(self.field, t, x, v, tau, out);
         self.mates.add(t, x, v, tau, out);
     }
 }
@@ -171,8 +173,10 @@ impl Execution {
                 Err(_) => return false,
             }
         }
-        // The acceleration at knot0 was computed under the old field.
+        // The acceleration at knot0 was computed under the old field; the fields being replaced may hold the
+        // culprits too.
         self.acc0_current = false;
+        self.blend.clear();
         true
     }
 }

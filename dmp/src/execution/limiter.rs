@@ -75,17 +75,8 @@ impl Limiter {
     /// A limiter of `groups` for `dim`-dimensional points `h` apart, at rest at `x`.
     pub(super) fn new(groups: Vec<Group>, dim: usize, h: f64, x: &[f64]) -> Self {
         let z = || vec![0.0; dim];
-        let mut l = Self {
-            groups,
-            dim,
-            h,
-            prev: [z(), z(), z()],
-            v: z(),
-            a: z(),
-            want: z(),
-            brake: z(),
-            cand: z(),
-        };
+        let mut l =
+            Self { groups, dim, h, prev: [z(), z(), z()], v: z(), a: z(), want: z(), brake: z(), cand: z() };
         l.set_recent(x, 1);
         l
     }

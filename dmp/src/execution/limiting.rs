@@ -62,7 +62,10 @@ impl Execution {
         limits.validate().map_err(|e| e.within("limits"))?;
         let dim = self.primitive.dim;
         if orientation && dim < 4 {
-            return Err(InvalidInput::new("limits", "orientation needs a position and three rotation dimensions"));
+            return Err(InvalidInput::new(
+                "limits",
+                "orientation needs a position and three rotation dimensions",
+            ));
         }
         let position_end = if orientation { dim - 3 } else { dim };
         let mut groups: Vec<Group> = self

@@ -18,6 +18,7 @@
 //! Outcomes ([`Outcome`]): arrival, stall, contact, holding, stop and the end time, judged on the points handed out.
 
 mod advance;
+mod blend;
 mod changes;
 mod fields;
 mod goal_changes;
@@ -41,6 +42,8 @@ use crate::integrate::{Integrator, Motion, State};
 use crate::primitive::Primitive;
 use crate::stall::{Stall, StallConfig, StallDetector};
 
+use self::blend::Blend;
+pub use self::blend::{DEFAULT_OBSTACLE_BLEND, smoothstep};
 pub use self::goal_tolerance::GoalTolerance;
 pub use self::group::{GroupMember, join_group};
 use self::history::History;
@@ -146,6 +149,10 @@ pub struct Execution {
     integrator: Integrator,
     motion: Motion,
     stepping: Stepping,
+    /// The fields being replaced by `field`, blended out ([`blend`]).
+    blend: Blend,
+    /// How far back a rollback can go, seconds.
+    history_span: f64,
     /// The fixed part of the field: the run's own obstacles, its members and their methods.
     scene: Scene,
     /// How the cell-mates are avoided.
@@ -247,6 +254,8 @@ impl Execution {
         let knot0 = Knot { t: 0.0, s: 1.0, x: state.x.clone(), xd: state.xd.clone(), xdd: vec![0.0; dim] };
         let limiter = Limiter::new(Vec::new(), dim, stepping.dt, &knot0.x);
         Ok(Self {
+            blend: Blend::new(DEFAULT_OBSTACLE_BLEND, dim),
+            history_span: history as f64 * stepping.dt,
             stretch_g: Vec::new(),
             rollback_g: Vec::new(),
             limits: Limits::NONE,

@@ -8,6 +8,7 @@ mod arrival;
 mod changing_the_motion;
 mod fixtures;
 mod guard_rails;
+mod limits;
 mod orientation;
 mod replay;
 mod rk4_convergence;
