@@ -244,6 +244,8 @@ async fn run_robot_group(
                         ignore_scene: true,
                         cell: String::new(),
                         goal_tolerance: None,
+                        limits: None,
+                        goal_filter_alpha: 0.0,
                     }),
                 }
             })

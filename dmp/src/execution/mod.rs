@@ -16,6 +16,12 @@
 //! nothing).
 //!
 //! Outcomes ([`Outcome`]): arrival, stall, contact, holding, stop and the end time, judged on the points handed out.
+//!
+//! Without jumps: a new goal is approached through the goal filter (`goal_changes.rs`,
+//! [`crate::integrate::goal_filter`]), and a change of the obstacles is blended in (`blend.rs`), so that the
+//! acceleration stays continuous. A robot's [`Limits`] are kept at every point handed out (`limiting.rs`): the phase
+//! slows first (temporal coupling), a limiter holds each setpoint within them, and the robot brakes to rest where
+//! the DMP asks for far more ([`Stretch::limit`]).
 
 mod advance;
 mod blend;
@@ -408,3 +414,6 @@ fn cellmate_field(
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod change_tests;

@@ -7,7 +7,8 @@ use std::time::Duration;
 use dmp::Stepping;
 use dmp::execution::{GoalTolerance, GroupMember, join_group};
 use dmp::field::Agent;
-use dmp_proto::status::segment_status;
+use dmp_proto::limits::tightest;
+use dmp_proto::status::segment_status_limited;
 use dmp_proto::v1;
 use dmp_proto::v1::motion_service_server::MotionService;
 use tokio::sync::mpsc;
@@ -79,6 +80,8 @@ impl MotionServiceImpl {
             history,
         )?;
         run.execution.set_goal_tolerance(r.goal_tolerance)?;
+        run.execution.set_limits(r.limits, false)?;
+        run.execution.set_goal_filter(r.goal_filter_alpha)?;
         Ok(run)
     }
 
@@ -251,7 +254,7 @@ impl MotionService for MotionServiceImpl {
                 start_time: 0.0,
                 dt,
                 dim: execution.dim() as u32,
-                status: segment_status(stretch.outcome) as i32,
+                status: segment_status_limited(stretch.outcome, stretch.limit) as i32,
                 positions: stretch.x,
                 velocities: stretch.xd,
                 accelerations: stretch.xdd,
@@ -438,6 +441,9 @@ impl MotionService for MotionServiceImpl {
             resolved.iter().map(|r| r.goal_tolerance).fold(resolved[0].goal_tolerance, |a, b| {
                 GoalTolerance { position: a.position.min(b.position), speed: a.speed.min(b.speed) }
             });
+        // One phase, one set of limits: the tightest of the members'; the goal filter of the first member.
+        let limits = resolved.iter().fold(resolved[0].limits, |a, r| tightest(&a, &r.limits));
+        let goal_filter_alpha = resolved[0].goal_filter_alpha;
         let members =
             agents.into_iter().zip(resolved.into_iter().map(|r| r.footprint_proto)).collect::<Vec<_>>();
         info!(robots = members.len(), realtime = cfg.realtime, "execute group");
@@ -448,6 +454,8 @@ impl MotionService for MotionServiceImpl {
         let grant = self.grant(caller, &cell, ids.iter().map(|id| id.to_string()).collect())?;
         let mut run = ServedRun::new(primitive, motion, members, avoidance, cfg.stepping, history_len(&cfg))?;
         run.execution.set_goal_tolerance(goal_tolerance).map_err(ServerError::from)?;
+        run.execution.set_limits(limits, false).map_err(ServerError::from)?;
+        run.execution.set_goal_filter(goal_filter_alpha).map_err(ServerError::from)?;
         let rx = self.spawn(run, cell, cfg, None, &peer, Owner { claim, grant })?;
         let stream = ReceiverStream::new(rx).map(|r| {
             r.map(|segments| v1::GroupSegment {

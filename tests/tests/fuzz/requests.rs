@@ -67,6 +67,8 @@ pub fn motion_spec() -> BoxedStrategy<v1::MotionSpec> {
                             ignore_scene: ignore,
                             cell: cell.clone(),
                             goal_tolerance,
+                            limits: None,
+                            goal_filter_alpha: 0.0,
                         }
                     },
                 )
