@@ -108,9 +108,7 @@ impl Execution {
         self.limiter.set_recent(&self.recent, n);
     }
 
-    /// Keeps the limits at the point just computed (index `k` of the stretch, at time `t` and phase `s`), before it
-    /// is handed out; the next output point is at `self.out_t`. Returns what it did.
-    #[allow(clippy::too_many_arguments)]
+    /// Keeps the limits at the point just computed (at time `t` and phase `s`), before it is handed out; the next output point is at `self.out_t`. Returns what it did.
     pub(super) fn keep_limits(
         &mut self,
         t: f64,
