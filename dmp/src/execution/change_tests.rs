@@ -154,3 +154,62 @@ fn an_obstacle_that_appears_is_blended_in_without_a_jump() {
     assert!(worst[0] > 10.0 * worst[1], "blending smooths the change: {worst:?}");
     assert!(reach(Stepping::rk4(1e-3), Scene::empty()).set_obstacle_blend(f64::NAN).is_err());
 }
+
+/// Peak speed, acceleration and jerk of dimensions `dims` of points `x` (`dim` each) as backward differences.
+fn peaks(x: &[f64], dim: usize, dims: std::ops::Range<usize>, dt: f64) -> [f64; 3] {
+    let n = x.len() / dim;
+    let p = |k: usize, i: usize| x[k * dim + i];
+    let mut peak = [0.0f64; 3];
+    for k in 3..n {
+        let norm = |f: &dyn Fn(usize) -> f64| dims.clone().map(|i| f(i).powi(2)).sum::<f64>().sqrt();
+        let v = norm(&|i| (p(k, i) - p(k - 1, i)) / dt);
+        let a = norm(&|i| (p(k, i) - 2.0 * p(k - 1, i) + p(k - 2, i)) / (dt * dt));
+        let j = norm(&|i| (p(k, i) - 3.0 * p(k - 1, i) + 3.0 * p(k - 2, i) - p(k - 3, i)) / (dt * dt * dt));
+        for (m, q) in peak.iter_mut().zip([v, a, j]) {
+            *m = m.max(q);
+        }
+    }
+    peak
+}
+
+#[test]
+fn a_pose_run_keeps_the_angular_limits_on_its_rotation_vector() {
+    let start = vec![0.3, 0.0, 0.4, 0.0, 0.0, 0.0];
+    let goal = vec![0.5, 0.1, 0.4, 0.0, 0.0, 1.0];
+    let p = Primitive::straight_line(20, 4.0, vec![1000.0; 6], None, 0.5, start, goal).unwrap();
+    let mut e = Execution::new(
+        p.clone(),
+        Motion::of(&p),
+        Scene::empty(),
+        CellMateAvoidance::NONE,
+        Stepping::rk4(1e-3),
+        10,
+    )
+    .unwrap();
+    assert!(e.set_limits(Limits::PANDA, true).is_ok());
+    let mut x = e.advance(200).unwrap().x;
+    e.set_goal(vec![0.5, 0.1, 0.4, 0.0, 1.5, -1.0]).unwrap();
+    x.extend(e.advance(3000).unwrap().x);
+    let (lin, ang) = (peaks(&x, 6, 0..3, 1e-3), peaks(&x, 6, 3..6, 1e-3));
+    let l = Limits::PANDA;
+    assert!(lin[0] <= l.max_speed && lin[1] <= l.max_acceleration && lin[2] <= l.max_jerk, "{lin:?}");
+    assert!(
+        ang[0] <= l.max_angular_speed && ang[1] <= l.max_angular_acceleration && ang[2] <= l.max_angular_jerk,
+        "{ang:?}"
+    );
+    // Without the orientation, the same limits bound the six dimensions as one position.
+    let tiny =
+        Primitive::straight_line(20, 4.0, vec![1000.0; 3], None, 0.5, vec![0.0; 3], vec![0.1; 3]).unwrap();
+    let mut e3 = Execution::new(
+        tiny.clone(),
+        Motion::of(&tiny),
+        Scene::empty(),
+        CellMateAvoidance::NONE,
+        Stepping::rk4(1e-3),
+        10,
+    )
+    .unwrap();
+    assert_eq!(e3.set_limits(Limits::PANDA, true).unwrap_err().field, "limits");
+    let bad = Limits { max_speed: -1.0, ..Limits::PANDA };
+    assert_eq!(e3.set_limits(bad, false).unwrap_err().field, "limits.max_speed");
+}
