@@ -48,7 +48,7 @@ pub mod tool;
 
 pub use avoidance::{Avoidance, Method};
 pub use error::{DmpError, InvalidInput, Result};
-pub use execution::{Execution, Outcome, Stepping};
+pub use execution::{Execution, LimitAction, Limits, Outcome, Stepping};
 pub use field::{Agent, Contact, RepulsiveField, Scene};
 pub use integrate::{Integrator, Motion, NoPerturbation, Perturbation, State};
 pub use isopotential::{Isopotential, NestedSuperquadric, Shape, Superquadric};

@@ -35,6 +35,7 @@ pub mod codec;
 mod error;
 pub mod keys;
 pub mod learning;
+pub mod limits;
 pub mod obstacle;
 pub mod obstacle_json;
 pub mod payload;

@@ -1,6 +1,6 @@
 //! The one mapping of a run's outcome to the status its segments carry.
 
-use dmp::Outcome;
+use dmp::{LimitAction, Outcome};
 
 use crate::v1::SegmentStatus;
 
@@ -13,6 +13,15 @@ pub fn segment_status(outcome: Outcome) -> SegmentStatus {
         Outcome::Collision => SegmentStatus::Collision,
         Outcome::GoalReached => SegmentStatus::GoalReached,
         Outcome::Stopped | Outcome::EndTime => SegmentStatus::Stopped,
+    }
+}
+
+/// The status of a segment whose points came to `outcome` while keeping the robot's limits did `limit`: a
+/// running segment that braked to rest within them is [`SegmentStatus::LimitBraking`].
+pub fn segment_status_limited(outcome: Outcome, limit: LimitAction) -> SegmentStatus {
+    match (outcome, limit) {
+        (Outcome::Running, LimitAction::Braking) => SegmentStatus::LimitBraking,
+        _ => segment_status(outcome),
     }
 }
 
@@ -45,5 +54,14 @@ mod tests {
         }
         assert_eq!(segment_status(Outcome::EndTime), SegmentStatus::Stopped);
         assert_eq!(segment_status(Outcome::Holding), SegmentStatus::Paused);
+        assert_eq!(
+            segment_status_limited(Outcome::Running, LimitAction::Braking),
+            SegmentStatus::LimitBraking
+        );
+        assert_eq!(segment_status_limited(Outcome::Running, LimitAction::Limited), SegmentStatus::Running);
+        assert_eq!(
+            segment_status_limited(Outcome::GoalReached, LimitAction::Braking),
+            SegmentStatus::GoalReached
+        );
     }
 }

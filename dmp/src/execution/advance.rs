@@ -24,6 +24,7 @@ impl Execution {
             ..Stretch::default()
         };
         self.stretch_s.clear();
+        self.stretch_g.resize(n * d, 0.0);
         for k in 0..n {
             let t = self.out_t;
             if self.knot1.as_ref().is_none_or(|k1| t >= k1.t - 0.5 * dt) {
@@ -58,7 +59,21 @@ impl Execution {
                 return Err(DmpError::Diverged { t });
             }
             self.stretch_s.push(s);
+            self.integrator.goal_filter().goal_at(
+                &self.motion.goal,
+                t,
+                self.motion.tau,
+                &mut self.stretch_g[range.clone()],
+            );
             self.out_t = ((t + dt) / dt).round() * dt;
+            let action = self.keep_limits(
+                t,
+                s,
+                &mut p.x[range.clone()],
+                &mut p.xd[range.clone()],
+                &mut p.xdd[range.clone()],
+            );
+            p.limit = p.limit.max(action);
 
             // Stalls at the point handed out (checked at its time); contacts below, for all points.
             if self.holding {
@@ -76,7 +91,7 @@ impl Execution {
                 }
             }
         }
-        self.history.push(p.start_time, &self.stretch_s, &p.x, &p.xd);
+        self.history.push(p.start_time, &self.stretch_s, &p.x, &p.xd, &self.stretch_g);
         self.track_goal(p.start_time, &p.x, &p.xd, n);
         if n > 0 {
             self.last_x.copy_from_slice(&p.x[(n - 1) * d..]);

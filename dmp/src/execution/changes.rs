@@ -8,10 +8,13 @@ use crate::error::{InvalidInput, Result, check_vector};
 use crate::integrate::State;
 
 impl Execution {
-    /// Changes the goal from the next output point on.
+    /// Changes the goal from the next output point on: the goal the DMP steers to moves there through the goal
+    /// filter ([`Execution::set_goal_filter`]; on by default), so that the acceleration stays continuous.
     pub fn set_goal(&mut self, goal: Vec<f64>) -> Result<(), InvalidInput> {
         check_vector("goal", &goal, self.primitive.dim)?;
         self.rebase();
+        self.anchor_goal(self.holding);
+        self.integrator.goal_filter_mut().retarget(&self.motion.goal, &goal);
         self.motion.goal = goal;
         // Arrival is judged afresh against the new goal, from the next point on.
         self.goal_met_since = None;
@@ -34,7 +37,9 @@ impl Execution {
         }
         check_stability(&self.primitive.k, self.stepping.internal_step(), tau, "tau")?;
         self.rebase();
-        self.motion.tau = tau;
+        self.anchor_goal(self.holding);
+        self.base_tau = tau;
+        self.motion.tau = tau * self.tau_scale;
         Ok(())
     }
 
@@ -43,6 +48,7 @@ impl Execution {
         let holding = holding || self.stopping;
         if holding != self.holding {
             self.rebase();
+            self.anchor_goal(holding);
         }
         self.holding = holding;
     }
@@ -66,8 +72,11 @@ impl Execution {
             return self.out_t;
         }
         let mut restored = std::mem::replace(&mut self.scratch, State::at_rest(&[]));
-        if self.history.rollback_into(t, 0.5 * self.stepping.dt, &mut restored) {
+        let mut g = std::mem::take(&mut self.rollback_g);
+        if self.history.rollback_into(t, 0.5 * self.stepping.dt, &mut restored, &mut g) {
+            self.integrator.goal_filter_mut().restore(restored.t, &g, &self.motion.goal);
             self.restart_at(&restored);
+            self.restore_limiter();
             // The last point handed out is now the one before the restored point.
             match self.history.last() {
                 Some((x, xd)) => {
@@ -78,6 +87,7 @@ impl Execution {
             }
         }
         self.scratch = restored;
+        self.rollback_g = g;
         self.forget_goal_after(self.out_t);
         self.out_t
     }

@@ -10,7 +10,8 @@ use crate::obstacle::Obstacle;
 
 impl Execution {
     /// Replaces the cell's obstacles by `seen`: each obstacle with its age, how long before the run's current time
-    /// its centre was where it says (it moves on along its velocity). Obstacles of another dimension than the
+    /// its centre was where it says (it moves on along its velocity). A change is blended in from the next output
+    /// point ([`Execution::set_obstacle_blend`]), so that the acceleration stays continuous. Obstacles of another dimension than the
     /// members' are left out and reported in the next stretch ([`super::Stretch::ignored`]), as are those dropped
     /// earlier in the run (until a new version with another shape replaces them); the run's own obstacles stay,
     /// after these.
@@ -39,7 +40,29 @@ impl Execution {
         self.ignored.set_other_dim(other_dim, sub);
         obstacles.extend(self.scene.obstacles.iter().filter(|o| !self.ignored.is_dropped(o)).cloned());
         let scene = Scene { obstacles, ..self.scene.clone() };
-        self.field = RepulsiveField::new(scene, self.primitive.dim)?;
+        let field = RepulsiveField::new(scene, self.primitive.dim)?;
+        // Blended in from the next point, unless nothing was handed out yet or nothing changed.
+        if self.has_last && field.scene().obstacles != self.field.scene().obstacles {
+            self.blend.forget_before(t - self.history_span);
+            let old = std::mem::replace(&mut self.field, field);
+            self.blend.push(old, t);
+        } else {
+            self.field = field;
+        }
+        Ok(())
+    }
+
+    /// Blends every later change of the obstacles in over `seconds` ([`super::blend`]; by default
+    /// [`super::DEFAULT_OBSTACLE_BLEND`]); 0 applies them at once. Refused (naming `obstacle_blend_s`) unless finite
+    /// and non-negative.
+    pub fn set_obstacle_blend(&mut self, seconds: f64) -> Result<(), crate::error::InvalidInput> {
+        if !(seconds.is_finite() && seconds >= 0.0) {
+            return Err(crate::error::InvalidInput::new(
+                "obstacle_blend_s",
+                format!("must be a finite number of seconds, zero (off) or more, not {seconds}"),
+            ));
+        }
+        self.blend.duration = seconds;
         Ok(())
     }
 

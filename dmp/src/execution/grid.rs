@@ -59,6 +59,7 @@ impl Execution {
         } else {
             let mut both = FieldSum::new(
                 &mut self.field,
+                &mut self.blend,
                 &mut self.cellmates,
                 diagnosis,
                 self.tool.as_ref(),
@@ -102,6 +103,7 @@ impl Execution {
             let diagnosis = diagnosis.as_deref_mut();
             let mut both = FieldSum::new(
                 &mut self.field,
+                &mut self.blend,
                 &mut self.cellmates,
                 diagnosis,
                 self.tool.as_ref(),

@@ -18,6 +18,8 @@ struct Record {
     /// Row-major, `dim` per point.
     x: Vec<f64>,
     xd: Vec<f64>,
+    /// The filtered goal at each point.
+    g: Vec<f64>,
 }
 
 impl Record {
@@ -40,8 +42,10 @@ impl Record {
         lo
     }
 
-    /// Point `k` into `out`.
-    fn write_point(&self, k: usize, dim: usize, dt: f64, out: &mut State) {
+    /// Point `k` into `out`, its filtered goal into `g`.
+    fn write_point(&self, k: usize, dim: usize, dt: f64, out: &mut State, g: &mut Vec<f64>) {
+        g.clear();
+        g.extend_from_slice(&self.g[k * dim..(k + 1) * dim]);
         (out.t, out.s) = (self.time(k, dt), self.s[k]);
         out.x.clear();
         out.x.extend_from_slice(&self.x[k * dim..(k + 1) * dim]);
@@ -53,6 +57,7 @@ impl Record {
         self.s.truncate(n);
         self.x.truncate(n * dim);
         self.xd.truncate(n * dim);
+        self.g.truncate(n * dim);
     }
 }
 
@@ -76,16 +81,16 @@ impl History {
         Self { dim, dt, keep, records: VecDeque::new(), points: 0, spare: Vec::new() }
     }
 
-    /// Appends the points from time `t0` on, one output step apart, with phases `s`, positions `x` and velocities
-    /// `xd` (`dim` per point), and forgets the oldest records that are no longer needed to hold `keep` points.
-    pub(super) fn push(&mut self, t0: f64, s: &[f64], x: &[f64], xd: &[f64]) {
-        debug_assert!(x.len() == s.len() * self.dim && xd.len() == x.len());
+    /// Appends the points from time `t0` on, one output step apart, with phases `s`, positions `x`, velocities
+    /// `xd` and filtered goals `g` (`dim` per point), and forgets the oldest records that are no longer needed to hold `keep` points.
+    pub(super) fn push(&mut self, t0: f64, s: &[f64], x: &[f64], xd: &[f64], g: &[f64]) {
+        debug_assert!(x.len() == s.len() * self.dim && xd.len() == x.len() && g.len() == x.len());
         if s.is_empty() || self.keep == 0 {
             return;
         }
         let mut r = self.spare.pop().unwrap_or_default();
         r.first = (t0 / self.dt).round() as i64;
-        for (buf, from) in [(&mut r.s, s), (&mut r.x, x), (&mut r.xd, xd)] {
+        for (buf, from) in [(&mut r.s, s), (&mut r.x, x), (&mut r.xd, xd), (&mut r.g, g)] {
             buf.clear();
             buf.extend_from_slice(from);
         }
@@ -108,9 +113,27 @@ impl History {
         Some((&r.x[from..], &r.xd[from..]))
     }
 
+    /// Writes the positions of the last points, the most recent first, into `out` (`dim` each, as many as fit);
+    /// returns how many were written (fewer when the history holds fewer).
+    pub(super) fn recent_positions(&self, out: &mut [f64]) -> usize {
+        let d = self.dim;
+        let want = out.len() / d;
+        let mut n = 0;
+        for r in self.records.iter().rev() {
+            for k in (0..r.len()).rev() {
+                if n == want {
+                    return n;
+                }
+                out[n * d..(n + 1) * d].copy_from_slice(&r.x[k * d..(k + 1) * d]);
+                n += 1;
+            }
+        }
+        n
+    }
+
     /// Removes every point from the first one whose time is at or after `t - tol` on, and writes that point into
-    /// `out`; false (and nothing removed) when there is none.
-    pub(super) fn rollback_into(&mut self, t: f64, tol: f64, out: &mut State) -> bool {
+    /// `out` (its filtered goal into `g`); false (and nothing removed) when there is none.
+    pub(super) fn rollback_into(&mut self, t: f64, tol: f64, out: &mut State, g: &mut Vec<f64>) -> bool {
         // Whole records from that time on go; the point is the first of the last one to go, unless the record
         // before it also reaches that time.
         let mut dropped: Option<Record> = None;
@@ -122,7 +145,7 @@ impl History {
             }
             if k > 0 {
                 self.points -= r.len() - k;
-                r.write_point(k, self.dim, self.dt, out);
+                r.write_point(k, self.dim, self.dt, out, g);
                 r.truncate(k, self.dim);
                 self.spare.extend(dropped);
                 return true;
@@ -133,7 +156,7 @@ impl History {
             }
         }
         let Some(r) = dropped else { return false };
-        r.write_point(0, self.dim, self.dt, out);
+        r.write_point(0, self.dim, self.dt, out, g);
         self.spare.push(r);
         true
     }
@@ -151,12 +174,13 @@ mod tests {
         let s: Vec<f64> = ks.iter().map(|k| 1.0 - k / 1000.0).collect();
         let x: Vec<f64> = ks.iter().flat_map(|&k| [k, -k]).collect();
         let xd: Vec<f64> = ks.iter().flat_map(|&k| [10.0 * k, 1.0]).collect();
-        h.push(from as f64 * DT, &s, &x, &xd);
+        h.push(from as f64 * DT, &s, &x, &xd, &x);
     }
 
     fn rollback(h: &mut History, t: f64) -> Option<State> {
         let mut st = State::at_rest(&[0.0, 0.0]);
-        h.rollback_into(t, 0.5 * DT, &mut st).then_some(st)
+        let mut g = Vec::new();
+        h.rollback_into(t, 0.5 * DT, &mut st, &mut g).then_some(st).inspect(|st| assert_eq!(g, st.x))
     }
 
     #[test]

@@ -82,6 +82,8 @@ pub(super) struct Diagnosis {
 /// first, at every finite state the step evaluates, until one is found that is not finite.
 pub(super) struct FieldSum<'a> {
     pub(super) field: &'a mut RepulsiveField,
+    /// The fields the run's field is replacing ([`super::blend`]).
+    pub(super) blend: &'a mut super::blend::Blend,
     pub(super) mates: &'a mut RepulsiveField,
     pub(super) diagnosis: Option<&'a mut Diagnosis>,
     /// A pose run's tool and chart: both fields act on its control points ([`super::tool`]).
@@ -92,12 +94,13 @@ pub(super) struct FieldSum<'a> {
 impl<'a> FieldSum<'a> {
     pub(super) fn new(
         field: &'a mut RepulsiveField,
+        blend: &'a mut super::blend::Blend,
         mates: &'a mut RepulsiveField,
         diagnosis: Option<&'a mut Diagnosis>,
         tool: Option<&'a super::pose::HeldTool>,
         chart: Option<&'a super::pose::Chart>,
     ) -> Self {
-        Self { field, mates, diagnosis, tool: tool.zip(chart) }
+        Self { field, blend, mates, diagnosis, tool: tool.zip(chart) }
     }
 }
 
@@ -105,7 +108,7 @@ impl Perturbation for FieldSum<'_> {
     fn add(&mut self, t: f64, x: &[f64], v: &[f64], tau: f64, out: &mut [f64]) {
         #[cfg(feature = "orientation")]
         if let Some((tool, chart)) = self.tool {
-            super::tool::add_on_tool(self.field, self.mates, tool, chart, t, x, v, tau, out);
+            super::tool::add_on_tool(self.field, self.blend, self.mates, tool, chart, t, x, v, tau, out);
             return;
         }
         if let Some(d) = self.diagnosis.as_deref_mut()
@@ -117,7 +120,7 @@ impl Perturbation for FieldSum<'_> {
             self.mates.nonfinite_obstacles(t, x, v, tau, &mut d.robots);
             d.t = t;
         }
-        self.field.add(t, x, v, tau, out);
+        self.blend.add(self.field, t, x, v, tau, out);
         self.mates.add(t, x, v, tau, out);
     }
 }
@@ -191,8 +194,10 @@ impl Execution {
                 Err(_) => return false,
             }
         }
-        // The acceleration at knot0 was computed under the old field.
+        // The acceleration at knot0 was computed under the old field; the fields being replaced may hold the
+        // culprits too.
         self.acc0_current = false;
+        self.blend.clear();
         true
     }
 }

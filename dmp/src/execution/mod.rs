@@ -16,16 +16,27 @@
 //! nothing).
 //!
 //! Outcomes ([`Outcome`]): arrival, stall, contact, holding, stop and the end time, judged on the points handed out.
+//!
+//! Without jumps: a new goal is approached through the goal filter (`goal_changes.rs`,
+//! [`crate::integrate::goal_filter`]), and a change of the obstacles is blended in (`blend.rs`), so that the
+//! acceleration stays continuous. A robot's [`Limits`] are kept at every point handed out (`limiting.rs`): the phase
+//! slows first (temporal coupling), a limiter holds each setpoint within them, and the robot brakes to rest where
+//! the DMP asks for far more ([`Stretch::limit`]).
 
 mod advance;
+mod blend;
 mod changes;
 mod fields;
+mod goal_changes;
 mod goal_tolerance;
 mod grid;
 mod group;
 mod history;
 mod hold;
 mod ignored;
+mod limiter;
+mod limiting;
+mod limits;
 mod pose;
 mod stepping;
 #[cfg(feature = "orientation")]
@@ -35,15 +46,20 @@ use crate::avoidance::Avoidance;
 use crate::dense::{Interpolant, Knot};
 use crate::error::Result;
 use crate::field::{Agent, Contact, RepulsiveField, Scene};
+use crate::integrate::goal_filter::{DEFAULT_GOAL_ALPHA, GoalFilter};
 use crate::integrate::{Integrator, Motion, State};
 use crate::primitive::Primitive;
 use crate::stall::{Stall, StallConfig, StallDetector};
 
+use self::blend::Blend;
+pub use self::blend::{DEFAULT_OBSTACLE_BLEND, smoothstep};
 pub use self::goal_tolerance::GoalTolerance;
 pub use self::group::{GroupMember, join_group};
 use self::history::History;
 use self::ignored::Ignored;
 pub use self::ignored::IgnoredObstacle;
+use self::limiter::Limiter;
+pub use self::limiting::{LimitAction, Limits};
 pub use self::pose::OrientationPoints;
 pub use self::stepping::{IntegrationCost, MAX_STIFF_STEP, Stepping, check_stability};
 
@@ -134,6 +150,8 @@ pub struct Stretch {
     pub ignored: Vec<IgnoredObstacle>,
     /// A pose run's orientations at the points (empty otherwise).
     pub orientation: OrientationPoints,
+    /// What keeping the run's limits did in the stretch ([`Execution::set_limits`]): the most that happened.
+    pub limit: LimitAction,
 }
 
 /// One run of a primitive on one phase: the state machine that the offline rollout and the server's streams step.
@@ -143,6 +161,10 @@ pub struct Execution {
     integrator: Integrator,
     motion: Motion,
     stepping: Stepping,
+    /// The fields being replaced by `field`, blended out ([`blend`]).
+    blend: Blend,
+    /// How far back a rollback can go, seconds.
+    history_span: f64,
     /// The fixed part of the field: the run's own obstacles, its members and their methods.
     scene: Scene,
     /// How the cell-mates are avoided.
@@ -203,6 +225,20 @@ pub struct Execution {
     /// A pose run's tool: the field acts on its control points ([`crate::tool`]).
     #[cfg_attr(not(feature = "orientation"), allow(dead_code))]
     tool: Option<pose::HeldTool>,
+    /// The filtered goal at the points of an `advance`, for the history; the one restored by a rollback.
+    stretch_g: Vec<f64>,
+    rollback_g: Vec<f64>,
+    /// The limits kept, and the limiter that keeps them.
+    limits: Limits,
+    limiter: Limiter,
+    /// Scratch: the limiter's last points.
+    recent: Vec<f64>,
+    /// Braking to rest (the limits could not be kept otherwise).
+    braking: bool,
+    /// `tau` as set, and the temporal coupling's factor on it (applied, and wanted).
+    base_tau: f64,
+    tau_scale: f64,
+    tau_scale_target: f64,
 }
 
 impl Execution {
@@ -238,7 +274,8 @@ impl Execution {
             }
         }
         check_stability(&primitive.k, stepping.internal_step(), motion.tau, "tau")?;
-        let integrator = Integrator::new(&primitive)?;
+        let mut integrator = Integrator::new(&primitive)?;
+        *integrator.goal_filter_mut() = GoalFilter::new(DEFAULT_GOAL_ALPHA, &motion.goal);
         let dim = primitive.dim;
         let field = RepulsiveField::new(scene.clone(), dim)?;
         let cellmate_field = cellmate_field(field.agents(), cellmates, Vec::new(), dim)?;
@@ -250,7 +287,19 @@ impl Execution {
         let member_ids = field.agents().iter().map(|a| a.id.clone()).collect();
         let state = State::at_rest(&motion.start);
         let knot0 = Knot { t: 0.0, s: 1.0, x: state.x.clone(), xd: state.xd.clone(), xdd: vec![0.0; dim] };
+        let limiter = Limiter::new(Vec::new(), dim, stepping.dt, &knot0.x);
         Ok(Self {
+            blend: Blend::new(DEFAULT_OBSTACLE_BLEND, dim),
+            history_span: history as f64 * stepping.dt,
+            stretch_g: Vec::new(),
+            rollback_g: Vec::new(),
+            limits: Limits::NONE,
+            limiter,
+            recent: Vec::new(),
+            braking: false,
+            base_tau: motion.tau,
+            tau_scale: 1.0,
+            tau_scale_target: 1.0,
             integrator,
             motion,
             scene,
@@ -320,7 +369,8 @@ impl Execution {
         self.stepping.dt
     }
 
-    /// The motion (start, goal, tau).
+    /// The motion (start, goal, tau). Its `tau` is the one in force: the one set times the temporal coupling's
+    /// factor ([`Execution::tau_scale`]).
     pub fn motion(&self) -> &Motion {
         &self.motion
     }
@@ -395,3 +445,6 @@ fn cellmate_field(
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod change_tests;

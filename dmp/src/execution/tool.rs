@@ -103,6 +103,7 @@ fn same_thing(a: &Contact, b: &Contact) -> bool {
 #[allow(clippy::too_many_arguments)]
 pub(super) fn add_on_tool(
     field: &mut RepulsiveField,
+    blend: &mut super::blend::Blend,
     mates: &mut RepulsiveField,
     tool: &Tool,
     chart: &Chart,
@@ -125,7 +126,7 @@ pub(super) fn add_on_tool(
         xi[..3].copy_from_slice(m.position.as_slice());
         vi[..3].copy_from_slice(m.velocity.as_slice());
         let mut phi = [0.0; 6];
-        field.add(t, &xi, &vi, tau, &mut phi);
+        blend.add(field, t, &xi, &vi, tau, &mut phi);
         mates.add(t, &xi, &vi, tau, &mut phi);
         let phi = Vector3::new(phi[0], phi[1], phi[2]);
         force += phi;

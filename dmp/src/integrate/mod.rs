@@ -2,11 +2,13 @@
 //! estimate for an adaptive step ([`dormand_prince`]), both with the phase in closed form.
 
 pub mod dormand_prince;
+pub mod goal_filter;
 
 use crate::basis::{ForcingTerm, GaussianBasis};
 use crate::canonical::phase_after;
 use crate::error::{InvalidInput, Result, check_vector, ensure_positive};
 use crate::primitive::Primitive;
+use goal_filter::GoalFilter;
 
 /// A repulsive term `phi(x, v, t)` added to `tau dv/dt` (paper, `eq:dmp_acc_obst`).
 pub trait Perturbation {
@@ -90,12 +92,16 @@ pub struct Integrator {
     cache_next: usize,
     b: Buffers,
     dp: dormand_prince::Stages,
+    /// The goal the transformation system sees (off unless set: the goal is then `motion.goal` exactly).
+    goal_filter: GoalFilter,
 }
 
 #[derive(Debug, Clone)]
 struct Buffers {
     v: Vec<f64>,
     phi: Vec<f64>,
+    /// The filtered goal at a stage.
+    g: Vec<f64>,
     xs: Vec<f64>,
     xds: Vec<f64>,
     kx: [Vec<f64>; 4],
@@ -120,12 +126,14 @@ impl Integrator {
             b: Buffers {
                 v: z(),
                 phi: z(),
+                g: z(),
                 xs: z(),
                 xds: z(),
                 kx: [z(), z(), z(), z()],
                 ka: [z(), z(), z(), z()],
             },
             dp: dormand_prince::Stages::new(dim),
+            goal_filter: GoalFilter::new(0.0, &p.goal),
         })
     }
 
@@ -137,6 +145,16 @@ impl Integrator {
     /// Canonical decay.
     pub fn alpha(&self) -> f64 {
         self.alpha
+    }
+
+    /// The goal filter ([`goal_filter`]): off unless set.
+    pub fn goal_filter(&self) -> &GoalFilter {
+        &self.goal_filter
+    }
+
+    /// The goal filter, to change it.
+    pub fn goal_filter_mut(&mut self) -> &mut GoalFilter {
+        &mut self.goal_filter
     }
 
     fn forcing_at(&mut self, s: f64) -> usize {
@@ -156,7 +174,8 @@ impl Integrator {
     ///
     /// # Formula
     /// `tau dv/dt = K (g - x) - D v - K (g - x0) s + K f(s) + phi(x, v)` (paper, `eq:dmp_acc_obst`) with
-    /// `v = tau dx/dt`, so `d2x/dt2 = (tau dv/dt) / tau^2`.
+    /// `v = tau dx/dt`, so `d2x/dt2 = (tau dv/dt) / tau^2`; `g` is the goal filter's `g(t)` while it filters a
+    /// change ([`goal_filter`]), `motion.goal` otherwise.
     #[allow(clippy::too_many_arguments)]
     pub fn acceleration<P: Perturbation + ?Sized>(
         &mut self,
@@ -177,8 +196,13 @@ impl Integrator {
         perturbation.add(t, x, &self.b.v, tau, &mut self.b.phi);
         let f = &self.cache[fi].1;
         let inv_tau2 = 1.0 / (tau * tau);
+        let filtered = self.goal_filter.is_active();
+        if filtered {
+            self.goal_filter.goal_at(&motion.goal, t, tau, &mut self.b.g);
+        }
         for i in 0..self.dim {
-            let (g, x0, k) = (motion.goal[i], motion.start[i], self.k[i]);
+            let g = if filtered { self.b.g[i] } else { motion.goal[i] };
+            let (x0, k) = (motion.start[i], self.k[i]);
             out[i] = (k * (g - x[i]) - self.d[i] * self.b.v[i] - k * (g - x0) * s + k * f[i] + self.b.phi[i])
                 * inv_tau2;
         }

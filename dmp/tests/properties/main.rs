@@ -9,6 +9,7 @@ mod bar_through_gap;
 mod changing_the_motion;
 mod fixtures;
 mod guard_rails;
+mod limits;
 mod orientation;
 mod replay;
 mod rk4_convergence;

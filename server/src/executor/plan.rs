@@ -36,6 +36,7 @@ pub fn advance_cancellable(
         all.cellmate_contacts.extend(p.cellmate_contacts.into_iter().map(|(i, c)| (i + done, c)));
         all.stalls.extend(p.stalls);
         all.ignored.extend(p.ignored);
+        all.limit = all.limit.max(p.limit);
         last = p.outcome;
         done += k;
         if n == 0 {

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use dmp::execution::Outcome;
-use dmp_proto::status::{end_reason, segment_status};
+use dmp_proto::status::{end_reason, segment_status_limited};
 use dmp_proto::v1;
 
 use super::ignored::push_obstacle_warnings;
@@ -132,10 +132,11 @@ pub fn compute(run: &mut ServedRun, step: Step, job: &JobContext<'_>) -> Result<
         push_obstacle_warnings(&mut stretch.ignored, &mut out.warnings);
         let last_point_time = e.time() - e.dt();
         let outcome = stretch.outcome;
+        let status = segment_status_limited(outcome, stretch.limit);
         if out.segments.is_empty() {
             out.states = member_states(run, &stretch, step.wall_of(stretch.start_time));
         }
-        let batch = member_segments(run, stretch, sequence, segment_status(outcome), step.start_unix);
+        let batch = member_segments(run, stretch, sequence, status, step.start_unix);
         sequence += 1;
         out.segments.push(Computed { batch, outcome, last_point_time });
         let done = end_reason(outcome).is_some()

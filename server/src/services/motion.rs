@@ -7,7 +7,8 @@ use std::time::Duration;
 use dmp::Stepping;
 use dmp::execution::{GoalTolerance, GroupMember, join_group};
 use dmp::field::Agent;
-use dmp_proto::status::segment_status;
+use dmp_proto::limits::tightest;
+use dmp_proto::status::segment_status_limited;
 use dmp_proto::v1;
 use dmp_proto::v1::motion_service_server::MotionService;
 use tokio::sync::mpsc;
@@ -83,6 +84,8 @@ impl MotionServiceImpl {
             run.execution.set_orientation_chart(chart)?;
         }
         run.execution.set_tool(r.tool)?;
+        run.execution.set_limits(r.limits, r.chart.is_some())?;
+        run.execution.set_goal_filter(r.goal_filter_alpha)?;
         Ok(run)
     }
 
@@ -243,7 +246,7 @@ impl MotionService for MotionServiceImpl {
         let collisions: Vec<String> = run.execution.touched().iter().cloned().collect();
         let stalled = !stretch.stalls.is_empty();
         info!(robot = %robot_id, steps, collisions = collisions.len(), stalled, "planned");
-        let status = segment_status(stretch.outcome);
+        let status = segment_status_limited(stretch.outcome, stretch.limit);
         let trajectory = member_segments(&run, stretch, 0, status, None).into_iter().next();
         Ok(Response::new(v1::PlanResponse { trajectory, collisions, stalled, warnings }))
     }
@@ -427,6 +430,9 @@ impl MotionService for MotionServiceImpl {
                     angular_speed: a.angular_speed.min(b.angular_speed),
                 }
             });
+        // One phase, one set of limits: the tightest of the members'; the goal filter of the first member.
+        let limits = resolved.iter().fold(resolved[0].limits, |a, r| tightest(&a, &r.limits));
+        let goal_filter_alpha = resolved[0].goal_filter_alpha;
         let members =
             agents.into_iter().zip(resolved.into_iter().map(|r| r.footprint_proto)).collect::<Vec<_>>();
         info!(robots = members.len(), realtime = cfg.realtime, "execute group");
@@ -437,6 +443,8 @@ impl MotionService for MotionServiceImpl {
         let grant = self.grant(caller, &cell, ids.iter().map(|id| id.to_string()).collect())?;
         let mut run = ServedRun::new(primitive, motion, members, avoidance, cfg.stepping, history_len(&cfg))?;
         run.execution.set_goal_tolerance(goal_tolerance).map_err(ServerError::from)?;
+        run.execution.set_limits(limits, false).map_err(ServerError::from)?;
+        run.execution.set_goal_filter(goal_filter_alpha).map_err(ServerError::from)?;
         let rx = self.spawn(run, cell, cfg, None, &peer, Owner { claim, grant })?;
         let stream = ReceiverStream::new(rx).map(|r| {
             r.map(|segments| v1::GroupSegment {

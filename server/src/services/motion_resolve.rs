@@ -5,6 +5,7 @@ use dmp::{Motion, Primitive};
 use dmp_proto::avoidance::avoidance_from_proto;
 use dmp_proto::check::{check_in_workspace, check_tau, check_vector};
 use dmp_proto::keys::check_name;
+use dmp_proto::limits::{goal_filter_alpha, limits_from_proto};
 use dmp_proto::shape::superquadric_to_shape;
 use dmp_proto::v1;
 
@@ -50,6 +51,10 @@ pub(super) struct ResolvedMotion {
     pub(super) chart: Option<nalgebra::UnitQuaternion<f64>>,
     /// A pose run's tool.
     pub(super) tool: Option<dmp::tool::Tool>,
+    /// The robot's limits (none when the request gives none).
+    pub(super) limits: dmp::Limits,
+    /// The goal filter's `alpha_g` (0: off).
+    pub(super) goal_filter_alpha: f64,
 }
 
 impl MotionServiceImpl {
@@ -135,6 +140,9 @@ impl MotionServiceImpl {
             goal_tolerance: goal_tolerance(spec.goal_tolerance.as_ref(), prefix)?,
             tool: spec.tool.as_ref().map(|t| tool(t, chart.is_some(), d, prefix)).transpose()?,
             chart,
+            limits: limits_from_proto(spec.limits.as_ref())
+                .map_err(|e| e.within(&format!("{prefix}.limits")))?,
+            goal_filter_alpha: goal_filter_alpha(spec.goal_filter_alpha).map_err(|e| e.within(prefix))?,
         })
     }
 }

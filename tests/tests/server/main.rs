@@ -12,6 +12,7 @@ mod limits;
 mod load;
 mod matches_the_engine;
 mod metrics;
+mod motion_limits;
 mod poses;
 mod primitives;
 mod python_clients;

@@ -1,0 +1,215 @@
+//! Goal filtering, obstacle blending and limits under the run's changes: rollbacks, pause and resume, `tau`
+//! changes and a second goal change while the first is filtered.
+
+use super::*;
+use crate::Obstacle;
+use crate::avoidance::Method;
+use crate::avoidance::StaticVolumetric;
+use crate::isopotential::{Shape, Superquadric};
+
+/// A 2-D straight reach from the origin to (1, 0.5) in 1 s, alone, at `stepping`.
+fn reach(stepping: Stepping, scene: Scene) -> Execution {
+    let p =
+        Primitive::straight_line(20, 4.0, vec![1000.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 0.5]).unwrap();
+    Execution::new(p.clone(), Motion::of(&p), scene, CellMateAvoidance::NONE, stepping, 2000).unwrap()
+}
+
+fn bits(v: &[f64]) -> Vec<u64> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+/// The largest change of the acceleration between consecutive points of `xdd` (2-D), per output step.
+fn largest_acc_step(xdd: &[f64]) -> f64 {
+    xdd.chunks(2)
+        .zip(xdd.chunks(2).skip(1))
+        .map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt())
+        .fold(0.0, f64::max)
+}
+
+/// Advances `n` points and returns the accelerations of the last point before and of the whole stretch.
+fn acc_across_change(e: &mut Execution, change: impl FnOnce(&mut Execution)) -> f64 {
+    let before = e.advance(10).unwrap();
+    change(e);
+    let after = e.advance(10).unwrap();
+    let mut xdd = before.xdd[18..].to_vec();
+    xdd.extend_from_slice(&after.xdd);
+    largest_acc_step(&xdd)
+}
+
+#[test]
+fn a_filtered_goal_change_keeps_the_acceleration_continuous_and_a_step_does_not() {
+    // The largest change of the acceleration from one point to the next across two goal changes (the second while
+    // the first is filtered), at output step `dt`.
+    let worst = |alpha: f64, dt: f64| {
+        let mut e = reach(Stepping::rk4(dt), Scene::empty());
+        e.set_goal_filter(alpha).unwrap();
+        e.advance((0.3 / dt).round() as usize).unwrap();
+        let first = acc_across_change(&mut e, |e| e.set_goal(vec![0.2, 0.9]).unwrap());
+        e.advance((0.03 / dt).round() as usize).unwrap();
+        let second = acc_across_change(&mut e, |e| e.set_goal(vec![0.6, -0.2]).unwrap());
+        let mut last = Stretch::default();
+        for _ in 0..2000 {
+            last = e.advance(10).unwrap();
+            if last.outcome.is_final() {
+                break;
+            }
+        }
+        assert_eq!(last.outcome, Outcome::GoalReached, "alpha {alpha}");
+        first.max(second)
+    };
+    let alpha = crate::integrate::goal_filter::DEFAULT_GOAL_ALPHA;
+    let (step, step_fine) = (worst(0.0, 1e-3), worst(0.0, 5e-4));
+    let (filtered, filtered_fine) = (worst(alpha, 1e-3), worst(alpha, 5e-4));
+    // A step of the goal is a step of the acceleration, whatever the output step; filtered, the acceleration is
+    // continuous: its change from one point to the next halves with the step.
+    assert!(step > 100.0 && step_fine > 0.9 * step, "{step} {step_fine}");
+    assert!(filtered < step / 20.0, "{filtered} against {step}");
+    assert!(filtered_fine < 0.6 * filtered, "{filtered_fine} against {filtered}");
+    assert!(reach(Stepping::rk4(1e-3), Scene::empty()).set_goal_filter(-1.0).is_err());
+}
+
+#[test]
+fn a_rollback_while_filtering_recomputes_the_same_points_and_restores_the_filter() {
+    for stepping in [Stepping::rk4(1e-3), Stepping { dt: 1e-3, step_points: 30, tolerance: Some(3e-6) }] {
+        let mut e = reach(stepping, Scene::empty());
+        e.advance(400).unwrap();
+        e.set_goal(vec![0.2, 0.9]).unwrap();
+        let kept = e.advance(50).unwrap();
+        let first = e.advance(50).unwrap();
+        // Back to a point after the change: the same points.
+        assert_eq!(e.rollback_to(0.45), 0.45);
+        let again = e.advance(50).unwrap();
+        let worst = first.x.iter().zip(&again.x).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        if stepping.is_coarse() {
+            assert!(worst < 1e-6, "{worst}");
+        } else {
+            assert_eq!(bits(&first.x), bits(&again.x));
+        }
+        // A second change at 0.5, then back before it: the filter goes on from where it was at 0.45.
+        let mut g45 = [0.0; 2];
+        e.filtered_goal_at(0.45, &mut g45);
+        e.set_goal(vec![0.6, -0.2]).unwrap();
+        e.advance(20).unwrap();
+        assert_eq!(e.rollback_to(0.45), 0.45);
+        let mut g = [0.0; 2];
+        e.filtered_goal_at(0.45, &mut g);
+        assert!((g[0] - g45[0]).abs() < 1e-12 && (g[1] - g45[1]).abs() < 1e-12, "{g:?} {g45:?}");
+        let redo = e.advance(50).unwrap();
+        // No jump where the recomputed points join the kept ones.
+        let join = largest_acc_step(&[&kept.xdd[98..], &redo.xdd[..2]].concat());
+        assert!(join <= 1.5 * largest_acc_step(&redo.xdd), "{stepping:?}: {join}");
+    }
+}
+
+#[test]
+fn the_filter_survives_pause_resume_and_tau_changes() {
+    let mut e = reach(Stepping::rk4(1e-3), Scene::empty());
+    e.advance(300).unwrap();
+    e.set_goal(vec![0.2, 0.9]).unwrap();
+    e.advance(40).unwrap();
+    // A tau change while filtering: the filtered goal is continuous through it.
+    let mut before = [0.0; 2];
+    e.filtered_goal_at(e.time(), &mut before);
+    e.set_tau(1.5).unwrap();
+    let mut after = [0.0; 2];
+    e.filtered_goal_at(e.time(), &mut after);
+    assert!((before[0] - after[0]).abs() < 1e-12 && (before[1] - after[1]).abs() < 1e-12);
+    e.advance(40).unwrap();
+    // Paused, the filtered goal stays where it is; resumed, it goes on from there.
+    e.set_holding(true);
+    let mut held = [0.0; 2];
+    e.filtered_goal_at(e.time(), &mut held);
+    e.advance(200).unwrap();
+    let mut still = [0.0; 2];
+    e.filtered_goal_at(e.time(), &mut still);
+    assert_eq!(held, still);
+    e.set_holding(false);
+    let mut last = Stretch::default();
+    for _ in 0..800 {
+        last = e.advance(10).unwrap();
+        if last.outcome.is_final() {
+            break;
+        }
+    }
+    assert_eq!(last.outcome, Outcome::GoalReached);
+}
+
+#[test]
+fn an_obstacle_that_appears_is_blended_in_without_a_jump() {
+    let ball = || {
+        let shape = Shape::Superquadric(Superquadric::new(vec![0.1, 0.1], vec![1.0, 1.0]).unwrap());
+        Obstacle::new("ball", shape, vec![0.55, 0.3], None, None).unwrap()
+    };
+    let avoid = Avoidance::new(Method::StaticVolumetric(StaticVolumetric { a: 0.1, eta: 1.0 }));
+    let mut worst = [0.0; 2];
+    for (i, blend) in [0.0, DEFAULT_OBSTACLE_BLEND].into_iter().enumerate() {
+        let mut e = reach(Stepping::rk4(1e-3), Scene::with_obstacles(Vec::new(), avoid, 0));
+        e.set_obstacle_blend(blend).unwrap();
+        e.advance(300).unwrap();
+        worst[i] = acc_across_change(&mut e, |e| e.set_obstacles([(&ball(), 0.0)]).unwrap());
+        let rest = e.advance(200).unwrap();
+        worst[i] = worst[i].max(largest_acc_step(&rest.xdd));
+        assert!(rest.contacts.is_empty());
+    }
+    assert!(worst[0] > 10.0 * worst[1], "blending smooths the change: {worst:?}");
+    assert!(reach(Stepping::rk4(1e-3), Scene::empty()).set_obstacle_blend(f64::NAN).is_err());
+}
+
+/// Peak speed, acceleration and jerk of dimensions `dims` of points `x` (`dim` each) as backward differences.
+fn peaks(x: &[f64], dim: usize, dims: std::ops::Range<usize>, dt: f64) -> [f64; 3] {
+    let n = x.len() / dim;
+    let p = |k: usize, i: usize| x[k * dim + i];
+    let mut peak = [0.0f64; 3];
+    for k in 3..n {
+        let norm = |f: &dyn Fn(usize) -> f64| dims.clone().map(|i| f(i).powi(2)).sum::<f64>().sqrt();
+        let v = norm(&|i| (p(k, i) - p(k - 1, i)) / dt);
+        let a = norm(&|i| (p(k, i) - 2.0 * p(k - 1, i) + p(k - 2, i)) / (dt * dt));
+        let j = norm(&|i| (p(k, i) - 3.0 * p(k - 1, i) + 3.0 * p(k - 2, i) - p(k - 3, i)) / (dt * dt * dt));
+        for (m, q) in peak.iter_mut().zip([v, a, j]) {
+            *m = m.max(q);
+        }
+    }
+    peak
+}
+
+#[test]
+fn a_pose_run_keeps_the_angular_limits_on_its_rotation_vector() {
+    let start = vec![0.3, 0.0, 0.4, 0.0, 0.0, 0.0];
+    let goal = vec![0.5, 0.1, 0.4, 0.0, 0.0, 1.0];
+    let p = Primitive::straight_line(20, 4.0, vec![1000.0; 6], None, 0.5, start, goal).unwrap();
+    let mut e = Execution::new(
+        p.clone(),
+        Motion::of(&p),
+        Scene::empty(),
+        CellMateAvoidance::NONE,
+        Stepping::rk4(1e-3),
+        10,
+    )
+    .unwrap();
+    assert!(e.set_limits(Limits::PANDA, true).is_ok());
+    let mut x = e.advance(200).unwrap().x;
+    e.set_goal(vec![0.5, 0.1, 0.4, 0.0, 1.5, -1.0]).unwrap();
+    x.extend(e.advance(3000).unwrap().x);
+    let (lin, ang) = (peaks(&x, 6, 0..3, 1e-3), peaks(&x, 6, 3..6, 1e-3));
+    let l = Limits::PANDA;
+    assert!(lin[0] <= l.max_speed && lin[1] <= l.max_acceleration && lin[2] <= l.max_jerk, "{lin:?}");
+    assert!(
+        ang[0] <= l.max_angular_speed && ang[1] <= l.max_angular_acceleration && ang[2] <= l.max_angular_jerk,
+        "{ang:?}"
+    );
+    // Without the orientation, the same limits bound the six dimensions as one position.
+    let tiny =
+        Primitive::straight_line(20, 4.0, vec![1000.0; 3], None, 0.5, vec![0.0; 3], vec![0.1; 3]).unwrap();
+    let mut e3 = Execution::new(
+        tiny.clone(),
+        Motion::of(&tiny),
+        Scene::empty(),
+        CellMateAvoidance::NONE,
+        Stepping::rk4(1e-3),
+        10,
+    )
+    .unwrap();
+    assert_eq!(e3.set_limits(Limits::PANDA, true).unwrap_err().field, "limits");
+    let bad = Limits { max_speed: -1.0, ..Limits::PANDA };
+    assert_eq!(e3.set_limits(bad, false).unwrap_err().field, "limits.max_speed");
+}

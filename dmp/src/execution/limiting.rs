@@ -1,0 +1,186 @@
+//! Keeping a robot's [`Limits`]: the DMP way first, then the limiter.
+//!
+//! 1. **Temporal coupling.** While the DMP's next point uses more than [`COUPLE_ABOVE`] of a bound (speed,
+//!    acceleration or jerk, as backward differences), its time scale grows, `tau = tau_user c`, with
+//!    `dc/dt = COUPLE_RATE c`; once it uses less than [`RELAX_BELOW`], `c` relaxes back to 1 at
+//!    `dc/dt = -RELAX_RATE c`. The phase slows, so the forcing term and the attractor ask less of the robot, and
+//!    the motion's path is kept. `c` is applied (a change of `tau` from the next output point, continuous in
+//!    position and velocity) whenever it moved by [`COUPLE_STEP`] since it was last applied.
+//! 2. **The limiter** ([`super::limiter`]): a point that would still exceed a bound is replaced by the nearest one
+//!    within the bounds, and the DMP is restarted from it ([`LimitAction::Limited`]).
+//! 3. **Braking.** Where the DMP asks to decelerate (an acceleration against the velocity) at more than
+//!    [`BRAKE_ABOVE`] times the acceleration bound (an obstacle appears right in front), the robot brakes to rest within its limits
+//!    ([`LimitAction::Braking`]), and the DMP restarts from rest.
+//!
+//! No point handed out exceeds a bound, measured as backward finite differences of the positions at the output
+//! rate, across stretches, changes and rollbacks (the limiter's last points are taken from the history after a
+//! rollback).
+
+use super::limiter::{Group, Limiter};
+use super::{ARRIVED_SPEED, Execution};
+use crate::error::InvalidInput;
+
+pub use super::limits::Limits;
+
+/// Temporal coupling starts above this use of a bound.
+pub const COUPLE_ABOVE: f64 = 0.9;
+/// Temporal coupling relaxes below this use of a bound.
+pub const RELAX_BELOW: f64 = 0.6;
+/// Growth rate of the time scale while coupling, 1/s.
+pub const COUPLE_RATE: f64 = 4.0;
+/// Relaxation rate of the time scale, 1/s.
+pub const RELAX_RATE: f64 = 1.0;
+/// Largest time scale factor.
+pub const MAX_TAU_SCALE: f64 = 10.0;
+/// Relative change of the time scale factor that is applied.
+pub const COUPLE_STEP: f64 = 0.01;
+/// Braking to rest starts when the DMP asks to decelerate at this many times the acceleration bound.
+pub const BRAKE_ABOVE: f64 = 4.0;
+
+/// What keeping the limits did in a stretch (the most that happened).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord)]
+pub enum LimitAction {
+    /// Nothing: the DMP's points were within the limits.
+    #[default]
+    None,
+    /// The phase was slowed (temporal coupling: `tau` scaled up).
+    Slowed,
+    /// Points were replaced by the nearest within the limits (the DMP restarted from them).
+    Limited,
+    /// The robot braked towards rest within its limits: the DMP asked for far more than they allow.
+    Braking,
+}
+
+impl Execution {
+    /// Keeps `limits` from the next output point on. With `orientation`, the last three dimensions are the
+    /// rotation vector of a pose run (pose convention): the angular limits apply to them (their speed bounds `ω`,
+    /// since `|ω| = |J(y) ẏ| <= |ẏ|`; their acceleration and jerk are those of `ẏ`, which equal `ω̇` and `ω̈` up to
+    /// the terms in `J̇`), and the linear limits to each robot's other dimensions. Without, the linear limits apply
+    /// to each robot's dimensions. Refused, naming the field, when a value is not finite or negative, or
+    /// `orientation` with fewer than four dimensions.
+    pub fn set_limits(&mut self, limits: Limits, orientation: bool) -> Result<(), InvalidInput> {
+        limits.validate().map_err(|e| e.within("limits"))?;
+        let dim = self.primitive.dim;
+        if orientation && dim < 4 {
+            return Err(InvalidInput::new(
+                "limits",
+                "orientation needs a position and three rotation dimensions",
+            ));
+        }
+        let position_end = if orientation { dim - 3 } else { dim };
+        let mut groups: Vec<Group> = self
+            .members()
+            .iter()
+            .map(|m| Group {
+                dims: m.dims.iter().copied().filter(|&i| i < position_end).collect(),
+                bounds: limits.linear(),
+            })
+            .filter(|g| !g.dims.is_empty())
+            .collect();
+        if orientation {
+            groups.push(Group { dims: (dim - 3..dim).collect(), bounds: limits.angular() });
+        }
+        self.limits = limits;
+        self.limiter = Limiter::new(groups, dim, self.stepping.dt, &self.knot0.x);
+        self.restore_limiter();
+        Ok(())
+    }
+
+    /// The limits kept.
+    pub fn limits(&self) -> Limits {
+        self.limits
+    }
+
+    /// The temporal coupling's factor on `tau` (1 when the limits ask nothing).
+    pub fn tau_scale(&self) -> f64 {
+        self.tau_scale
+    }
+
+    /// The limiter's last points from the history (after a rollback, or new limits).
+    pub(super) fn restore_limiter(&mut self) {
+        let d = self.primitive.dim;
+        self.recent.resize(3 * d, 0.0);
+        let mut n = self.history.recent_positions(&mut self.recent[..3 * d]);
+        if n == 0 {
+            self.recent[..d].copy_from_slice(&self.knot0.x);
+            n = 1;
+        }
+        self.limiter.set_recent(&self.recent, n);
+    }
+
+    /// Keeps the limits at the point just computed (at time `t` and phase `s`), before it is handed out; the next output point is at `self.out_t`. Returns what it did.
+    pub(super) fn keep_limits(
+        &mut self,
+        t: f64,
+        s: f64,
+        x: &mut [f64],
+        xd: &mut [f64],
+        xdd: &mut [f64],
+    ) -> LimitAction {
+        if self.limiter.is_off() {
+            return LimitAction::None;
+        }
+        let verdict = self.limiter.limit(x, xd, xdd, self.braking);
+        if !self.braking && !self.holding && verdict.decel_usage > BRAKE_ABOVE {
+            self.braking = true;
+        }
+        let mut action = if self.braking {
+            LimitAction::Braking
+        } else if verdict.changed {
+            LimitAction::Limited
+        } else {
+            LimitAction::None
+        };
+        if self.braking {
+            let speed = xd.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if speed <= ARRIVED_SPEED {
+                // At rest: the DMP goes on from here.
+                xd.fill(0.0);
+                self.braking = false;
+            }
+        }
+        if verdict.changed || action == LimitAction::Braking {
+            self.restart_dmp_at(t, s, x, xd);
+        }
+        if !self.holding {
+            self.couple(verdict.usage);
+        }
+        if self.tau_scale > 1.0 && action == LimitAction::None {
+            action = LimitAction::Slowed;
+        }
+        action
+    }
+
+    /// Temporal coupling after a point that used `usage` of the bounds.
+    fn couple(&mut self, usage: f64) {
+        let dt = self.stepping.dt;
+        let wanted = if usage > COUPLE_ABOVE {
+            (self.tau_scale_target * (COUPLE_RATE * dt).exp()).min(MAX_TAU_SCALE)
+        } else if usage < RELAX_BELOW {
+            (self.tau_scale_target * (-RELAX_RATE * dt).exp()).max(1.0)
+        } else {
+            self.tau_scale_target
+        };
+        self.tau_scale_target = wanted;
+        let moved = (wanted / self.tau_scale - 1.0).abs() >= COUPLE_STEP;
+        if moved || (wanted == 1.0 && self.tau_scale != 1.0) {
+            self.rebase();
+            self.anchor_goal(self.holding);
+            self.tau_scale = wanted;
+            self.motion.tau = self.base_tau * wanted;
+        }
+    }
+
+    /// Restarts the DMP at the output point just handed out (time `t`, phase `s`): the next knot is computed from
+    /// there.
+    fn restart_dmp_at(&mut self, t: f64, s: f64, x: &[f64], xd: &[f64]) {
+        self.knot0.t = t;
+        self.knot0.s = s;
+        self.knot0.x.copy_from_slice(x);
+        self.knot0.xd.copy_from_slice(xd);
+        if let Some(k1) = self.knot1.take() {
+            self.spare = Some(k1);
+        }
+        self.acc0_current = false;
+    }
+}

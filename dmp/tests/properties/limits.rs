@@ -1,0 +1,246 @@
+//! Changes without jumps, and limits that are always kept: a goal change is filtered, obstacles that appear are
+//! blended in, and no setpoint exceeds the robot's profile, measured as backward finite differences of the
+//! positions at the output rate over everything handed out (superseded points left out, as a robot sees them).
+
+use std::sync::LazyLock;
+
+use dmp::execution::CellMateAvoidance;
+use dmp::{
+    Avoidance, Demonstration, Execution, LearnConfig, Limits, Motion, Outcome, Primitive, Scene, Stepping,
+    learn,
+};
+use proptest::prelude::*;
+
+use crate::fixtures::{config, dist, dynamic_volumetric, ellipsoid};
+
+const DT: f64 = 1e-3;
+
+/// A minimum-jerk reach of 2 s from (0.3, 0, 0.4) to (0.6, 0.2, 0.5), sampled at 1 kHz, learned with the paper's
+/// settings.
+static REACH: LazyLock<Primitive> = LazyLock::new(|| {
+    let (a, b) = ([0.3, 0.0, 0.4], [0.6, 0.2, 0.5]);
+    let t: Vec<f64> = (0..=2000).map(|k| k as f64 * 1e-3).collect();
+    let x = t
+        .iter()
+        .map(|&t| {
+            let u = t / 2.0;
+            let c = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
+            (0..3).map(|i| a[i] + (b[i] - a[i]) * c).collect()
+        })
+        .collect();
+    learn(&Demonstration::new(t, x).unwrap(), &LearnConfig::paper()).unwrap()
+});
+
+/// What the robot received: the points kept, `dim` each, from time zero, one output step apart.
+#[derive(Default)]
+struct Received {
+    x: Vec<f64>,
+}
+
+impl Received {
+    /// Drops the points at or after `t` (superseded), then appends `stretch`.
+    fn supersede(&mut self, t: f64, x: &[f64], dim: usize) {
+        let keep = ((t / DT).round() as usize) * dim;
+        self.x.truncate(keep);
+        self.x.extend_from_slice(x);
+    }
+
+    /// Peak speed, acceleration and jerk of dimensions `dims` as backward differences, the robot at rest at its
+    /// first point before it.
+    fn peaks(&self, dim: usize, dims: std::ops::Range<usize>) -> [f64; 3] {
+        let n = self.x.len() / dim;
+        let p = |k: isize| -> Vec<f64> {
+            let k = k.max(0) as usize;
+            dims.clone().map(|i| self.x[k * dim + i]).collect()
+        };
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let mut peak = [0.0f64; 3];
+        for k in 0..n as isize {
+            let (p0, p1, p2, p3) = (p(k), p(k - 1), p(k - 2), p(k - 3));
+            let d = p0.len();
+            let v: Vec<f64> = (0..d).map(|i| (p0[i] - p1[i]) / DT).collect();
+            let a: Vec<f64> = (0..d).map(|i| (p0[i] - 2.0 * p1[i] + p2[i]) / (DT * DT)).collect();
+            let j: Vec<f64> =
+                (0..d).map(|i| (p0[i] - 3.0 * p1[i] + 3.0 * p2[i] - p3[i]) / (DT * DT * DT)).collect();
+            for (m, q) in peak.iter_mut().zip([norm(&v), norm(&a), norm(&j)]) {
+                *m = m.max(q);
+            }
+        }
+        peak
+    }
+}
+
+fn run(p: &Primitive, scene: Scene, stepping: Stepping) -> Execution {
+    Execution::new(p.clone(), Motion::of(p), scene, CellMateAvoidance::NONE, stepping, 5000).unwrap()
+}
+
+/// The reach streamed at 1 kHz in 10 ms segments, its goal moved by 0.3 m at 0.8 s; the points received and the
+/// last outcome.
+fn reach_with_goal_change(limits: Option<Limits>, alpha: Option<f64>) -> (Received, Outcome, Execution) {
+    let p = &*REACH;
+    let mut e = run(p, Scene::empty(), Stepping::rk4(DT));
+    if let Some(l) = limits {
+        e.set_limits(l, false).unwrap();
+    }
+    if let Some(a) = alpha {
+        e.set_goal_filter(a).unwrap();
+    }
+    let mut got = Received::default();
+    let mut outcome = Outcome::Running;
+    for seg in 0..800 {
+        if seg == 80 {
+            let g: Vec<f64> = p.goal.iter().zip([0.0, 0.3, 0.0]).map(|(g, d)| g + d).collect();
+            e.set_goal(g).unwrap();
+        }
+        let s = e.advance(10).unwrap();
+        got.supersede(s.start_time, &s.x, 3);
+        outcome = s.outcome;
+        if outcome.is_final() {
+            break;
+        }
+    }
+    (got, outcome, e)
+}
+
+#[test]
+fn an_unfiltered_goal_change_jumps_and_the_filter_and_the_limits_keep_the_panda_profile() {
+    let l = Limits::PANDA;
+    let (step, _, _) = reach_with_goal_change(None, Some(0.0));
+    let [v, a, j] = step.peaks(3, 0..3);
+    eprintln!("goal step, no filter, no limits: {v:.3} m/s, {a:.1} m/s², {j:.0} m/s³");
+    assert!(a > 2.0 * l.max_acceleration && j > 2.0 * l.max_jerk, "the problem of the issue: {a} {j}");
+
+    let (filtered, _, _) = reach_with_goal_change(None, None);
+    let [v, a, j] = filtered.peaks(3, 0..3);
+    eprintln!("goal filtered (default alpha_g), no limits: {v:.3} m/s, {a:.2} m/s², {j:.1} m/s³");
+
+    let (limited, outcome, e) = reach_with_goal_change(Some(l), None);
+    let [v, a, j] = limited.peaks(3, 0..3);
+    eprintln!(
+        "goal filtered, Panda limits: {v:.3} m/s, {a:.2} m/s², {j:.1} m/s³; tau scale {}",
+        e.tau_scale()
+    );
+    assert!(v <= l.max_speed && a <= l.max_acceleration && j <= l.max_jerk, "{v} {a} {j}");
+    assert_eq!(outcome, Outcome::GoalReached);
+    assert!(dist(&e.motion().goal, &limited.x[limited.x.len() - 3..]) <= 1e-3);
+
+    // Unfiltered but limited: still within the profile, and still reaches the new goal.
+    let (hard, outcome, _) = reach_with_goal_change(Some(l), Some(0.0));
+    let [v, a, j] = hard.peaks(3, 0..3);
+    eprintln!("goal step, Panda limits: {v:.3} m/s, {a:.2} m/s², {j:.1} m/s³");
+    assert!(v <= l.max_speed && a <= l.max_acceleration && j <= l.max_jerk, "{v} {a} {j}");
+    assert_eq!(outcome, Outcome::GoalReached);
+}
+
+proptest! {
+    #![proptest_config(config(12))]
+
+    /// Random goals, taus, goal changes, obstacles appearing on the way, rollbacks (a change superseding points
+    /// already handed out), steppings and segment lengths: every point the robot keeps is within the Panda's
+    /// profile.
+    #[test]
+    fn no_setpoint_ever_exceeds_the_profile(
+        goal in prop::array::uniform3(-0.4f64..0.4),
+        new_goal in prop::array::uniform3(-0.4f64..0.4),
+        tau in 0.4f64..3.0,
+        change_at in 0.05f64..1.5,
+        obstacle_at in prop::option::of(0.05f64..1.5),
+        obstacle_radius in 0.03f64..0.15,
+        rollback in 0usize..30,
+        segment in 5usize..60,
+        coarse in any::<bool>(),
+        alpha in prop::option::of(0.0f64..40.0),
+    ) {
+        let p = &*REACH;
+        let start = p.start.clone();
+        let goal: Vec<f64> = start.iter().zip(goal).map(|(s, g)| s + g).collect();
+        let new_goal: Vec<f64> = start.iter().zip(new_goal).map(|(s, g)| s + g).collect();
+        let stepping = if coarse {
+            Stepping { dt: DT, step_points: 20, tolerance: Some(3e-6) }
+        } else {
+            Stepping::rk4(DT)
+        };
+        let motion = Motion { start: start.clone(), goal: goal.clone(), tau };
+        let scene = Scene::with_obstacles(Vec::new(), Avoidance::new(dynamic_volumetric(10.0, 2.0, 0.5)), 0);
+        let mut e = Execution::new(p.clone(), motion, scene, CellMateAvoidance::NONE, stepping, 5000).unwrap();
+        e.set_limits(Limits::PANDA, false).unwrap();
+        if let Some(a) = alpha {
+            e.set_goal_filter(a).unwrap();
+        }
+        let mut got = Received::default();
+        let (mut changed, mut appeared) = (false, false);
+        let end = 2.0 * tau + 2.0;
+        while e.time() < end {
+            let s = e.advance(segment).unwrap();
+            got.supersede(s.start_time, &s.x, 3);
+            if s.outcome.is_final() {
+                break;
+            }
+            let t = e.time();
+            if !changed && t >= change_at {
+                changed = true;
+                // A change that supersedes the last points handed out, as a real-time stream does.
+                let back = e.rollback_to(t - (rollback.min(segment) as f64) * DT);
+                prop_assert!(back <= t);
+                e.set_goal(new_goal.clone()).unwrap();
+            }
+            if let Some(at) = obstacle_at && !appeared && t >= at {
+                appeared = true;
+                // Right in front: ahead on the way to the goal.
+                let x = &got.x[got.x.len() - 3..];
+                let c: Vec<f64> = (0..3).map(|i| x[i] + 0.3 * (e.motion().goal[i] - x[i])).collect();
+                let o = ellipsoid("ball", &c, &[obstacle_radius; 3]);
+                e.set_obstacles([(&o, 0.0)]).unwrap();
+            }
+        }
+        let l = Limits::PANDA;
+        let [v, a, j] = got.peaks(3, 0..3);
+        prop_assert!(
+            v <= l.max_speed && a <= l.max_acceleration && j <= l.max_jerk,
+            "peaks {v} m/s, {a} m/s², {j} m/s³"
+        );
+    }
+}
+
+/// An obstacle appears ahead of the reach at 0.8 s; the time from then until the path leaves the obstacle-free one by
+/// 1 mm, and the smallest clearance to the ball, with the obstacle applied at once and blended in over `blend`.
+fn reaction(blend: f64, radius: f64) -> (f64, f64) {
+    let p = &*REACH;
+    let scene = Scene::with_obstacles(Vec::new(), Avoidance::new(dynamic_volumetric(10.0, 2.0, 0.5)), 0);
+    let free = {
+        let mut e = run(p, scene.clone(), Stepping::rk4(DT));
+        e.advance(3000).unwrap().x
+    };
+    let mut e = run(p, scene, Stepping::rk4(DT));
+    e.set_obstacle_blend(blend).unwrap();
+    let mut x = e.advance(800).unwrap().x;
+    let here = &x[x.len() - 3..];
+    let c: Vec<f64> = (0..3).map(|i| here[i] + 0.4 * (p.goal[i] - here[i])).collect();
+    e.set_obstacles([(&ellipsoid("ball", &c, &[radius; 3]), 0.0)]).unwrap();
+    x.extend(e.advance(2200).unwrap().x);
+    let deviates = (800..3000).find(|&k| dist(&x[3 * k..3 * k + 3], &free[3 * k..3 * k + 3]) > 1e-3);
+    let reaction = deviates.map_or(f64::INFINITY, |k| (k - 800) as f64 * DT);
+    let clearance =
+        (800..3000).map(|k| dist(&x[3 * k..3 * k + 3], &c) - radius).fold(f64::INFINITY, f64::min);
+    (reaction, clearance)
+}
+
+/// What blending an obstacle in costs: the reaction to an obstacle that appears comes later, by about a third of the
+/// blend time here, and the clearance shrinks a little.
+#[test]
+fn blending_an_obstacle_in_delays_the_reaction_by_less_than_the_blend_time() {
+    for radius in [0.03, 0.06] {
+        let (now, now_clear) = reaction(0.0, radius);
+        let (blended, blended_clear) = reaction(dmp::execution::DEFAULT_OBSTACLE_BLEND, radius);
+        eprintln!(
+            "ball of {radius} m: 1 mm off the free path after {:.0} ms at once, {:.0} ms blended; clearance \
+             {:.1} mm, {:.1} mm",
+            now * 1e3,
+            blended * 1e3,
+            now_clear * 1e3,
+            blended_clear * 1e3
+        );
+        assert!(now.is_finite() && blended >= now && blended - now <= dmp::execution::DEFAULT_OBSTACLE_BLEND);
+        assert!(now_clear > 0.0 && blended_clear > 0.0);
+    }
+}
