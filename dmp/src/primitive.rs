@@ -160,10 +160,10 @@ impl Primitive {
         }
         if let Some(chart) = &self.orientation {
             chart.validate()?;
-            if d < 3 {
+            if d < 4 {
                 return Err(InvalidInput::new(
                     "dim",
-                    format!("a pose primitive has at least the 3 orientation dimensions, found {d}"),
+                    format!("a pose primitive has a position and the 3 orientation dimensions, found {d}"),
                 )
                 .into());
             }

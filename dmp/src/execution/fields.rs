@@ -27,6 +27,8 @@ impl Execution {
                 other_dim.push(o);
                 continue;
             }
+            // Inflated for a tool's axis samples before the check: what was dropped is the field's shape.
+            let o = if margin > 0.0 { &o.inflated(margin)? } else { o };
             if self.ignored.is_dropped(o) {
                 continue;
             }
@@ -34,8 +36,7 @@ impl Execution {
             let mut now = vec![0.0; sub];
             o.center_at(age, &mut now);
             let c0: Vec<f64> = now.iter().zip(o.velocity()).map(|(c, v)| c - v * t).collect();
-            let placed = o.with_center(c0);
-            obstacles.push(if margin > 0.0 { placed.inflated(margin)? } else { placed });
+            obstacles.push(o.with_center(c0));
         }
         self.ignored.set_other_dim(other_dim, sub);
         obstacles.extend(self.scene.obstacles.iter().filter(|o| !self.ignored.is_dropped(o)).cloned());
@@ -61,6 +62,11 @@ impl Execution {
                 "obstacle_blend_s",
                 format!("must be a finite number of seconds, zero (off) or more, not {seconds}"),
             ));
+        }
+        if seconds == 0.0 {
+            // Off: the fields being phased out go now (a zero duration would weigh them 0 / 0).
+            self.rebase();
+            self.blend.clear();
         }
         self.blend.duration = seconds;
         Ok(())

@@ -71,11 +71,11 @@ impl Ignored {
 #[derive(Debug, Default)]
 pub(super) struct Diagnosis {
     /// Indices into the run's field.
-    obstacles: Vec<usize>,
+    pub(super) obstacles: Vec<usize>,
     /// Indices into the cell-mates' field.
-    robots: Vec<usize>,
+    pub(super) robots: Vec<usize>,
     /// Run time of the first evaluation that found one.
-    t: f64,
+    pub(super) t: f64,
 }
 
 /// The run's field and its cell-mates' field, summed; while a step is diagnosed, each obstacle's term is checked
@@ -108,7 +108,10 @@ impl Perturbation for FieldSum<'_> {
     fn add(&mut self, t: f64, x: &[f64], v: &[f64], tau: f64, out: &mut [f64]) {
         #[cfg(feature = "orientation")]
         if let Some((tool, chart)) = self.tool {
-            super::tool::add_on_tool(self.field, self.blend, self.mates, tool, chart, t, x, v, tau, out);
+            let diagnosis = self.diagnosis.as_deref_mut();
+            super::tool::add_on_tool(
+                self.field, self.blend, self.mates, tool, chart, t, x, v, tau, out, diagnosis,
+            );
             return;
         }
         if let Some(d) = self.diagnosis.as_deref_mut()

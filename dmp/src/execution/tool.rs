@@ -14,7 +14,9 @@ impl Execution {
     /// Holds `tool` (or nothing): the obstacles and cell-mates act on its control points, which turns the run's
     /// orientation ([`crate::tool`]), and contacts are judged on them. A tool sampled on its axis inflates every
     /// obstacle by [`crate::tool::ControlPoints::reach`] (the run's own now, the cell's as they are set). Only for
-    /// a pose run moving in 3-D, before its first point; the error names `tool`.
+    /// a pose run moving in 3-D, once, before its first point and before the cell's obstacles are set; the error
+    /// names `tool`. With axis samples, contacts are judged against the inflated obstacles: a contact then means
+    /// the tool came within its reach of one (a clearance lost, not necessarily a touch).
     pub fn set_tool(&mut self, tool: Option<Tool>) -> Result<(), InvalidInput> {
         if tool.is_some() && (self.chart.is_none() || self.primitive.position_dim() != 3) {
             return Err(InvalidInput::new(
@@ -22,8 +24,11 @@ impl Execution {
                 "a tool needs a pose primitive (positions and orientations) moving in 3-D",
             ));
         }
-        if self.has_last || self.out_t != 0.0 {
-            return Err(InvalidInput::new("tool", "a tool is attached before the first point"));
+        if self.has_last || self.out_t != 0.0 || self.tool.is_some() {
+            return Err(InvalidInput::new("tool", "a tool is attached once, before the first point"));
+        }
+        if self.field.scene().obstacles.len() != self.scene.obstacles.len() {
+            return Err(InvalidInput::new("tool", "a tool is attached before the cell's obstacles are set"));
         }
         self.rebase();
         self.tool = tool;
@@ -112,6 +117,7 @@ pub(super) fn add_on_tool(
     v: &[f64],
     tau: f64,
     out: &mut [f64],
+    mut diagnosis: Option<&mut super::ignored::Diagnosis>,
 ) {
     if x.len() != 6 {
         return;
@@ -119,16 +125,32 @@ pub(super) fn add_on_tool(
     let pose = ToolPose::from_state(x, v, chart);
     let (mut force, mut moment) = (Vector3::zeros(), Vector3::zeros());
     let (mut xi, mut vi) = ([0.0; 6], [0.0; 6]);
+    let mut nonfinite = false;
     xi[3..].copy_from_slice(&x[3..]);
     vi[3..].copy_from_slice(&v[3..]);
     for r in tool.control_points() {
         let m = pose.point(r);
         xi[..3].copy_from_slice(m.position.as_slice());
         vi[..3].copy_from_slice(m.velocity.as_slice());
+        if let Some(d) = diagnosis.as_deref_mut()
+            && d.obstacles.is_empty()
+            && d.robots.is_empty()
+            && xi.iter().chain(&vi).all(|v| v.is_finite())
+        {
+            // As at a point robot: the obstacles whose term is not finite at this control point.
+            field.nonfinite_obstacles(t, &xi, &vi, tau, &mut d.obstacles);
+            mates.nonfinite_obstacles(t, &xi, &vi, tau, &mut d.robots);
+            d.t = t;
+        }
         let mut phi = [0.0; 6];
         blend.add(field, t, &xi, &vi, tau, &mut phi);
         mates.add(t, &xi, &vi, tau, &mut phi);
         let phi = Vector3::new(phi[0], phi[1], phi[2]);
+        if !phi.iter().all(|v| v.is_finite()) {
+            // Not summed: one point's term must not zero the others' (the step is diagnosed as not finite).
+            nonfinite = true;
+            continue;
+        }
         force += phi;
         moment += m.arm.cross(&phi);
     }
@@ -137,5 +159,9 @@ pub(super) fn add_on_tool(
     for i in 0..3 {
         out[i] += force[i];
         out[3 + i] += angular[i];
+    }
+    if nonfinite {
+        // The step is then redone under diagnosis, and the obstacles at fault dropped and reported.
+        out[0] = f64::NAN;
     }
 }

@@ -373,14 +373,13 @@ fn the_execution_carries_the_tool_as_the_integrator_does() {
     let (layout, method) = (LEVEL, methods()[1]);
     let mut p = LEVEL_PRIMITIVE.clone();
     p.orientation = Some(OrientationChart { reference: to_xyzw(&across()) });
-    let tool = bar_tool();
-    let margin = tool.sampling().reach(tool.shape()).unwrap();
-    let scene = Scene::with_obstacles(pegs(&layout, margin), Avoidance::new(method), 50);
+    // The execution inflates the pegs by the axis samples' reach itself.
+    let scene = Scene::with_obstacles(pegs(&layout, 0.0), Avoidance::new(method), 50);
     let motion = Motion { start: p.start.clone(), goal: p.goal.clone(), tau: TAU };
     let mut e =
         Execution::new(p.clone(), motion.clone(), scene, CellMateAvoidance::NONE, Stepping::rk4(DT), 0)
             .unwrap();
-    e.set_tool(Some(tool)).unwrap();
+    e.set_tool(Some(bar_tool())).unwrap();
     // The integrator's states at every step (the execution's first point is the start itself).
     let mut field = tool_aware(&layout, method, across());
     let mut integrator = Integrator::new(&p).unwrap();

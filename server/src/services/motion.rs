@@ -61,6 +61,12 @@ struct Owner {
 type SegmentStream = Pin<Box<dyn Stream<Item = Result<v1::Segment, Status>> + Send + 'static>>;
 type GroupStream = Pin<Box<dyn Stream<Item = Result<v1::GroupSegment, Status>> + Send + 'static>>;
 
+/// Numbers per point per kind (position, velocity, acceleration) that a segment of `p` carries, rounded up: a pose
+/// run's `n` positions and 4 + 3 + 3 orientation values fit in `3 (n + 4)`.
+fn columns(p: &dmp::Primitive) -> usize {
+    p.position_dim() + if p.orientation.is_some() { 4 } else { 0 }
+}
+
 impl MotionServiceImpl {
     /// The run of one robot.
     fn single_robot_run(
@@ -216,7 +222,7 @@ impl MotionService for MotionServiceImpl {
             .into());
         }
         let steps = (steps_f as usize).max(1);
-        self.check_message_size("duration", (steps + 1) * r.primitive.dim)?;
+        self.check_message_size("duration", (steps + 1) * columns(&r.primitive))?;
         let robot_id = r.robot_id.clone();
         let cell = r.cell.clone();
         // A plan is RK4 at the output rate, as the engine's own rollout.
@@ -263,7 +269,7 @@ impl MotionService for MotionServiceImpl {
         let r = self.resolve(&caller, Intent::Execute, req.motion.as_ref(), "motion").await?;
         let cfg = StreamRequest::of(&req).config(r.motion.tau, &self.state.config, urgency)?;
         info!(robot = %r.robot_id, cell = r.cell.name(), realtime = cfg.realtime, "execute");
-        self.check_message_size("segment_s", cfg.segment_points * r.primitive.dim)?;
+        self.check_message_size("segment_s", cfg.segment_points * columns(&r.primitive))?;
         let cell = r.cell.clone();
         let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await?;
         audit!(caller, "execute", cell = cell.name(), robot = %r.robot_id, take_over = req.take_over);
@@ -303,7 +309,7 @@ impl MotionService for MotionServiceImpl {
             .map_err(|e| e.within("start"))?;
         let robot_id = r.robot_id.clone();
         let (dim, pose) = (r.primitive.position_dim(), r.chart.is_some());
-        self.check_message_size("start.segment_s", cfg.segment_points * r.primitive.dim)?;
+        self.check_message_size("start.segment_s", cfg.segment_points * columns(&r.primitive))?;
         let cell = r.cell.clone();
         let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await.map_err(|e| e.within("start"))?;
         audit!(caller, "session", cell = cell.name(), robot = %robot_id, take_over = req.take_over);
