@@ -126,6 +126,8 @@ pub fn motion_spec(m: &MotionArgs) -> v1::MotionSpec {
         version: m.version,
         start: m.start.as_ref().map(|v| v.0.clone()).unwrap_or_default(),
         goal: m.goal.as_ref().map(|v| v.0.clone()).unwrap_or_default(),
+        start_orientation: m.start_orientation.as_ref().map(|v| v.0.clone()).unwrap_or_default(),
+        goal_orientation: m.goal_orientation.as_ref().map(|v| v.0.clone()).unwrap_or_default(),
         tau: m.tau.unwrap_or(0.0),
         avoidance: m.avoidance.as_ref().map(|a| avoidance_to_proto(a, m.point_samples.unwrap_or(0))),
         ignore_scene: m.ignore_scene,

@@ -24,6 +24,12 @@ pub struct MotionArgs {
     /// Goal [default: the primitive's].
     #[arg(long, value_name = "X,Y,..", allow_hyphen_values = true)]
     pub goal: Option<Vector>,
+    /// A pose primitive's start orientation, a unit quaternion [default: the primitive's].
+    #[arg(long = "start-orientation", value_name = "QX,QY,QZ,QW", allow_hyphen_values = true)]
+    pub start_orientation: Option<Vector>,
+    /// A pose primitive's goal orientation, a unit quaternion; q and -q are the same [default: the primitive's].
+    #[arg(long = "goal-orientation", value_name = "QX,QY,QZ,QW", allow_hyphen_values = true)]
+    pub goal_orientation: Option<Vector>,
     /// Time scale, seconds; larger is slower [default: the primitive's].
     #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub tau: Option<f64>,

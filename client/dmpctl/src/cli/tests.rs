@@ -209,6 +209,26 @@ fn plan_parses_vectors_with_negative_entries_and_avoidance() {
     assert_eq!(a.motion.avoidance.unwrap().method.name(), "static_volumetric");
     let spec = server_commands::motion_spec(&a.motion);
     assert!(spec.goal.is_empty() && spec.start.is_empty() && spec.tau == 0.0);
+    assert!(spec.goal_orientation.is_empty() && spec.start_orientation.is_empty());
+
+    // A pose primitive's orientations go to the server as given (it checks them, naming the field).
+    let c = parse(&[
+        "plan",
+        "--robot",
+        "r",
+        "--name",
+        "p",
+        "--out",
+        "o",
+        "--goal-orientation",
+        "0,0,-0.6,0.8",
+        "--start-orientation",
+        "0,0,0,1",
+    ]);
+    let Command::Plan(a) = c.command else { panic!() };
+    let spec = server_commands::motion_spec(&a.motion);
+    assert_eq!(spec.goal_orientation, vec![0.0, 0.0, -0.6, 0.8]);
+    assert_eq!(spec.start_orientation, vec![0.0, 0.0, 0.0, 1.0]);
 
     let e = refused(&["plan", "--robot", "r", "--name", "p", "--goal", "1,x", "--out", "o"]);
     assert!(e.contains("--goal") && e.contains("entry 2"), "{e}");
