@@ -89,12 +89,14 @@ impl ServedRun {
     /// What the run costs to compute in a cell of `cell_obstacles` obstacles and `cell_robots` other robots.
     pub fn workload(&self, cell_obstacles: usize, cell_robots: usize) -> Workload {
         let c = &self.costing;
+        // A held tool feels every obstacle and robot at each of its control points.
+        let points = self.execution.tool().map_or(1, |t| t.control_points().len());
         let avoided = Avoided {
             obstacles: (&c.obstacles.0, c.obstacles.1),
-            obstacle_count: c.extra + if self.ignore_scene { 0 } else { cell_obstacles },
+            obstacle_count: (c.extra + if self.ignore_scene { 0 } else { cell_obstacles }) * points,
             robots: (&c.robots.0, c.robots.1),
             // Each member avoids, in its own dimensions, the others of its group and the cell's robots.
-            robot_count: c.members.saturating_sub(1) + cell_robots,
+            robot_count: (c.members.saturating_sub(1) + cell_robots) * points,
         };
         Workload::of(self.execution.dim(), c.basis, avoided, self.execution.stepping())
     }

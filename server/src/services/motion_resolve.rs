@@ -184,6 +184,9 @@ fn pose(
     Ok((m.motion, Some(m.chart)))
 }
 
+/// The most control points a request's tool may have.
+pub const MAX_TOOL_POINTS: usize = 256;
+
 /// The request's tool, for a pose primitive moving in 3-D; errors name `{prefix}.tool.*`.
 fn tool(t: &v1::Tool, pose: bool, dim: usize, prefix: &str) -> Result<dmp::tool::Tool, ServerError> {
     use dmp::tool::ControlPoints;
@@ -207,6 +210,16 @@ fn tool(t: &v1::Tool, pose: bool, dim: usize, prefix: &str) -> Result<dmp::tool:
             ));
         }
     };
+    // Each control point costs a whole field evaluation per step: the server takes at most MAX_TOOL_POINTS.
+    if t.control_points as usize > MAX_TOOL_POINTS {
+        return Err(ServerError::invalid(
+            field(".control_points"),
+            format!(
+                "at most {MAX_TOOL_POINTS} (each one costs a field evaluation per step), not {}",
+                t.control_points
+            ),
+        ));
+    }
     let count = |default: usize| if t.control_points == 0 { default } else { t.control_points as usize };
     let sampling = if t.axis {
         ControlPoints::Axis { count: count(DEFAULT_AXIS_POINTS) }

@@ -158,6 +158,27 @@ async fn orientations_are_refused_where_they_cannot_apply() {
     assert!(e.to_string().contains("motion.goal_orientation"), "{e}");
     assert!(e.to_string().contains("unit quaternion"), "{e}");
 
+    // A tool costs a field evaluation per control point and step: a huge one is refused before any work.
+    let mut motion = spec("arm", "turn");
+    motion.tool = Some(v1::Tool {
+        shape: Some(v1::Superquadric { semi_axes: vec![0.3, 0.01, 0.01], exponents: vec![] }),
+        control_points: 100_000,
+        ..Default::default()
+    });
+    let e =
+        within("plan", client.plan(v1::PlanRequest { motion: Some(motion.clone()), dt: DT, duration: 1.0 }))
+            .await
+            .unwrap_err();
+    assert_eq!(e.code(), Some(tonic::Code::InvalidArgument), "{e}");
+    assert!(e.to_string().contains("motion.tool.control_points"), "{e}");
+    // A tool of a sane size is taken.
+    motion.tool.as_mut().unwrap().control_points = 0;
+    motion.ignore_scene = true;
+    let plan = within("plan", client.plan(v1::PlanRequest { motion: Some(motion), dt: DT, duration: 1.0 }))
+        .await
+        .unwrap();
+    assert!(plan.trajectory.is_some_and(|t| t.orientations.len() == 4 * 1001));
+
     let mut bad = q.clone();
     bad[7] = [0.0, 0.0, 0.0, 0.5];
     let e =
