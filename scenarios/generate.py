@@ -5,6 +5,7 @@ Run from this folder: python3 generate.py. Deterministic: the files it writes ar
 """
 import json
 import math
+import os
 
 DT = 0.001
 
@@ -36,9 +37,9 @@ def rot_z(a):
     return [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
 
 
-def write(name, scenario):
+def write(name, scenario, path=None):
     scenario["name"] = name
-    with open(f"{name}.json", "w") as f:
+    with open(path or f"{name}.json", "w") as f:
         json.dump(scenario, f, separators=(",", ":"))
 
 
@@ -93,6 +94,43 @@ def main():
                avoidance={"method": "dynamic_volumetric", "lambda": 60.0, "beta": 2.0, "eta": 2.0},
                robots=robots,
                robot_avoidance={"method": "dynamic_volumetric", "lambda": 60.0, "beta": 2.0, "eta": 0.2}))
+
+    # Obstacle-aware orientation (issue 16): a 0.6 m bar, held at its middle, lowered from 0.8 m above to 0.8 m
+    # below the middle of two upright pegs (radius 5 cm, 0.4 m tall, axes 0.4 m apart: a 0.3 m gap), held across
+    # the gap and 10 degrees off square, so that it meets both pegs. The pegs are rounded cylinders (exponents 1, 1,
+    # 4) 1.5 cm wider and 2.5 cm taller than the pegs they stand for. With the tool, the terms act on 25 points
+    # along the bar (the pegs inflated by its half-thickness) and turn it until it fits past the pegs; the point
+    # robot, the pegs inflated by the bar's half-length as the paper does with a held object, cannot pass.
+    tau = 3.0
+    n = int(round(tau / 0.01)) + 1
+    t = [i * tau / (n - 1) for i in range(n)]
+
+    def min_jerk(u):
+        return u * u * u * (10 + u * (-15 + 6 * u))
+
+    start, goal = [0.0, 0.0, 0.8], [0.0, 0.0, -0.8]
+    yaw = math.radians(100.0)
+    across = [0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)]
+    bar_demo = {"t": t, "x": [[s + (g - s) * min_jerk(ti / tau) for s, g in zip(start, goal)] for ti in t],
+                "q": [across] * n}
+
+    def pegs(margin):
+        r, h = 0.05 + 0.015 + margin, 0.2 + 0.025 + margin
+        return [ellipse(f"peg{i}", [0.0, y, 0.0], [r, r, h], exponents=[1, 1, 4]) for i, y in enumerate([-0.2, 0.2])]
+
+    bar = dict(base, demonstration=bar_demo, rollout={"dt": DT, "duration": 3 * tau, "start": None, "goal": None,
+                                                      "tau": None})
+    os.makedirs("bar-through-gap", exist_ok=True)
+    for method, params in [("static_volumetric", {"A": 10.0, "eta": 1.0}),
+                           ("dynamic_volumetric", {"lambda": 10.0, "beta": 2.0, "eta": 0.5})]:
+        kind = method.replace("_", "-")
+        avoidance = dict(method=method, **params)
+        write(f"bar-through-gap-tool-{kind}",
+              dict(bar, obstacles=pegs(0.0), avoidance=avoidance,
+                   tool={"semi_axes": [0.3, 0.01, 0.01], "exponents": [4, 4, 4], "control_points": "axis"}),
+              f"bar-through-gap/tool-{kind}.json")
+        write(f"bar-through-gap-point-{kind}", dict(bar, obstacles=pegs(0.3), avoidance=avoidance),
+              f"bar-through-gap/point-{kind}.json")
 
 
 if __name__ == "__main__":

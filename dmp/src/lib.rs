@@ -33,7 +33,7 @@ pub mod field;
 pub mod integrate;
 pub mod isopotential;
 pub mod learn;
-#[cfg(feature = "learn")]
+#[cfg(all(feature = "learn", feature = "orientation"))]
 pub mod metrics;
 pub mod obstacle;
 #[cfg(feature = "orientation")]

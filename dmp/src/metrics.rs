@@ -50,6 +50,33 @@ pub struct PairMetrics {
     pub collision: bool,
 }
 
+/// A pose scenario's orientation figures.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PoseMetrics {
+    /// Angle between the orientation at the end and the goal orientation, degrees.
+    pub final_orientation_error_deg: f64,
+    /// Largest angle between the orientation and the obstacle-free run's at the same time, degrees: how far the
+    /// obstacles (through a held tool) turned the robot.
+    pub max_turn_from_free_deg: f64,
+    /// Largest angular speed `|ω|`, rad/s.
+    pub angular_speed_max: f64,
+    /// Largest angular acceleration `|ω̇|`, rad/s².
+    pub angular_acc_max: f64,
+    /// With a tool: the rows at which a control point was inside an obstacle (inflated by the tool's reach for axis
+    /// samples), 0 when the tool kept its distance.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tool_contact_rows: Option<usize>,
+    /// With a tool: per obstacle, the smallest clearance of the tool's surface to the obstacle's (negative: inside),
+    /// sampled ([`TOOL_SURFACE_SAMPLES`] surface points, every [`TOOL_CLEARANCE_STRIDE`] rows).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tool_min_distance: Option<BTreeMap<String, f64>>,
+}
+
+/// Surface samples of a held tool for [`PoseMetrics::tool_min_distance`].
+pub const TOOL_SURFACE_SAMPLES: usize = 500;
+/// Rows between two measurements of [`PoseMetrics::tool_min_distance`] (and the last row).
+pub const TOOL_CLEARANCE_STRIDE: usize = 10;
+
 /// A detected stall.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StallMetrics {
@@ -100,6 +127,9 @@ pub struct Metrics {
     pub robot_pairs: Option<BTreeMap<String, PairMetrics>>,
     /// Robots that stopped away from their goal (local minima).
     pub stalls: Vec<StallMetrics>,
+    /// A pose scenario's orientation figures (the other figures are of the positions).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pose: Option<PoseMetrics>,
 }
 
 fn dist(a: &[f64], b: &[f64], dims: &[usize]) -> f64 {
@@ -143,7 +173,7 @@ pub fn metrics(p: &Prepared, free: &Rollout, adapted: &Rollout) -> crate::Result
     let ta = &adapted.trajectory;
     let field = p.field()?;
     let agents = field.agents().to_vec();
-    let all: Vec<usize> = (0..p.primitive.dim).collect();
+    let all: Vec<usize> = (0..p.position_dim()).collect();
     let (eps_max, eps_mean, acc_max, acc_max_after_10pct, acc_mean, final_goal_distance, time_to_goal) =
         motion_figures(p, free, adapted, &all);
 
@@ -172,7 +202,8 @@ pub fn metrics(p: &Prepared, free: &Rollout, adapted: &Rollout) -> crate::Result
     let mut collision = obstacles.values().any(|o| o.collision);
 
     let (mut robots, mut robot_pairs) = (None, None);
-    if !p.scene.agents.is_empty() {
+    // A pose scenario's one robot is no group.
+    if p.pose.is_none() && !p.scene.agents.is_empty() {
         let mut per_robot = BTreeMap::new();
         for a in &agents {
             let (eps_max, _, acc_max, _, _, final_goal_distance, time_to_goal) =
@@ -235,5 +266,66 @@ pub fn metrics(p: &Prepared, free: &Rollout, adapted: &Rollout) -> crate::Result
         robots,
         robot_pairs,
         stalls,
+        pose: pose_figures(p, free, adapted),
+    })
+}
+
+/// The orientation figures of a pose scenario.
+fn pose_figures(p: &Prepared, free: &Rollout, adapted: &Rollout) -> Option<PoseMetrics> {
+    use crate::orientation::pose::from_chart;
+    use crate::orientation::quaternion::angle_between;
+    use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+    let pose = p.pose.as_ref()?;
+    let n = p.position_dim();
+    let goal = from_chart(&pose.chart, &Vector3::from_column_slice(&p.motion.goal[n..n + 3]));
+    let q = |r: &Rollout, k: usize| {
+        let v = &r.orientations.q[4 * k..4 * k + 4];
+        UnitQuaternion::new_normalize(Quaternion::new(v[3], v[0], v[1], v[2]))
+    };
+    let rows = adapted.orientations.q.len() / 4;
+    let max_turn = (0..rows.min(free.orientations.q.len() / 4))
+        .map(|k| angle_between(&q(adapted, k), &q(free, k)))
+        .fold(0.0, f64::max);
+    let peak =
+        |v: &[f64]| v.chunks_exact(3).map(|w| Vector3::from_column_slice(w).norm()).fold(0.0, f64::max);
+    let contact_rows = {
+        let mut rows: Vec<usize> = adapted.contacts.iter().map(|(k, _)| *k).collect();
+        rows.dedup();
+        rows.len()
+    };
+    Some(PoseMetrics {
+        final_orientation_error_deg: rows
+            .checked_sub(1)
+            .map_or(f64::NAN, |last| angle_between(&q(adapted, last), &goal).to_degrees()),
+        max_turn_from_free_deg: max_turn.to_degrees(),
+        angular_speed_max: peak(&adapted.orientations.omega),
+        angular_acc_max: peak(&adapted.orientations.omega_dot),
+        tool_contact_rows: pose.tool.as_ref().map(|_| contact_rows),
+        tool_min_distance: pose.tool.as_ref().map(|tool| {
+            let samples = crate::tool::surface_samples(tool, TOOL_SURFACE_SAMPLES);
+            let ta = &adapted.trajectory;
+            let n = rows.min(ta.len());
+            let mut rows: Vec<usize> = (0..n).step_by(TOOL_CLEARANCE_STRIDE).collect();
+            if n > 0 && rows.last() != Some(&(n - 1)) {
+                rows.push(n - 1);
+            }
+            // A row can only lower the minimum where the frame's origin is within the samples' reach of it.
+            let reach = samples.iter().map(|s| s.norm()).fold(0.0, f64::max);
+            p.scene
+                .obstacles
+                .iter()
+                .map(|o| {
+                    let mut d = f64::INFINITY;
+                    for &k in &rows {
+                        let x = Vector3::from_column_slice(&ta.position(k)[..3]);
+                        if signed_distance_world(o, x.as_slice(), ta.t[k]) - reach >= d {
+                            continue;
+                        }
+                        d = d.min(crate::tool::sampled_clearance(&samples, &x, &q(adapted, k), o, ta.t[k]));
+                    }
+                    (o.id().to_string(), d)
+                })
+                .collect()
+        }),
     })
 }

@@ -1,7 +1,7 @@
 //! Full rollouts: fixed step, a row per step, contacts and stalls reported.
 
 use crate::error::{InvalidInput, Result};
-use crate::execution::{CellMateAvoidance, Execution, Stepping, Stretch};
+use crate::execution::{CellMateAvoidance, Execution, OrientationPoints, Stepping, Stretch};
 use crate::field::{Contact, RepulsiveField};
 use crate::integrate::Motion;
 use crate::primitive::Primitive;
@@ -89,6 +89,8 @@ pub struct Rollout {
     pub contacts: Vec<(usize, Contact)>,
     /// Stalls, with the index of the robot.
     pub stalls: Vec<(usize, Stall)>,
+    /// A pose run's orientations, angular velocities and accelerations at every row (empty otherwise).
+    pub orientations: OrientationPoints,
 }
 
 /// Rolls `primitive` out from rest at `motion.start` for `steps` steps of `dt` (RK4 at `dt`), avoiding the scene
@@ -100,6 +102,35 @@ pub fn rollout(
     field: &RepulsiveField,
     dt: f64,
     steps: usize,
+) -> Result<Rollout> {
+    rollout_with(primitive, motion, field, dt, steps, |_| Ok(()))
+}
+
+/// [`rollout`] of a pose primitive, its orientation dimensions in the chart `chart` (see
+/// [`crate::orientation::pose::pose_motion`]), holding `tool` if given ([`Execution::set_tool`]).
+#[cfg(feature = "orientation")]
+pub fn rollout_pose(
+    primitive: &Primitive,
+    motion: &Motion,
+    field: &RepulsiveField,
+    dt: f64,
+    steps: usize,
+    chart: nalgebra::UnitQuaternion<f64>,
+    tool: Option<crate::tool::Tool>,
+) -> Result<Rollout> {
+    rollout_with(primitive, motion, field, dt, steps, |run| {
+        run.set_orientation_chart(chart)?;
+        Ok(run.set_tool(tool)?)
+    })
+}
+
+fn rollout_with(
+    primitive: &Primitive,
+    motion: &Motion,
+    field: &RepulsiveField,
+    dt: f64,
+    steps: usize,
+    set_up: impl FnOnce(&mut Execution) -> Result<()>,
 ) -> Result<Rollout> {
     if !(dt.is_finite() && dt > 0.0) {
         return Err(InvalidInput::new("rollout.dt", "must be a finite number greater than zero").into());
@@ -119,10 +150,11 @@ pub fn rollout(
         Stepping::rk4(dt),
         0,
     )?;
-    let Stretch { x, xd, xdd, mut contacts, stalls, .. } = run.advance(steps + 1)?;
+    set_up(&mut run)?;
+    let Stretch { x, xd, xdd, mut contacts, stalls, orientation, .. } = run.advance(steps + 1)?;
     // By row, and in the field's order within a row.
     contacts.sort_by_key(|&(k, _)| k);
     let t = (0..=steps).map(|k| k as f64 * dt).collect();
     let trajectory = Trajectory { dim: primitive.dim, t, x, xd, xdd };
-    Ok(Rollout { trajectory, contacts, stalls })
+    Ok(Rollout { trajectory, contacts, stalls, orientations: orientation })
 }

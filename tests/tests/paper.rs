@@ -105,3 +105,25 @@ fn three_youbots_on_one_phase_do_not_collide() {
         assert!(f(&p["min_center_distance"]) > 0.3, "{pair}: {p}");
     }
 }
+
+#[test]
+fn the_held_bar_scenario_writes_its_orientations_and_the_tools_outline() {
+    let out = tempfile::tempdir().unwrap();
+    let file = scenarios().join("bar-through-gap/tool-static-volumetric.json");
+    let summary = run_scenario(&file, out.path()).unwrap();
+    let m = serde_json::to_value(&summary.metrics).unwrap();
+    assert_eq!(m["collision"], false);
+    assert!(f(&m["pose"]["max_turn_from_free_deg"]) > 7.5, "the bar turns to pass: {m}");
+    assert!(f(&m["pose"]["tool_min_distance"]["peg0"]) > 0.0);
+    let csv = std::fs::read_to_string(out.path().join("trajectory.csv")).unwrap();
+    let header = csv.lines().next().unwrap();
+    assert_eq!(header, "t,x1,x2,x3,xd1,xd2,xd3,a1,a2,a3,qx,qy,qz,qw,wx,wy,wz,wdx,wdy,wdz");
+    let last: Vec<f64> = csv.lines().last().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
+    let q = &last[10..14];
+    assert!((q.iter().map(|v| v * v).sum::<f64>() - 1.0).abs() < 1e-12, "a unit quaternion: {q:?}");
+    let svg = std::fs::read_to_string(out.path().join("plot.svg")).unwrap();
+    assert!(
+        svg.contains("tool at t (s)") && svg.contains("strip-orientation"),
+        "the tool and its rotation drawn"
+    );
+}

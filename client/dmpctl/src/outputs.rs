@@ -1,9 +1,12 @@
 //! Writing a run's files: `trajectory.csv`, `metrics.json`, `plot.svg`.
 
+use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::path::Path;
 
 use dmp::Trajectory;
+use dmp::execution::OrientationPoints;
+use dmp::scenario::Prepared;
 use serde::Serialize;
 
 use crate::error::DmpctlError;
@@ -28,6 +31,46 @@ pub fn trajectory_csv(traj: &Trajectory) -> String {
         out.push('\n');
     }
     out
+}
+
+/// A pose run's CSV: the columns of [`trajectory_csv`] for its positions (`t,x1..xn,xd1..xdn,a1..an`), then its
+/// orientation `qx,qy,qz,qw`, angular velocity `wx,wy,wz` (rad/s) and angular acceleration `wdx,wdy,wdz`
+/// (rad/s²), world frame.
+pub fn pose_trajectory_csv(traj: &Trajectory, orientations: &OrientationPoints) -> String {
+    let n = traj.dim() - 3;
+    let mut out = String::with_capacity(traj.len() * (n * 3 + 11) * 22);
+    out.push('t');
+    for prefix in ["x", "xd", "a"] {
+        for i in 1..=n {
+            let _ = write!(out, ",{prefix}{i}");
+        }
+    }
+    out.push_str(",qx,qy,qz,qw,wx,wy,wz,wdx,wdy,wdz\n");
+    for k in 0..traj.len() {
+        let _ = write!(out, "{}", traj.t[k]);
+        let (x, xd, a) = (traj.position(k), traj.velocity(k), traj.acceleration(k));
+        let q = orientations.q.get(4 * k..4 * k + 4).unwrap_or(&[f64::NAN; 4]);
+        let w = orientations.omega.get(3 * k..3 * k + 3).unwrap_or(&[f64::NAN; 3]);
+        let wd = orientations.omega_dot.get(3 * k..3 * k + 3).unwrap_or(&[f64::NAN; 3]);
+        for v in x[..n].iter().chain(&xd[..n]).chain(&a[..n]).chain(q).chain(w).chain(wd) {
+            let _ = write!(out, ",{v}");
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// The positions of a run: all of a position scenario's dimensions, the first `n` of a pose scenario's.
+pub fn positions_of<'a>(p: &Prepared, traj: &'a Trajectory) -> Cow<'a, Trajectory> {
+    let n = p.position_dim();
+    if n == traj.dim() {
+        return Cow::Borrowed(traj);
+    }
+    let mut out = Trajectory::with_capacity(n, traj.len());
+    for k in 0..traj.len() {
+        out.push(traj.t[k], &traj.position(k)[..n], &traj.velocity(k)[..n], &traj.acceleration(k)[..n]);
+    }
+    Cow::Owned(out)
 }
 
 /// Writes `contents` to `dir/name`, creating `dir`.

@@ -66,6 +66,16 @@ pub async fn run_scenario_through_server(
     let scenario = load_scenario(path)?;
     let p = dmp::scenario::prepare(&scenario)
         .map_err(|source| DmpctlError::Invalid { path: path.to_path_buf(), source })?;
+    if p.pose.is_some() {
+        return Err(DmpctlError::Invalid {
+            path: path.to_path_buf(),
+            source: dmp::InvalidInput::new(
+                "demonstration.q",
+                "a pose scenario (orientations, a held tool) runs offline only: run it without --server",
+            )
+            .into(),
+        });
+    }
     let mut notes = Vec::new();
     let (free, adapted) = if scenario.robots.is_empty() {
         plan_one_robot(client, &scenario, &p, &mut notes).await?
@@ -73,12 +83,13 @@ pub async fn run_scenario_through_server(
         run_robot_group(client, &scenario, &p, &mut notes).await?
     };
     let stalls = detect_stalls(&p, &adapted)?;
-    let free = Rollout { trajectory: free, contacts: vec![], stalls: vec![] };
-    let adapted = Rollout { trajectory: adapted, contacts: vec![], stalls };
+    let free =
+        Rollout { trajectory: free, contacts: vec![], stalls: vec![], orientations: Default::default() };
+    let adapted = Rollout { trajectory: adapted, contacts: vec![], stalls, orientations: Default::default() };
     let mut metrics = dmp::metrics::metrics(&p, &free, &adapted)
         .map_err(|source| DmpctlError::Invalid { path: path.to_path_buf(), source })?;
     metrics.compute_seconds = started.elapsed().as_secs_f64();
-    write_outputs(&p, &free.trajectory, &adapted.trajectory, &metrics, out)?;
+    write_outputs(&p, &free, &adapted, &metrics, out)?;
     Ok(RunSummary { metrics, notes })
 }
 
@@ -366,8 +377,18 @@ mod tests {
         // Rebuilding the rollout from its trajectory alone gives the offline metrics.
         let again = dmp::metrics::metrics(
             &p,
-            &Rollout { trajectory: out.free.trajectory.clone(), contacts: vec![], stalls: vec![] },
-            &Rollout { trajectory: out.adapted.trajectory.clone(), contacts: vec![], stalls },
+            &Rollout {
+                trajectory: out.free.trajectory.clone(),
+                contacts: vec![],
+                stalls: vec![],
+                orientations: Default::default(),
+            },
+            &Rollout {
+                trajectory: out.adapted.trajectory.clone(),
+                contacts: vec![],
+                stalls,
+                orientations: Default::default(),
+            },
         )
         .unwrap();
         assert_eq!(again, out.metrics);

@@ -110,6 +110,7 @@ async fn try_write_plot(
         method,
         clearance: None,
         events,
+        pose: None,
     })?;
     write_file(out, "plot.svg", svg.as_bytes())
 }

@@ -34,6 +34,7 @@
 //! | true shapes: outlines, signed distance | `solid.rs` |
 //! | clearance over time, contacts, marked times | `clearance.rs` |
 //! | speed, acceleration and clearance against time, events | `strip.rs` |
+//! | a pose run: orientation over time, the held tool's outline | `pose.rs` |
 //! | legend | `legend.rs` |
 //! | thinning curves (rows, then pixels) | `decimate.rs` |
 //! | data ranges and equal aspect ratio | `bounds.rs` |
@@ -50,6 +51,7 @@ mod decimate;
 mod draw;
 mod layout;
 mod legend;
+mod pose;
 mod projection;
 mod run;
 mod solid;
@@ -66,6 +68,7 @@ use self::run::{Run, groups};
 
 pub use self::backend::SCALE;
 pub use self::decimate::MAX_POINTS;
+pub use self::pose::PoseTrace;
 pub use self::solid::{Solid, SolidShape};
 
 /// Most panels of a plot against time; further dimensions are left out (the legend says so).
@@ -119,6 +122,9 @@ pub struct PlotInput<'a> {
     pub clearance: Option<&'a [Series]>,
     /// What happened during the run, drawn as vertical lines in the time strip.
     pub events: &'a [Event],
+    /// A pose run's orientations (a panel of the time strip) and held tool (outlined along the path at the marked
+    /// times); `None` for a position run. Only for a robot moving in 3-D.
+    pub pose: Option<PoseTrace<'a>>,
 }
 
 /// Values over time.
@@ -225,6 +231,12 @@ pub fn render_svg(input: &PlotInput<'_>) -> Result<String, PlotError> {
                 });
             }
         }
+    }
+    if let Some(pose) = &input.pose {
+        if sub != 3 || groups.len() != 1 {
+            return Err(PlotError::Dimension { what: "a pose run's robot".into(), expected: 3, found: sub });
+        }
+        pose.validate(input.adapted.len(), input.free.len())?;
     }
     let run = Run::new(input, groups);
     match sub {

@@ -182,7 +182,9 @@ impl<'a> Run<'a> {
         };
         let contacts = clearance.iter().map(|s| contacts(input.adapted, s)).collect();
         let footprints = groups.len() > 1 && groups.iter().any(|g| g.footprint.is_some());
-        let marks = if moving || footprints { marked_times(t0, t1, obstacle_time) } else { Vec::new() };
+        let tool = input.pose.is_some_and(|p| !p.tool_surface.is_empty());
+        let marks =
+            if moving || footprints || tool { marked_times(t0, t1, obstacle_time) } else { Vec::new() };
         Self {
             groups,
             demo,

@@ -75,7 +75,21 @@ fn outlines(input: &PlotInput<'_>, run: &Run<'_>, axes: (usize, usize), n: usize
                     Some(Outline { t: Some(t), poly: obstacle_outline(&o, 0.0, axes, n), cloud: false })
                 })
                 .collect(),
-            _ => Vec::new(),
+            // One robot holding a tool: the tool where it is at each marked time.
+            _ => match input.pose {
+                Some(pose) if run.single() => {
+                    let (adapted, orientations) = (input.adapted, pose.orientations);
+                    run.marks
+                        .iter()
+                        .filter_map(|&t| {
+                            let k = adapted.t.partition_point(|s| *s < t).min(adapted.len() - 1);
+                            let poly = pose.tool_outline(adapted.position(k), orientations.get(k)?, axes);
+                            (!poly.is_empty()).then_some(Outline { t: Some(t), poly, cloud: false })
+                        })
+                        .collect()
+                }
+                _ => Vec::new(),
+            },
         })
         .collect();
     Plane::new(run, axes, iso, truth, prints)
@@ -87,14 +101,13 @@ pub(super) fn render(input: &PlotInput<'_>, run: &Run<'_>) -> Result<String, Plo
     let n = if sub == 2 { OUTLINE_SAMPLES_2D } else { OUTLINE_SAMPLES_ND };
     let planes: Vec<Plane> = planes(sub).into_iter().map(|axes| outlines(input, run, axes, n)).collect();
     let panels: Vec<(u32, u32)> = planes.iter().map(|pl| panel_size(pl, sub)).collect();
-    let width: u32 = panels.iter().map(|p| p.0).sum();
     let entries = legend(input, run, planes.iter().any(|p| p.prints.iter().any(|f| !f.is_empty())));
     let frame = Frame {
         title: input.title,
         panels: &panels,
         vertical: false,
         legend: (&entries, &[]),
-        strip_h: strip::height(width),
+        strip_h: strip::height(input),
     };
     figure(
         &frame,
@@ -166,8 +179,11 @@ fn legend(input: &PlotInput<'_>, run: &Run<'_>, footprints: bool) -> Vec<Entry> 
         entries.push(Entry::new(Mark::Dot, "path and obstacles at t (s)").class("legend-time-mark"));
     }
     if footprints {
-        entries
-            .push(Entry::new(Mark::Patch(TRANSPARENT.to_rgba(), Stroke::solid(MARKER, 1.0)), "footprints"));
+        let (text, class) =
+            if run.single() { ("tool at t (s)", "legend-tool") } else { ("footprints", "legend-footprints") };
+        entries.push(
+            Entry::new(Mark::Patch(TRANSPARENT.to_rgba(), Stroke::solid(MARKER, 1.0)), text).class(class),
+        );
     }
     entries.push(Entry::new(Mark::Dot, "start"));
     entries.push(Entry::new(Mark::Cross, "goal"));

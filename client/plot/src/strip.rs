@@ -1,5 +1,6 @@
 //! The time strip under the path panels: speed, acceleration and clearance to the nearest obstacle against time,
-//! one panel each on a shared time axis, with the run's events as vertical lines.
+//! and for a pose run its rotation from the start orientation, one panel each on a shared time axis, with the run's
+//! events as vertical lines.
 
 use plotters::prelude::*;
 use plotters::style::text_anchor::HPos;
@@ -15,20 +16,30 @@ use super::{P2, PlotError, PlotInput};
 
 /// Height of one panel's plotting area, pixels.
 const PANEL_H: u32 = 96;
-/// The three quantities.
-const QUANTITIES: [(&str, &str); 3] =
-    [("speed", "speed (m/s)"), ("acceleration", "acceleration (m/s²)"), ("clearance", "clearance (m)")];
+/// The quantities: the first three always, the orientation for a pose run.
+const QUANTITIES: [(&str, &str); 4] = [
+    ("speed", "speed (m/s)"),
+    ("acceleration", "acceleration (m/s²)"),
+    ("clearance", "clearance (m)"),
+    ("orientation", "rotation from start (°)"),
+];
+
+/// The panels of `input`'s strip.
+fn quantities(input: &PlotInput<'_>) -> usize {
+    if input.pose.is_some() { 4 } else { 3 }
+}
 
 /// Room for the tick labels of the upper panels (only the lowest one names the time axis).
 const TICKS_ONLY: u32 = px(24);
 
-fn panel_h(q: usize) -> u32 {
-    px(PANEL_H) + 2 * PANEL_MARGIN + if q == 2 { X_LABEL_AREA } else { TICKS_ONLY }
+fn panel_h(last: bool) -> u32 {
+    px(PANEL_H) + 2 * PANEL_MARGIN + if last { X_LABEL_AREA } else { TICKS_ONLY }
 }
 
-/// Height of the strip under panels `_width` wide.
-pub(super) fn height(_width: u32) -> u32 {
-    (0..3).map(panel_h).sum()
+/// Height of the strip of `input`.
+pub(super) fn height(input: &PlotInput<'_>) -> u32 {
+    let n = quantities(input);
+    (0..n).map(|q| panel_h(q + 1 == n)).sum()
 }
 
 /// The time axis: the run's, widened to its events.
@@ -42,7 +53,10 @@ fn time_range(input: &PlotInput<'_>, run: &Run<'_>) -> (f64, f64) {
 }
 
 /// The curves of quantity `q` per robot: `(adapted, free)`; the clearance has no free curve.
-fn curves(run: &Run<'_>, q: usize) -> Vec<(Vec<P2>, Vec<P2>)> {
+fn curves(input: &PlotInput<'_>, run: &Run<'_>, q: usize) -> Vec<(Vec<P2>, Vec<P2>)> {
+    if q == 3 {
+        return input.pose.iter().map(|p| p.turn_curves(&input.adapted.t, &input.free.t)).collect();
+    }
     run.groups
         .iter()
         .enumerate()
@@ -73,10 +87,12 @@ pub(super) fn draw(
 ) -> Result<(), PlotError> {
     let (tx0, tx1) = time_range(input, run);
     let (w, _) = area.dim_in_pixel();
-    for (q, (class, desc)) in QUANTITIES.iter().enumerate() {
-        let top: u32 = (0..q).map(panel_h).sum();
-        let sub = area.clone().shrink((0, top), (w, panel_h(q)));
-        let data = curves(run, q);
+    let n = quantities(input);
+    for (q, (class, desc)) in QUANTITIES.iter().enumerate().take(n) {
+        let last = q + 1 == n;
+        let top: u32 = (0..q).map(|k| panel_h(k + 1 == n)).sum();
+        let sub = area.clone().shrink((0, top), (w, panel_h(last)));
+        let data = curves(input, run, q);
         let mut b = Bounds::new();
         for (a, f) in &data {
             b.add_all(a);
@@ -90,12 +106,11 @@ pub(super) fn draw(
             padded(0.0, b.y1.max(0.0), 0.05)
         };
         Doc::begin(doc, &[("class", class), ("id", &format!("strip-{class}"))]);
-        let last = q == 2;
         let mut chart = chart_on(&sub, if last { X_LABEL_AREA } else { TICKS_ONLY }, |_, _| ((tx0, tx1), y))?;
         draw_mesh(&mut chart, if last { "t (s)" } else { "" }, desc, 10, 4)?;
         if q == 2 {
             if b.is_empty() {
-                put_text(&sub, "no obstacle", (w as i32 / 2, panel_h(q) as i32 / 2), 15, HPos::Center);
+                put_text(&sub, "no obstacle", (w as i32 / 2, panel_h(last) as i32 / 2), 15, HPos::Center);
             } else {
                 draw_curve(&mut chart, &[(tx0, 0.0), (tx1, 0.0)], Stroke::solid(CONTACT, 1.0))?;
             }

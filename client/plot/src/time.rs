@@ -103,7 +103,7 @@ pub(super) fn render(input: &PlotInput<'_>, run: &Run<'_>, d: usize) -> Result<S
         panels: &panels,
         vertical: true,
         legend: (&entries, &notes),
-        strip_h: strip::height(panels[0].0),
+        strip_h: strip::height(input),
     };
     figure(
         &frame,

@@ -3,13 +3,17 @@
 //! errors naming the field, and the offline run; parsing the JSON text is the caller's business.
 
 mod model;
-#[cfg(feature = "learn")]
+#[cfg(all(feature = "learn", feature = "orientation"))]
+mod pose;
+#[cfg(all(feature = "learn", feature = "orientation"))]
 mod run;
 mod to_engine;
 
 pub use model::{
     DemonstrationSpec, DmpSpec, FootprintSpec, NestedSpec, ObstacleSpec, OneOrMany, RobotSpec, RolloutSpec,
-    Scenario,
+    Scenario, ToolPointsKind, ToolSpec,
 };
-#[cfg(feature = "learn")]
+#[cfg(all(feature = "learn", feature = "orientation"))]
+pub use pose::PoseSetup;
+#[cfg(all(feature = "learn", feature = "orientation"))]
 pub use run::{Prepared, ScenarioOutcome, prepare, run};

@@ -31,6 +31,10 @@ pub struct Scenario {
     /// Method of the robot-robot terms; `null` for none.
     #[serde(default)]
     pub robot_avoidance: Option<Avoidance>,
+    /// A tool held by the robot (a pose scenario moving in 3-D: `demonstration.q` given): the repulsive terms act
+    /// on its control points and turn it ([`crate::tool`]); `null` for a point robot.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool: Option<ToolSpec>,
 }
 
 fn default_point_samples() -> usize {
@@ -48,8 +52,8 @@ pub struct DemonstrationSpec {
     pub t: Vec<f64>,
     /// One row of `d` positions per sample.
     pub x: Vec<Vec<f64>>,
-    /// Optional: one orientation `[x, y, z, w]` (a unit quaternion) per sample, for a pose primitive. The offline
-    /// runs use the positions only.
+    /// Optional: one orientation `[x, y, z, w]` (a unit quaternion) per sample, for a pose primitive (the
+    /// rollout then runs the orientation too, and can hold a [`ToolSpec`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub q: Vec<[f64; 4]>,
 }
@@ -106,6 +110,12 @@ pub struct RolloutSpec {
     /// Time scale (default: the demonstration's duration).
     #[serde(default)]
     pub tau: Option<f64>,
+    /// A pose scenario's start orientation `[x, y, z, w]` (default: the demonstration's first).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start_orientation: Option<[f64; 4]>,
+    /// A pose scenario's goal orientation `[x, y, z, w]` (default: the demonstration's last).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub goal_orientation: Option<[f64; 4]>,
 }
 
 /// The nested 3-D form's exponents.
@@ -138,6 +148,36 @@ pub struct ObstacleSpec {
     /// The paper's nested 3-D form instead of per-axis exponents.
     #[serde(default)]
     pub nested: Option<NestedSpec>,
+}
+
+/// A held tool: a superquadric in the tool frame (the frame of the robot's pose), and where the repulsive terms act
+/// on it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ToolSpec {
+    /// Semi-axes (3), metres.
+    pub semi_axes: Vec<f64>,
+    /// Per-axis exponents (default 1: an ellipsoid).
+    #[serde(default)]
+    pub exponents: Option<Vec<f64>>,
+    /// The shape's centre in the tool frame (default: at the controlled point).
+    #[serde(default)]
+    pub offset: Option<[f64; 3]>,
+    /// `axis` (samples along the longest semi-axis, for a long thin tool) or `surface` (default).
+    #[serde(default)]
+    pub control_points: Option<ToolPointsKind>,
+    /// How many control points (default: 25 on the axis, 64 on the surface).
+    #[serde(default)]
+    pub control_point_count: Option<usize>,
+}
+
+/// Where a tool's control points lie.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ToolPointsKind {
+    /// Along the longest semi-axis, tips included.
+    Axis,
+    /// On the surface.
+    Surface,
 }
 
 /// A robot's footprint.

@@ -1,6 +1,7 @@
 //! Turning a scenario into engine objects (validating every field on the way) and running it offline.
 
 use super::model::{FootprintSpec, Scenario};
+use super::pose::{self, PoseSetup};
 use super::to_engine::superquadric;
 use crate::avoidance::Avoidance;
 use crate::error::{DmpError, InvalidInput, Result, ensure_positive};
@@ -10,7 +11,7 @@ use crate::isopotential::Shape;
 use crate::learn::{Demonstration, LearnConfig, learn};
 use crate::metrics::{Metrics, metrics};
 use crate::primitive::Primitive;
-use crate::rollout::{MAX_ROLLOUT_STEPS, Rollout, rollout};
+use crate::rollout::{MAX_ROLLOUT_STEPS, Rollout, rollout, rollout_pose};
 
 /// A validated scenario, learned and ready to roll out.
 #[derive(Debug, Clone)]
@@ -31,9 +32,32 @@ pub struct Prepared {
     pub steps: usize,
     /// Physical duration.
     pub duration: f64,
+    /// A pose scenario's chart and tool (`None`: a position scenario).
+    pub pose: Option<PoseSetup>,
 }
 
 impl Prepared {
+    /// Rolls the primitive out avoiding `field`'s scene (a pose scenario with its chart, holding its tool).
+    pub fn roll_out(&self, field: &RepulsiveField) -> Result<Rollout> {
+        match &self.pose {
+            None => rollout(&self.primitive, &self.motion, field, self.dt, self.steps),
+            Some(pose) => rollout_pose(
+                &self.primitive,
+                &self.motion,
+                field,
+                self.dt,
+                self.steps,
+                pose.chart,
+                pose.tool.clone(),
+            ),
+        }
+    }
+
+    /// The dimensions of the positions (all of them but a pose primitive's last three).
+    pub fn position_dim(&self) -> usize {
+        self.primitive.position_dim()
+    }
+
     /// The compiled repulsive field of the scene.
     pub fn field(&self) -> Result<RepulsiveField> {
         RepulsiveField::new(self.scene.clone(), self.primitive.dim)
@@ -67,7 +91,29 @@ pub fn prepare(s: &Scenario) -> Result<Prepared> {
         d: s.dmp.d.as_ref().map(|d| d.to_vec()),
         alpha: s.dmp.alpha,
     };
-    let primitive = learn(&demonstration, &config)?;
+    let posed = !s.demonstration.q.is_empty();
+    if !posed {
+        let needs_q = "needs a pose demonstration: give `demonstration.q`, one orientation per sample";
+        if s.tool.is_some() {
+            return Err(InvalidInput::new("tool", needs_q).into());
+        }
+        for (q, field) in [
+            (s.rollout.start_orientation, "rollout.start_orientation"),
+            (s.rollout.goal_orientation, "rollout.goal_orientation"),
+        ] {
+            if q.is_some() {
+                return Err(InvalidInput::new(field, needs_q).into());
+            }
+        }
+    } else if !s.robots.is_empty() {
+        return Err(InvalidInput::new(
+            "robots",
+            "a pose scenario has one robot (it owns the position dimensions): leave `robots` empty",
+        )
+        .into());
+    }
+    let primitive =
+        if posed { pose::learn(s, &demonstration, &config)? } else { learn(&demonstration, &config)? };
 
     let r = &s.rollout;
     ensure_positive(|| "rollout.dt".into(), r.dt)?;
@@ -82,11 +128,18 @@ pub fn prepare(s: &Scenario) -> Result<Prepared> {
     }
     let steps = (steps_f as usize).max(1);
     let motion = Motion {
-        start: r.start.clone().unwrap_or_else(|| primitive.start.clone()),
-        goal: r.goal.clone().unwrap_or_else(|| primitive.goal.clone()),
+        start: r.start.clone().unwrap_or_else(|| primitive.start[..dim].to_vec()),
+        goal: r.goal.clone().unwrap_or_else(|| primitive.goal[..dim].to_vec()),
         tau: r.tau.unwrap_or(primitive.tau),
     };
     motion.validate(dim).map_err(|e| prefixed("rollout", e))?;
+    let (motion, pose) = if posed {
+        let (motion, chart) = pose::motion(s, &primitive, motion)?;
+        let tool = s.tool.as_ref().map(pose::tool).transpose()?;
+        (motion, Some(PoseSetup { chart, tool }))
+    } else {
+        (motion, None)
+    };
 
     let mut obstacles = Vec::with_capacity(s.obstacles.len());
     for (i, o) in s.obstacles.iter().enumerate() {
@@ -108,6 +161,10 @@ pub fn prepare(s: &Scenario) -> Result<Prepared> {
             footprint(&r.footprint).map_err(|e| prefixed_err(&format!("robots[{i}].footprint"), e))?;
         agents.push(Agent { id: r.id.clone(), dims: r.dims.clone(), footprint: Some(footprint) });
     }
+    if posed {
+        // The one robot of a pose run owns the position dimensions, as in its execution.
+        agents = vec![Agent { id: "robot".into(), dims: (0..dim).collect(), footprint: None }];
+    }
     let scene = Scene {
         obstacles,
         avoidance: s.avoidance,
@@ -116,7 +173,7 @@ pub fn prepare(s: &Scenario) -> Result<Prepared> {
         point_samples: s.point_samples,
     };
     // Compiling the field checks dimensions and method parameters.
-    RepulsiveField::new(scene.clone(), dim)?;
+    RepulsiveField::new(scene.clone(), primitive.dim)?;
     Ok(Prepared {
         name: s.name.clone(),
         demonstration,
@@ -126,13 +183,14 @@ pub fn prepare(s: &Scenario) -> Result<Prepared> {
         dt: r.dt,
         steps,
         duration: r.duration,
+        pose,
     })
 }
 
 /// Rolls the prepared scenario out with and without obstacles and measures it.
 pub fn run(p: &Prepared) -> Result<ScenarioOutcome> {
-    let free = rollout(&p.primitive, &p.motion, &p.free_field()?, p.dt, p.steps)?;
-    let adapted = rollout(&p.primitive, &p.motion, &p.field()?, p.dt, p.steps)?;
+    let free = p.roll_out(&p.free_field()?)?;
+    let adapted = p.roll_out(&p.field()?)?;
     let metrics = metrics(p, &free, &adapted)?;
     Ok(ScenarioOutcome { free, adapted, metrics })
 }

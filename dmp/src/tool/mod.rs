@@ -56,11 +56,13 @@
 //! | the field on the tool (a [`crate::Perturbation`] of a pose run) | [`field`] |
 
 pub mod body;
+pub mod clearance;
 pub mod field;
 pub mod kinematics;
 pub mod sampling;
 
 pub use body::{Tool, inertia};
+pub use clearance::{sampled_clearance, surface_samples};
 pub use field::{POSE_DIM, ToolField, Wrench, angular_term, cap};
 pub use kinematics::{PointMotion, ToolPose};
 pub use sampling::ControlPoints;

@@ -10,7 +10,9 @@
 //!   measured with parry3d at every 1 ms step, stays positive.
 //!
 //! Carried level (the [`LEVEL`] layout, pegs 1 m tall), the bar passes with the paper's dynamic volumetric
-//! potential, which steers each point's velocity around the peg it approaches; with the static volumetric
+//! potential, which steers each point's velocity around the peg it approaches: it turns along its motion and goes
+//! around the outside of a peg rather than through the gap (its middle swings out beyond the peg; nothing here
+//! closes the sides, as a wall would); with the static volumetric
 //! potential the pegs only push back where the bar meets them first, which turns it square to its motion (a stable
 //! balance), and the run stalls in front of the gap. Carried down along the pegs ([`DOWN`], pegs 0.4 m tall), the
 //! peg tops push the bar's points up and outward, which turns a bar that is not square further from square, and
@@ -49,7 +51,7 @@ const AXIAL_ROOM: f64 = 0.025;
 
 /// Where the pegs stand and where the bar's middle goes.
 #[derive(Debug, Clone, Copy)]
-struct Layout {
+pub(crate) struct Layout {
     /// Half the pegs' height.
     peg_half_height: f64,
     /// Start and goal of the bar's middle.
@@ -60,7 +62,7 @@ struct Layout {
 }
 
 /// The experiment: pegs 0.4 m tall, the bar carried down from above them to below.
-const DOWN: Layout =
+pub(crate) const DOWN: Layout =
     Layout { peg_half_height: 0.2, start: [0.0, 0.0, 0.8], goal: [0.0, 0.0, -0.8], pegs_extent: 0.2 };
 
 /// The same gap met horizontally: pegs 1 m tall, the bar carried level between them.
@@ -78,12 +80,12 @@ impl Layout {
     }
 
     /// Whether the whole bar is past the pegs, whatever its orientation.
-    fn passed(&self, p: &Vector3<f64>) -> bool {
+    pub(crate) fn passed(&self, p: &Vector3<f64>) -> bool {
         self.progress(p) > self.pegs_extent + HALF_LENGTH
     }
 
     /// Whether the bar's middle is held in front of the pegs, `margin` before their near side.
-    fn held_before(&self, p: &Vector3<f64>, margin: f64) -> bool {
+    pub(crate) fn held_before(&self, p: &Vector3<f64>, margin: f64) -> bool {
         self.progress(p) < -self.pegs_extent - margin
     }
 }
@@ -166,7 +168,7 @@ fn bar_tool() -> Tool {
 }
 
 /// The clearance of the true bar at `(p, q)` to the true pegs (parry3d; 0 when they touch or overlap).
-fn clearance(layout: &Layout, p: &Vector3<f64>, q: &UnitQuaternion<f64>) -> f64 {
+pub(crate) fn clearance(layout: &Layout, p: &Vector3<f64>, q: &UnitQuaternion<f64>) -> f64 {
     let bar = Cuboid::new(Vector::new(HALF_LENGTH, HALF_THICKNESS, HALF_THICKNESS));
     let axis = q.scaled_axis();
     let bar_pose = Pose::new(Vector::new(p.x, p.y, p.z), Vector::new(axis.x, axis.y, axis.z));

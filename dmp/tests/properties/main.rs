@@ -6,6 +6,7 @@
 
 mod arrival;
 mod bar_through_gap;
+mod bar_through_gap_scenarios;
 mod changing_the_motion;
 mod fixtures;
 mod guard_rails;

@@ -24,6 +24,7 @@ fn input<'a>(free: &'a Trajectory, adapted: &'a Trajectory, obstacles: &'a [Obst
         method: "dynamic_volumetric",
         clearance: None,
         events: &[],
+        pose: None,
     }
 }
 

@@ -9,6 +9,7 @@ use super::projection::convex_hull;
 use super::style::{fmt_num, fmt_tick};
 
 mod elements;
+mod pose;
 use super::{MAX_POINTS, MAX_TIME_PANELS, OUTLINE_SAMPLES_2D, PlotError, PlotInput, render_svg};
 
 pub(super) fn ellipse(id: &str, center: Vec<f64>, axes: Vec<f64>, velocity: Option<Vec<f64>>) -> Obstacle {
@@ -150,6 +151,7 @@ fn input_2d(c: &Case2d) -> PlotInput<'_> {
         method: "dynamic_volumetric",
         clearance: None,
         events: &[],
+        pose: None,
     }
 }
 
@@ -201,6 +203,7 @@ fn plot_3d_three_projections() {
         method: "dynamic_volumetric",
         clearance: None,
         events: &[],
+        pose: None,
     };
     let svg = render_svg(&input).unwrap();
     dump("plot_3d_three_projections", &svg);
@@ -259,6 +262,7 @@ fn plot_three_robots() {
         method: "dynamic_volumetric",
         clearance: None,
         events: &[],
+        pose: None,
     };
     let svg = render_svg(&input).unwrap();
     dump("plot_three_robots", &svg);
@@ -298,6 +302,7 @@ fn plot_against_time_above_3d() {
         method: "dynamic_volumetric",
         clearance: None,
         events: &[],
+        pose: None,
     };
     let svg = render_svg(&input).unwrap();
     dump("plot_against_time_above_3d", &svg);
@@ -334,6 +339,7 @@ fn plot_1d_and_non_finite_rows() {
         method: "dynamic_volumetric",
         clearance: None,
         events: &[],
+        pose: None,
     };
     let svg = render_svg(&input).unwrap();
     dump("plot_1d_and_non_finite_rows", &svg);
@@ -389,6 +395,7 @@ fn plot_demonstration_times() {
         method: "dynamic_volumetric",
         clearance: None,
         events: &[],
+        pose: None,
     };
     let spread = render_svg(&input).unwrap();
     assert_eq!(count_text(&spread, "demonstration (time rescaled)"), 1);

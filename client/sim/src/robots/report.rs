@@ -305,6 +305,7 @@ pub fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), SimE
         method: fig.method,
         clearance: clearance.as_deref(),
         events: fig.events,
+        pose: None,
     };
     let svg = render_svg(&input).map_err(|e| SimError::Plot(e.to_string()))?;
     let path = dir.join(name);
