@@ -130,6 +130,7 @@ impl AppState {
             clock,
             access: Arc::new(AccessControl::open()),
             exposure: Exposure::default(),
+            ros2_out: Default::default(),
         }
     }
 }
