@@ -36,7 +36,8 @@ const LINE_WIDTH_M: f64 = 0.01;
 /// The true shape of `o`; none for a shape RViz cannot draw (not 2-D or 3-D, a solid with bad dimensions).
 pub fn true_shape(o: &v1::Obstacle) -> Option<Marker> {
     let (r#type, scale) = shape_marker(o)?;
-    let pose = pose_of(&o.center, (o.rotation.len() == o.center.len().pow(2)).then_some(o.rotation.as_slice()))?;
+    let pose =
+        pose_of(&o.center, (o.rotation.len() == o.center.len().pow(2)).then_some(o.rotation.as_slice()))?;
     Some(Marker {
         ns: NS_OBSTACLES.into(),
         r#type,
@@ -162,7 +163,10 @@ mod tests {
     fn boxed(margin: f64) -> v1::Obstacle {
         v1::Obstacle {
             id: "b".into(),
-            shape: Some(v1::obstacle::Shape::Solid(v1::SolidPrimitive { r#type: 1, dimensions: vec![0.2, 0.1, 0.3] })),
+            shape: Some(v1::obstacle::Shape::Solid(v1::SolidPrimitive {
+                r#type: 1,
+                dimensions: vec![0.2, 0.1, 0.3],
+            })),
             center: vec![1.0, 2.0, 3.0],
             rotation: vec![0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             margin,
@@ -196,7 +200,10 @@ mod tests {
         }
         let flat = v1::Obstacle {
             id: "e".into(),
-            shape: Some(v1::obstacle::Shape::Superquadric(v1::Superquadric { semi_axes: vec![0.1, 0.2], exponents: vec![] })),
+            shape: Some(v1::obstacle::Shape::Superquadric(v1::Superquadric {
+                semi_axes: vec![0.1, 0.2],
+                exponents: vec![],
+            })),
             center: vec![0.5, 0.5],
             ..Default::default()
         };

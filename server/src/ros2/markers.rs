@@ -61,7 +61,8 @@ impl Shown {
             self.started = true;
             out.push(Marker { action: Marker::DELETEALL, ..Default::default() });
         }
-        let mut wanted: BTreeMap<Key, Marker> = wanted.into_iter().map(|m| ((m.ns.clone(), m.text.clone()), m)).collect();
+        let mut wanted: BTreeMap<Key, Marker> =
+            wanted.into_iter().map(|m| ((m.ns.clone(), m.text.clone()), m)).collect();
         let gone: Vec<Key> = self.shown.keys().filter(|k| !wanted.contains_key(*k)).cloned().collect();
         for key in gone {
             if let Some(old) = self.shown.remove(&key) {
@@ -211,7 +212,10 @@ mod tests {
     fn changes_are_sent_and_gone_markers_deleted() {
         let mut s = Shown::default();
         let first = s.update(vec![marker("obstacles", "a", 1.0), marker("paths", "r", 0.0)], false);
-        assert_eq!(first.iter().map(|m| m.action).collect::<Vec<_>>(), [Marker::DELETEALL, Marker::ADD, Marker::ADD]);
+        assert_eq!(
+            first.iter().map(|m| m.action).collect::<Vec<_>>(),
+            [Marker::DELETEALL, Marker::ADD, Marker::ADD]
+        );
         let id_a = first.iter().find(|m| m.text == "a").unwrap().id;
         // Nothing changed: nothing to send, unless full.
         assert!(s.update(vec![marker("obstacles", "a", 1.0), marker("paths", "r", 0.0)], false).is_empty());

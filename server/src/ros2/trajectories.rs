@@ -51,12 +51,16 @@ impl Trajectories {
                         for s in &segments {
                             let stamp = if s.start_unix_s > 0.0 { s.start_unix_s } else { sent_unix_s };
                             let msg = trajectory_message(s, &self.frame, stamp);
-                            let Some(p) = self.publisher(&mut publishers, &s.robot_id).await else { continue };
+                            let Some(p) = self.publisher(&mut publishers, &s.robot_id).await else {
+                                continue;
+                            };
                             match p.put(&msg, self.clock.now_unix_s()).await {
                                 Ok(()) => {
                                     self.counters.trajectories_published.fetch_add(1, Ordering::Relaxed);
                                 }
-                                Err(e) => warn!(robot = %s.robot_id, error = %e, "ros2: trajectory not published"),
+                                Err(e) => {
+                                    warn!(robot = %s.robot_id, error = %e, "ros2: trajectory not published")
+                                }
                             }
                         }
                         self.paths.extend(&cell, &segments);

@@ -80,7 +80,10 @@ mod tests {
         };
         let m = trajectory_message(&s, "world", 100.5);
         assert_eq!(m.joint_names, vec!["arm-1".to_string()]);
-        assert_eq!((m.header.stamp.sec, m.header.stamp.nanosec, m.header.frame_id.as_str()), (100, 5e8 as u32, "world"));
+        assert_eq!(
+            (m.header.stamp.sec, m.header.stamp.nanosec, m.header.frame_id.as_str()),
+            (100, 5e8 as u32, "world")
+        );
         assert_eq!(m.points.len(), 2);
         let p = &m.points[1];
         assert_eq!(p.transforms[0].translation, Vector3 { x: 4.0, y: 5.0, z: 6.0 });

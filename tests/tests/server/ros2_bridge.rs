@@ -116,8 +116,13 @@ async fn a_ros2_collision_object_enters_and_leaves_the_scene() {
             break (array, attachment);
         }
     };
-    let cube = array.markers.iter().find(|m| m.ns == "obstacles" && m.text == "crate.0").expect("its true shape");
-    let iso = array.markers.iter().find(|m| m.ns == "isopotentials" && m.text == "crate.0").expect("its isopotential");
+    let cube =
+        array.markers.iter().find(|m| m.ns == "obstacles" && m.text == "crate.0").expect("its true shape");
+    let iso = array
+        .markers
+        .iter()
+        .find(|m| m.ns == "isopotentials" && m.text == "crate.0")
+        .expect("its isopotential");
     assert_eq!((iso.r#type, iso.pose.position.y), (Marker::TRIANGLE_LIST, cube.pose.position.y));
     assert_eq!((cube.r#type, cube.header.frame_id.as_str()), (Marker::CUBE, "world"));
     assert!((cube.pose.position.y - 0.45).abs() < 1e-9 && (cube.scale.x - 0.2).abs() < 1e-12, "{cube:?}");
@@ -143,7 +148,8 @@ async fn a_ros2_collision_object_enters_and_leaves_the_scene() {
     while deleted.len() < 2 {
         let sample = within("markers", markers.recv_async()).await.unwrap();
         let array: MarkerArray = dmp_ros2::decode(&sample.payload().to_bytes()).unwrap();
-        deleted.extend(array.markers.into_iter().filter(|m| m.action == Marker::DELETE).map(|m| (m.ns, m.id)));
+        deleted
+            .extend(array.markers.into_iter().filter(|m| m.action == Marker::DELETE).map(|m| (m.ns, m.id)));
     }
     deleted.sort();
     let mut want = ids.clone();

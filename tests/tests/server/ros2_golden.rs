@@ -105,7 +105,20 @@ fn server_messages() -> Vec<(&'static str, &'static str, Vec<u8>, Value)> {
         positions: vec![0.1, 0.2, 0.3, 0.11, 0.19, 0.31, 0.125, 0.18, 0.32],
         velocities: vec![2.5, -2.5, 2.5, 3.0, -2.0, 2.0, 3.5, -1.5, 1.5],
         accelerations: vec![10.0, 0.0, -7.5, 12.0, 1.0, -6.0, 0.0, 0.0, 0.0],
-        orientations: vec![0.0, 0.0, 0.6, 0.8, 0.0, 0.1, 0.6, 0.7937253933193772, 0.0, 0.2, 0.6, 0.7745966692414834],
+        orientations: vec![
+            0.0,
+            0.0,
+            0.6,
+            0.8,
+            0.0,
+            0.1,
+            0.6,
+            0.7937253933193772,
+            0.0,
+            0.2,
+            0.6,
+            0.7745966692414834,
+        ],
         angular_velocities: vec![0.0, 25.0, 0.0, 0.0, 24.0, 0.5, 0.0, 23.0, 1.0],
         angular_accelerations: vec![0.0, -250.0, 0.0, 0.0, -240.0, 5.0, 0.0, -230.0, 10.0],
         start_unix_s: 1_764_100_000.5,
@@ -122,7 +135,10 @@ fn server_messages() -> Vec<(&'static str, &'static str, Vec<u8>, Value)> {
     };
     let boxed = v1::Obstacle {
         id: "crate".into(),
-        shape: Some(v1::obstacle::Shape::Solid(v1::SolidPrimitive { r#type: 1, dimensions: vec![0.2, 0.1, 0.3] })),
+        shape: Some(v1::obstacle::Shape::Solid(v1::SolidPrimitive {
+            r#type: 1,
+            dimensions: vec![0.2, 0.1, 0.3],
+        })),
         center: vec![1.0, 2.0, 0.5],
         rotation: vec![0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0],
         margin: 0.05,
@@ -138,9 +154,14 @@ fn server_messages() -> Vec<(&'static str, &'static str, Vec<u8>, Value)> {
         ..Default::default()
     };
     let engine = |o: &v1::Obstacle| dmp_proto::obstacle::obstacle_to_engine(o).unwrap();
-    let robot_path = Path { times: vec![0.0, 0.1, 0.2], points: vec![[0.0, 0.0, 0.0], [0.1, 0.05, 0.0], [0.2, 0.1, 0.0]] };
+    let robot_path =
+        Path { times: vec![0.0, 0.1, 0.2], points: vec![[0.0, 0.0, 0.0], [0.1, 0.05, 0.0], [0.2, 0.1, 0.0]] };
     let mut wanted = vec![true_shape(&boxed).unwrap(), isopotential(&engine(&boxed)).unwrap()];
-    wanted.extend([true_shape(&disc).unwrap(), isopotential(&engine(&disc)).unwrap(), path("arm-1", &robot_path).unwrap()]);
+    wanted.extend([
+        true_shape(&disc).unwrap(),
+        isopotential(&engine(&disc)).unwrap(),
+        path("arm-1", &robot_path).unwrap(),
+    ]);
     let mut shown = Shown::default();
     let first = marker_array("world", 1_764_100_001.25, shown.update(wanted.clone(), false));
     // The disc and the robot go: two DELETEs.
@@ -153,10 +174,30 @@ fn server_messages() -> Vec<(&'static str, &'static str, Vec<u8>, Value)> {
     let t1 = trajectory_message(&pose_run, "world", pose_run.start_unix_s);
     let t2 = trajectory_message(&flat_run, "world", 1_764_100_003.0);
     vec![
-        encoded("server-pose-trajectory", traj, dmp_ros2::encode(&t1).unwrap(), serde_json::to_value(&t1).unwrap()),
-        encoded("server-flat-trajectory", traj, dmp_ros2::encode(&t2).unwrap(), serde_json::to_value(&t2).unwrap()),
-        encoded("server-markers", markers, dmp_ros2::encode(&first).unwrap(), serde_json::to_value(&first).unwrap()),
-        encoded("server-marker-deletes", markers, dmp_ros2::encode(&next).unwrap(), serde_json::to_value(&next).unwrap()),
+        encoded(
+            "server-pose-trajectory",
+            traj,
+            dmp_ros2::encode(&t1).unwrap(),
+            serde_json::to_value(&t1).unwrap(),
+        ),
+        encoded(
+            "server-flat-trajectory",
+            traj,
+            dmp_ros2::encode(&t2).unwrap(),
+            serde_json::to_value(&t2).unwrap(),
+        ),
+        encoded(
+            "server-markers",
+            markers,
+            dmp_ros2::encode(&first).unwrap(),
+            serde_json::to_value(&first).unwrap(),
+        ),
+        encoded(
+            "server-marker-deletes",
+            markers,
+            dmp_ros2::encode(&next).unwrap(),
+            serde_json::to_value(&next).unwrap(),
+        ),
     ]
 }
 

@@ -58,7 +58,9 @@ async fn a_group_runs_trajectories_arrive_on_rmw_zenoh_keys_as_the_robots_got_th
         subscribers.push(within("subscribe", tool.declare_subscriber(&key).into_future()).await.unwrap());
         let start = if *robot == "amr-1" { [0.0, 0.0] } else { [0.0, 2.0] };
         let goal = [start[0] + 1.0, start[1]];
-        within("put", client.put_primitive(robot, "go", &line(start.to_vec(), goal.to_vec(), 1.0))).await.unwrap();
+        within("put", client.put_primitive(robot, "go", &line(start.to_vec(), goal.to_vec(), 1.0)))
+            .await
+            .unwrap();
     }
     // Declared after the trajectories' subscribers on the same session: once the markers arrive (a put obstacle
     // changes the scene), the server has the subscriptions before it publishes a trajectory.
@@ -107,7 +109,10 @@ async fn a_group_runs_trajectories_arrive_on_rmw_zenoh_keys_as_the_robots_got_th
         }
         assert!(sub.try_recv().unwrap().is_none(), "{robot}: more trajectories than segments");
     }
-    assert_eq!(Ros2Counters::get(&counters.trajectories_published), got.values().map(Vec::len).sum::<usize>() as u64);
+    assert_eq!(
+        Ros2Counters::get(&counters.trajectories_published),
+        got.values().map(Vec::len).sum::<usize>() as u64
+    );
 
     // The markers: each robot's path (the positions sent) while it ran, then its DELETE.
     let mut paths: HashMap<String, (i32, Vec<[f64; 3]>)> = HashMap::new();
