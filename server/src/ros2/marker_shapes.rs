@@ -65,14 +65,14 @@ pub fn isopotential(o: &dmp::Obstacle) -> Option<Marker> {
         (phi.cos(), phi.sin())
     };
     let (r#type, points, scale) = if shape.dim() == 2 {
-        let points = (0..=LONGITUDES).map(|k| ring(k)).map(|(c, s)| surface([c, s, 0.0])).collect();
+        let points = (0..=LONGITUDES).map(ring).map(|(c, s)| surface([c, s, 0.0])).collect();
         (Marker::LINE_STRIP, points, Vector3 { x: LINE_WIDTH_M, y: 0.0, z: 0.0 })
     } else {
         let grid: Vec<Vec<Point>> = (0..=LATITUDES)
             .map(|i| {
                 let theta = std::f64::consts::PI * i as f64 / LATITUDES as f64;
                 (0..=LONGITUDES)
-                    .map(|k| ring(k))
+                    .map(ring)
                     .map(|(c, s)| surface([theta.sin() * c, theta.sin() * s, theta.cos()]))
                     .collect()
             })

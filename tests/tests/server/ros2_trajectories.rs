@@ -11,6 +11,7 @@ use dmp_proto::v1;
 use dmp_proto::zenoh_session::{SessionOptions, session_config};
 use dmp_ros2::attachment::Attachment;
 use dmp_ros2::keys::{MARKER_ARRAY, MULTI_DOF_JOINT_TRAJECTORY, topic_key};
+use dmp_ros2::msgs::builtin_interfaces::Time;
 use dmp_ros2::msgs::trajectory_msgs::MultiDOFJointTrajectory;
 use dmp_ros2::msgs::visualization_msgs::{Marker, MarkerArray};
 use dmp_server::ros2::Ros2Counters;
@@ -20,12 +21,19 @@ use tokio_stream::StreamExt;
 
 use crate::{line, rows, spec};
 
-/// `msg` is `segment` as the brief of the topic says: the robot's one joint, the cell's frame, a point per
-/// setpoint with the position, velocity and acceleration (`z = 0` for 2-D), identity rotations, `dt` apart.
+/// `msg` is `segment` as the topic is documented: the robot's one joint, the cell's frame and its first point's wall
+/// time, a point per setpoint with the position, velocity and acceleration (`z = 0` for 2-D), identity rotations,
+/// `dt` apart.
 fn assert_same(msg: &MultiDOFJointTrajectory, segment: &v1::Segment) {
     let robot = &segment.robot_id;
     assert_eq!(msg.joint_names, vec![robot.clone()]);
     assert_eq!(msg.header.frame_id, "world");
+    assert!(segment.start_unix_s > 0.0);
+    assert_eq!(
+        msg.header.stamp,
+        Time::from_unix_s(segment.start_unix_s),
+        "stamped at the first point's wall time"
+    );
     let xs = rows(segment, &segment.positions);
     assert_eq!(msg.points.len(), xs.len(), "{robot} segment {}", segment.sequence);
     let (vs, accs) = (rows(segment, &segment.velocities), rows(segment, &segment.accelerations));
@@ -85,7 +93,13 @@ async fn a_group_runs_trajectories_arrive_on_rmw_zenoh_keys_as_the_robots_got_th
             v1::GroupMember { motion: Some(motion) }
         })
         .collect();
-    let request = v1::ExecuteGroupRequest { members, max_duration_s: 10.0, ..Default::default() };
+    // Real time: the run lasts its second or so, over several periods of the markers.
+    let request = v1::ExecuteGroupRequest {
+        members,
+        max_duration_s: 10.0,
+        pacing: v1::Pacing::Realtime as i32,
+        ..Default::default()
+    };
     let mut stream = within("group", client.execute_group(request)).await.unwrap();
     let mut got: HashMap<String, Vec<v1::Segment>> = HashMap::new();
     while let Some(g) = within("group segment", stream.next()).await {
