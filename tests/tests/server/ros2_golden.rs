@@ -164,9 +164,9 @@ fn server_messages() -> Vec<(&'static str, &'static str, Vec<u8>, Value)> {
     ]);
     let mut shown = Shown::default();
     let first = marker_array("world", 1_764_100_001.25, shown.update(wanted.clone(), false));
-    // The disc and the robot go: two DELETEs.
+    // The disc (its true shape and its isopotential) and the robot go: three DELETEs.
     let next = marker_array("world", 1_764_100_002.0, shown.update(wanted[..2].to_vec(), true));
-    assert_eq!(next.markers.iter().filter(|m| m.action == 2).count(), 2);
+    assert_eq!(next.markers.iter().filter(|m| m.action == 2).count(), 3);
 
     let traj = "trajectory_msgs/msg/MultiDOFJointTrajectory";
     let markers = "visualization_msgs/msg/MarkerArray";
