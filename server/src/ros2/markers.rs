@@ -61,7 +61,7 @@ impl Shown {
             self.started = true;
             out.push(Marker { action: Marker::DELETEALL, ..Default::default() });
         }
-        let mut wanted: BTreeMap<Key, Marker> =
+        let wanted: BTreeMap<Key, Marker> =
             wanted.into_iter().map(|m| ((m.ns.clone(), m.text.clone()), m)).collect();
         let gone: Vec<Key> = self.shown.keys().filter(|k| !wanted.contains_key(*k)).cloned().collect();
         for key in gone {
@@ -69,7 +69,7 @@ impl Shown {
                 out.push(Marker { ns: old.ns, id: old.id, action: Marker::DELETE, ..Default::default() });
             }
         }
-        for (key, mut m) in std::mem::take(&mut wanted) {
+        for (key, mut m) in wanted {
             m.id = match self.shown.get(&key) {
                 Some(old) => old.id,
                 None => {
