@@ -7,7 +7,11 @@
 //! | --- | --- | --- |
 //! | `/collision_object` | `moveit_msgs/msg/CollisionObject` | objects' shapes as obstacles ([`collision`], [`shapes`]) |
 //! | configured | `nav2_dynamic_msgs/msg/ObstacleArray` | tracked boxes, moving ([`obstacle_array`]) |
-//! | out: `/dmp/<cell>/markers` | `visualization_msgs/msg/MarkerArray` | each cell's obstacles for RViz ([`markers`]) |
+//! | out: `/dmp/<cell>/markers` | `visualization_msgs/msg/MarkerArray` | each cell's obstacles (true shape and isopotential) and robots' paths for RViz ([`markers`], [`marker_shapes`]) |
+//! | out: `/dmp/<robot>/trajectory` | `trajectory_msgs/msg/MultiDOFJointTrajectory` | each segment sent to a robot ([`trajectory`], [`trajectories`]) |
+//!
+//! The streams hand their segments over through [`outbox`] without ever waiting (a full channel drops and counts);
+//! the server is one node of ROS 2's graph ([`graph`]).
 //!
 //! A message whose `header.frame_id` is neither the cell's frame (`ros2.frame`, `world`) nor a frame of
 //! `ros2.static_transforms` is refused; so is one that does not decode or breaks a rule. Every refusal is logged
@@ -16,9 +20,15 @@
 
 pub mod collision;
 pub mod config;
+pub mod graph;
+pub mod marker_shapes;
 pub mod markers;
 pub mod obstacle_array;
+pub mod outbox;
+pub mod paths;
 pub mod shapes;
+pub mod trajectories;
+pub mod trajectory;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
@@ -45,6 +55,10 @@ pub struct Ros2Counters {
     pub refused_frames: AtomicU64,
     /// Messages refused for any reason (frames included).
     pub refused: AtomicU64,
+    /// Trajectories published (one per segment sent to a robot).
+    pub trajectories_published: AtomicU64,
+    /// Segments not published as trajectories: the publisher was behind and the streams do not wait for it.
+    pub trajectories_dropped: AtomicU64,
 }
 
 impl Ros2Counters {
@@ -139,7 +153,9 @@ impl Inbox {
 pub struct Ros2Bridge {
     subscribers: Vec<Subscriber<()>>,
     counters: Arc<Ros2Counters>,
+    outbox: outbox::Ros2Out,
     markers: tokio::task::JoinHandle<()>,
+    trajectories: tokio::task::JoinHandle<()>,
     stop: tokio_util::sync::CancellationToken,
 }
 
@@ -184,9 +200,24 @@ impl Ros2Bridge {
             subscribers.push(sub);
         }
         let stop = tokio_util::sync::CancellationToken::new();
-        let markers =
-            markers::spawn(session.clone(), domain, config.frame.clone(), cells, clock, stop.clone());
-        Ok(Self { subscribers, counters, markers, stop })
+        let graph = Arc::new(graph::Graph::declare(session.clone(), domain).await);
+        let paths = paths::Paths::default();
+        let (outbox, rx) = outbox::Ros2Out::channel(counters.clone());
+        let trajectories = trajectories::Trajectories {
+            graph: graph.clone(),
+            frame: config.frame.clone(),
+            paths: paths.clone(),
+            counters: counters.clone(),
+            clock,
+        }
+        .spawn(rx, stop.clone());
+        let markers = markers::spawn(graph, config.frame.clone(), cells, paths, clock, stop.clone());
+        Ok(Self { subscribers, counters, outbox, markers, trajectories, stop })
+    }
+
+    /// Where the streams hand their segments over.
+    pub fn outbox(&self) -> outbox::Ros2Out {
+        self.outbox.clone()
     }
 
     /// What the bridge took and refused so far.
@@ -194,11 +225,14 @@ impl Ros2Bridge {
         self.counters.clone()
     }
 
-    /// Stops the markers' publisher and undeclares the subscribers, waiting for running callbacks.
+    /// Stops the markers' and trajectories' publishers and undeclares the subscribers, waiting for running callbacks.
     pub async fn close(self) {
         self.stop.cancel();
         if let Err(e) = self.markers.await {
             warn!(error = %e, "ros2 markers task failed");
+        }
+        if let Err(e) = self.trajectories.await {
+            warn!(error = %e, "ros2 trajectories task failed");
         }
         let subscribers = self.subscribers;
         let done = tokio::task::spawn_blocking(move || {

@@ -165,6 +165,7 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         _ => None,
     };
     let ros2 = ros2_bridge.as_ref().map(|b| b.counters());
+    let ros2_out = ros2_bridge.as_ref().map(|b| b.outbox()).unwrap_or_default();
 
     let compute = Compute::start(&config.compute)
         .map_err(|e| ServerError::Internal(format!("cannot start the compute threads: {e}")))?;
@@ -185,6 +186,7 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         state_admission,
         access: access.clone(),
         exposure,
+        ros2_out,
     });
     let max = state.config.limits.max_message_bytes;
     let metrics_addr = match state.config.metrics_addr {

@@ -56,6 +56,8 @@ pub struct AppState {
     pub access: Arc<AccessControl>,
     /// What is exposed without protection (`--insecure`).
     pub exposure: Exposure,
+    /// Where the streams hand their segments to ROS 2 (empty without `ros2.domain`).
+    pub ros2_out: crate::ros2::outbox::Ros2Out,
 }
 
 /// What the server has done so far.
@@ -128,6 +130,7 @@ impl AppState {
             clock,
             access: Arc::new(AccessControl::open()),
             exposure: Exposure::default(),
+            ros2_out: Default::default(),
         }
     }
 }

@@ -102,6 +102,7 @@ pub async fn run_stream(
     for id in &ids {
         app.robots.retire(&cell, id).await;
     }
+    app.ros2_out.ended(cell.name(), &ids);
     match result {
         Ok(reason) => info!(robots = ?ids, reason, t, "stream ended"),
         Err(ServerError::Cancelled(reason)) => info!(robots = ?ids, reason, t, "stream ended"),
@@ -432,10 +433,12 @@ impl<'a> Producer<'a> {
             // The robot first: publishing the states may wait on Zenoh (a robot's first state declares its
             // publisher).
             let first_point_unix_s = computed.batch.first().map(|s| s.start_unix_s);
+            let for_ros2 = app.ros2_out.copy_of(&computed.batch);
             tokio::select! {
                 sent = self.tx.send(Ok(computed.batch)) => if sent.is_err() { return Ok(Some("client left")) },
                 _ = app.shutdown.cancelled() => return Err(ServerError::ShuttingDown),
             }
+            app.ros2_out.offer(self.cell.name(), for_ros2, app.clock.now_unix_s());
             if self.cfg.realtime {
                 let (now, update) = (app.clock.now_unix_s(), self.scene_update_unix_s.take());
                 app.histograms.handed_over(now, first_point_unix_s, update);

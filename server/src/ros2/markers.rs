@@ -1,75 +1,140 @@
-//! The cells' obstacles for RViz: each cell's scene, whenever its version changes, as a
-//! `visualization_msgs/msg/MarkerArray` on `/dmp/<cell>/markers` (`-` and `.` of the cell's name as `_`, which ROS
-//! topic names need), in the cell's frame. The first marker deletes every earlier one; then one marker per obstacle
-//! (namespace `obstacles`, its id as the marker's text): a box, sphere or cylinder as itself, a superquadric or a
-//! nested one as the ellipsoid of its semi-axes. Each sample carries rmw_zenoh's attachment, and the server
-//! declares rmw_zenoh's liveliness tokens for its node (`dmp_server`) and each publisher, so that ROS 2's graph
-//! tools list them.
+//! The cells for RViz: each cell's obstacles (true shape and isopotential) and its robots' planned paths
+//! ([`super::marker_shapes`]), as a `visualization_msgs/msg/MarkerArray` on `/dmp/<cell>/markers` (the cell's name
+//! as a topic token), in the cell's frame, whenever the scene or a path changes.
+//!
+//! Each marker keeps its id in its namespace while its obstacle or robot is there. A message carries what changed:
+//! an ADD for each new or changed marker, a DELETE for each whose obstacle or robot went. The first message of a
+//! cell starts with a DELETEALL (markers of an earlier run of the server), and every [`FULL_REFRESH_S`] the whole
+//! set goes again, so that a tool that subscribes late draws everything. Each sample carries rmw_zenoh's attachment,
+//! and the publisher its liveliness token ([`super::graph`]).
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
 use std::time::Duration;
 
 use dmp_proto::v1;
-use dmp_ros2::attachment::Attachment;
-use dmp_ros2::keys::{MARKER_ARRAY, topic_key};
-use dmp_ros2::liveliness::{Node, gid};
+use dmp_ros2::keys::MARKER_ARRAY;
 use dmp_ros2::msgs::builtin_interfaces::Time;
-use dmp_ros2::msgs::geometry_msgs::Vector3;
-use dmp_ros2::msgs::std_msgs::{ColorRGBA, Header};
+use dmp_ros2::msgs::std_msgs::Header;
 use dmp_ros2::msgs::visualization_msgs::{Marker, MarkerArray};
-use dmp_ros2::pose::Rigid;
 use tokio::task::JoinHandle;
 use tokio_util::sync::CancellationToken;
 use tracing::{debug, warn};
-use zenoh::Session;
-use zenoh::liveliness::LivelinessToken;
-use zenoh::pubsub::Publisher;
 
+use super::graph::{Graph, RosPublisher};
+use super::marker_shapes::{isopotential, path, true_shape};
+use super::paths::Paths;
+use super::trajectory::topic_token;
+use crate::cell::ObstacleSet;
 use crate::cells::Cells;
 use crate::clock::Clock;
 
 /// How often the cells' versions are looked at.
 pub const PERIOD: Duration = Duration::from_millis(100);
 
+/// How often every marker goes again, changed or not (seconds).
+pub const FULL_REFRESH_S: f64 = 5.0;
+
 /// The topic of a cell's markers.
 pub fn markers_topic(cell: &str) -> String {
-    format!("/dmp/{}/markers", cell.replace(['-', '.'], "_"))
+    format!("/dmp/{}/markers", topic_token(cell))
 }
 
-/// One cell's publisher, its token and its count.
-struct CellPublisher {
-    publisher: Publisher<'static>,
-    _token: LivelinessToken,
-    gid: [u8; 16],
-    sequence: i64,
-    version: Option<u64>,
+/// A marker's identity: its namespace and its obstacle's or robot's id.
+type Key = (String, String);
+
+/// The markers a tool shows, as the messages so far left them; what a new set of wanted markers changes.
+#[derive(Debug, Default)]
+pub struct Shown {
+    shown: BTreeMap<Key, Marker>,
+    next_id: i32,
+    started: bool,
+}
+
+impl Shown {
+    /// What to send so that the tool shows `wanted` (headerless markers, keyed by namespace and text): a
+    /// DELETEALL first the first time, an ADD per new or changed marker (every marker when `full`), a DELETE per
+    /// marker no longer wanted. Ids stay while a key stays.
+    pub fn update(&mut self, wanted: Vec<Marker>, full: bool) -> Vec<Marker> {
+        let mut out = Vec::new();
+        if !self.started {
+            self.started = true;
+            out.push(Marker { action: Marker::DELETEALL, ..Default::default() });
+        }
+        let wanted: BTreeMap<Key, Marker> =
+            wanted.into_iter().map(|m| ((m.ns.clone(), m.text.clone()), m)).collect();
+        let gone: Vec<Key> = self.shown.keys().filter(|k| !wanted.contains_key(*k)).cloned().collect();
+        for key in gone {
+            if let Some(old) = self.shown.remove(&key) {
+                out.push(Marker { ns: old.ns, id: old.id, action: Marker::DELETE, ..Default::default() });
+            }
+        }
+        for (key, mut m) in wanted {
+            m.id = match self.shown.get(&key) {
+                Some(old) => old.id,
+                None => {
+                    self.next_id = self.next_id.wrapping_add(1);
+                    self.next_id
+                }
+            };
+            if full || self.shown.get(&key) != Some(&m) {
+                out.push(m.clone());
+                self.shown.insert(key, m);
+            }
+        }
+        out
+    }
+}
+
+/// The message of `markers` (from [`Shown::update`]): each with the header of `frame` at `now_unix_s`.
+pub fn marker_array(frame: &str, now_unix_s: f64, mut markers: Vec<Marker>) -> MarkerArray {
+    let header = Header { stamp: Time::from_unix_s(now_unix_s), frame_id: frame.to_owned() };
+    for m in &mut markers {
+        m.header = header.clone();
+    }
+    MarkerArray { markers }
+}
+
+/// One cell's publisher and what it showed.
+struct CellMarkers {
+    publisher: RosPublisher,
+    scene_version: Option<u64>,
+    paths_version: Option<u64>,
+    paths: Vec<Marker>,
+    /// Each obstacle's markers, with the obstacle they were drawn from (not drawn again while it is the same).
+    drawn: HashMap<String, (v1::Obstacle, Vec<Marker>)>,
+    shown: Shown,
+    last_full_unix_s: f64,
+}
+
+impl CellMarkers {
+    /// The markers of `scene`, drawing again only the obstacles that changed.
+    fn obstacles(&mut self, scene: &ObstacleSet) -> Vec<Marker> {
+        self.drawn.retain(|id, _| scene.obstacles.contains_key(id));
+        let mut out = Vec::new();
+        for (id, o) in &scene.obstacles {
+            let fresh = self.drawn.get(id).is_some_and(|(proto, _)| *proto == o.proto);
+            if !fresh {
+                let markers = true_shape(&o.proto).into_iter().chain(isopotential(&o.engine)).collect();
+                self.drawn.insert(id.clone(), (o.proto.clone(), markers));
+            }
+            out.extend(self.drawn[id].1.iter().cloned());
+        }
+        out
+    }
 }
 
 /// Spawns the task that publishes the cells' markers until `stop`.
 pub fn spawn(
-    session: Session,
-    domain: u32,
+    graph: Arc<Graph>,
     frame: String,
     cells: Cells,
+    paths: Paths,
     clock: Clock,
     stop: CancellationToken,
 ) -> JoinHandle<()> {
     tokio::spawn(async move {
-        let node = Node {
-            domain,
-            zid: session.zid().to_string(),
-            node_id: 0,
-            namespace: "/".into(),
-            name: "dmp_server".into(),
-        };
-        let _node_token = match session.liveliness().declare_token(node.token()).await {
-            Ok(t) => Some(t),
-            Err(e) => {
-                warn!(error = %e, "ros2: cannot declare the node's liveliness token");
-                None
-            }
-        };
-        let mut publishers: HashMap<String, CellPublisher> = HashMap::new();
+        let mut publishers: HashMap<String, CellMarkers> = HashMap::new();
         let mut tick = tokio::time::interval(PERIOD);
         tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         loop {
@@ -78,28 +143,20 @@ pub fn spawn(
                 _ = tick.tick() => {}
             }
             for cell in cells.all() {
-                let snap = cell.snapshot();
                 let name = cell.name().to_owned();
                 if !publishers.contains_key(&name) {
-                    let topic = markers_topic(&name);
-                    let entity = publishers.len() as u32 + 1;
-                    let token_key = node.publisher_token(entity, &topic, &MARKER_ARRAY);
-                    let declared = async {
-                        let publisher =
-                            session.declare_publisher(topic_key(domain, &topic, &MARKER_ARRAY)).await?;
-                        let token = session.liveliness().declare_token(token_key.clone()).await?;
-                        Ok::<_, zenoh::Error>((publisher, token))
-                    };
-                    match declared.await {
-                        Ok((publisher, token)) => {
-                            let p = CellPublisher {
+                    match graph.publisher(&markers_topic(&name), &MARKER_ARRAY).await {
+                        Ok(publisher) => {
+                            let c = CellMarkers {
                                 publisher,
-                                _token: token,
-                                gid: gid(&token_key),
-                                sequence: 0,
-                                version: None,
+                                scene_version: None,
+                                paths_version: None,
+                                paths: Vec::new(),
+                                drawn: HashMap::new(),
+                                shown: Shown::default(),
+                                last_full_unix_s: f64::NEG_INFINITY,
                             };
-                            publishers.insert(name.clone(), p);
+                            publishers.insert(name.clone(), c);
                         }
                         Err(e) => {
                             warn!(cell = %name, error = %e, "ros2: cannot declare the markers' publisher");
@@ -108,145 +165,68 @@ pub fn spawn(
                     }
                 }
                 let Some(p) = publishers.get_mut(&name) else { continue };
-                if p.version == Some(snap.version) {
+                let now = clock.now_unix_s();
+                let snap = cell.snapshot();
+                let full = now - p.last_full_unix_s >= FULL_REFRESH_S;
+                let new_paths = paths.changed(&name, p.paths_version);
+                if !full && p.scene_version == Some(snap.version) && new_paths.is_none() {
                     continue;
                 }
-                let now = clock.now_unix_s();
-                let obstacles: Vec<&v1::Obstacle> = snap.obstacles.values().map(|o| &o.proto).collect();
-                let msg = marker_array(&frame, now, &obstacles);
-                let bytes = match dmp_ros2::encode(&msg) {
-                    Ok(b) => b,
-                    Err(e) => {
-                        warn!(cell = %name, error = %e, "ros2: markers not encoded");
-                        continue;
-                    }
-                };
-                p.sequence += 1;
-                let attachment = Attachment {
-                    sequence_number: p.sequence,
-                    source_timestamp: (now * 1e9) as i64,
-                    source_gid: p.gid,
-                };
-                if let Err(e) = p.publisher.put(bytes).attachment(attachment.encode()).await {
+                if let Some(c) = new_paths {
+                    p.paths = c.robots.iter().filter_map(|(robot, path_)| path(robot, path_)).collect();
+                    p.paths_version = Some(c.version);
+                }
+                let mut wanted = p.obstacles(&snap);
+                wanted.extend(p.paths.iter().cloned());
+                let markers = p.shown.update(wanted, full);
+                if markers.is_empty() {
+                    p.scene_version = Some(snap.version);
+                    continue;
+                }
+                let msg = marker_array(&frame, now, markers);
+                if let Err(e) = p.publisher.put(&msg, now).await {
                     warn!(cell = %name, error = %e, "ros2: markers not published");
                     continue;
                 }
-                p.version = Some(snap.version);
+                p.scene_version = Some(snap.version);
+                if full {
+                    p.last_full_unix_s = now;
+                }
                 debug!(cell = %name, version = snap.version, markers = msg.markers.len(), "ros2 markers published");
             }
         }
     })
 }
 
-/// The markers of `obstacles`: a DELETEALL, then one marker each (3-D and 2-D obstacles; others are skipped).
-pub fn marker_array(frame: &str, now_unix_s: f64, obstacles: &[&v1::Obstacle]) -> MarkerArray {
-    let header = Header { stamp: Time::from_unix_s(now_unix_s), frame_id: frame.to_owned() };
-    let mut markers = vec![Marker {
-        header: header.clone(),
-        ns: "obstacles".into(),
-        action: Marker::DELETEALL,
-        ..Default::default()
-    }];
-    let mut sorted = obstacles.to_vec();
-    sorted.sort_by(|a, b| a.id.cmp(&b.id));
-    for (k, o) in sorted.into_iter().enumerate() {
-        let Some((r#type, scale)) = shape_marker(o) else { continue };
-        let Some(pose) = pose_of(o) else { continue };
-        markers.push(Marker {
-            header: header.clone(),
-            ns: "obstacles".into(),
-            id: k as i32,
-            r#type,
-            action: Marker::ADD,
-            pose: pose.to_pose(),
-            scale,
-            color: ColorRGBA { r: 0.8, g: 0.2, b: 0.2, a: 0.6 },
-            text: o.id.clone(),
-            ..Default::default()
-        });
-    }
-    MarkerArray { markers }
-}
-
-fn pose_of(o: &v1::Obstacle) -> Option<Rigid> {
-    let d = o.center.len();
-    if !(d == 2 || d == 3) {
-        return None;
-    }
-    let t = [o.center[0], o.center[1], o.center.get(2).copied().unwrap_or(0.0)];
-    let mut m = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    if o.rotation.len() == d * d {
-        for i in 0..d {
-            for j in 0..d {
-                m[i][j] = o.rotation[i * d + j];
-            }
-        }
-    }
-    Some(Rigid::from_matrix(t, m))
-}
-
-fn shape_marker(o: &v1::Obstacle) -> Option<(i32, Vector3)> {
-    use v1::obstacle::Shape;
-    let v = |x: f64, y: f64, z: f64| Vector3 { x, y, z };
-    let axes = |a: &[f64]| match a {
-        [x, y] => Some(v(2.0 * x, 2.0 * y, 0.01)),
-        [x, y, z] => Some(v(2.0 * x, 2.0 * y, 2.0 * z)),
-        _ => None,
-    };
-    match o.shape.as_ref()? {
-        Shape::Solid(s) => {
-            match (v1::solid_primitive::Type::try_from(s.r#type).ok()?, s.dimensions.as_slice()) {
-                (v1::solid_primitive::Type::Box, [x, y, z]) => Some((Marker::CUBE, v(*x, *y, *z))),
-                (v1::solid_primitive::Type::Sphere, [r]) => {
-                    Some((Marker::SPHERE, v(2.0 * r, 2.0 * r, 2.0 * r)))
-                }
-                (v1::solid_primitive::Type::Cylinder, [h, r]) => {
-                    Some((Marker::CYLINDER, v(2.0 * r, 2.0 * r, *h)))
-                }
-                _ => None,
-            }
-        }
-        Shape::Superquadric(s) => Some((Marker::SPHERE, axes(&s.semi_axes)?)),
-        Shape::Nested(n) => Some((Marker::SPHERE, axes(&n.semi_axes)?)),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn marker(ns: &str, text: &str, x: f64) -> Marker {
+        let mut m = Marker { ns: ns.into(), text: text.into(), action: Marker::ADD, ..Default::default() };
+        m.pose.position.x = x;
+        m
+    }
+
     #[test]
-    fn obstacles_become_markers_after_a_deleteall() {
-        let b = v1::Obstacle {
-            id: "b".into(),
-            shape: Some(v1::obstacle::Shape::Solid(v1::SolidPrimitive {
-                r#type: 1,
-                dimensions: vec![0.2, 0.1, 0.3],
-            })),
-            center: vec![1.0, 2.0, 3.0],
-            rotation: vec![0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0],
-            ..Default::default()
-        };
-        let e = v1::Obstacle {
-            id: "a".into(),
-            shape: Some(v1::obstacle::Shape::Superquadric(v1::Superquadric {
-                semi_axes: vec![0.1, 0.2],
-                exponents: vec![],
-            })),
-            center: vec![0.5, 0.5],
-            ..Default::default()
-        };
-        let m = marker_array("world", 10.5, &[&b, &e]);
-        assert_eq!(m.markers.len(), 3);
-        assert_eq!(m.markers[0].action, Marker::DELETEALL);
-        assert_eq!((m.markers[1].text.as_str(), m.markers[1].r#type), ("a", Marker::SPHERE));
-        assert_eq!(m.markers[1].scale, Vector3 { x: 0.2, y: 0.4, z: 0.01 });
-        let cube = &m.markers[2];
-        assert_eq!((cube.r#type, cube.scale.x, cube.pose.position.z), (Marker::CUBE, 0.2, 3.0));
-        let q = &cube.pose.orientation;
-        let h = std::f64::consts::FRAC_1_SQRT_2;
-        assert!((q.z - h).abs() < 1e-12 && (q.w - h).abs() < 1e-12, "a quarter turn about z: {q:?}");
-        assert_eq!(cube.header.stamp.sec, 10);
+    fn changes_are_sent_and_gone_markers_deleted() {
+        let mut s = Shown::default();
+        let first = s.update(vec![marker("obstacles", "a", 1.0), marker("paths", "r", 0.0)], false);
+        assert_eq!(
+            first.iter().map(|m| m.action).collect::<Vec<_>>(),
+            [Marker::DELETEALL, Marker::ADD, Marker::ADD]
+        );
+        let id_a = first.iter().find(|m| m.text == "a").unwrap().id;
+        // Nothing changed: nothing to send, unless full.
+        assert!(s.update(vec![marker("obstacles", "a", 1.0), marker("paths", "r", 0.0)], false).is_empty());
+        assert_eq!(s.update(vec![marker("obstacles", "a", 1.0), marker("paths", "r", 0.0)], true).len(), 2);
+        // `a` moved and the robot left: `a` again with its id, a DELETE of the path.
+        let next = s.update(vec![marker("obstacles", "a", 2.0)], false);
+        assert_eq!(next.len(), 2);
+        let del = next.iter().find(|m| m.action == Marker::DELETE).unwrap();
+        assert_eq!(del.ns, "paths");
+        let moved = next.iter().find(|m| m.action == Marker::ADD).unwrap();
+        assert_eq!((moved.id, moved.pose.position.x), (id_a, 2.0));
         assert_eq!(markers_topic("cell-a.1"), "/dmp/cell_a_1/markers");
     }
 }

@@ -18,6 +18,7 @@ mod primitives;
 mod python_clients;
 mod ros2_bridge;
 mod ros2_golden;
+mod ros2_trajectories;
 mod scene_over_zenoh;
 mod sessions_and_groups;
 mod stale_scene;

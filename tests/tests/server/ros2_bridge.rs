@@ -1,8 +1,8 @@
 //! End to end: a stock eclipse-zenoh session publishes rosbags-encoded collision objects on rmw_zenoh's key
 //! (`tests/python/ros2_publish.py`), as a ROS 2 node on rmw_zenoh would; the server, with `ros2.domain`, puts the
 //! box in the scene at its pose within 1 s, a REMOVE empties the scene, and an unknown frame is refused and
-//! counted. Out: the cell's markers arrive on rmw_zenoh's key with its attachment, and the node's and the
-//! publisher's liveliness tokens are there.
+//! counted. Out: the cell's markers (the box's true shape and isopotential) arrive on rmw_zenoh's key with its
+//! attachment, are deleted when the box goes, and the node's and the publisher's liveliness tokens are there.
 
 use std::future::IntoFuture;
 use std::io::{BufRead, BufReader, Write};
@@ -116,8 +116,14 @@ async fn a_ros2_collision_object_enters_and_leaves_the_scene() {
             break (array, attachment);
         }
     };
-    assert_eq!(array.markers[0].action, Marker::DELETEALL);
-    let cube = &array.markers[1];
+    let cube =
+        array.markers.iter().find(|m| m.ns == "obstacles" && m.text == "crate.0").expect("its true shape");
+    let iso = array
+        .markers
+        .iter()
+        .find(|m| m.ns == "isopotentials" && m.text == "crate.0")
+        .expect("its isopotential");
+    assert_eq!((iso.r#type, iso.pose.position.y), (Marker::TRIANGLE_LIST, cube.pose.position.y));
     assert_eq!((cube.r#type, cube.header.frame_id.as_str()), (Marker::CUBE, "world"));
     assert!((cube.pose.position.y - 0.45).abs() < 1e-9 && (cube.scale.x - 0.2).abs() < 1e-12, "{cube:?}");
     assert!(attachment.sequence_number >= 1);
@@ -136,6 +142,19 @@ async fn a_ros2_collision_object_enters_and_leaves_the_scene() {
 
     let sent = p.send("remove");
     within_1s("the scene empty", sent, || cell.snapshot().obstacles.is_empty()).await;
+    // Its markers are deleted, by namespace and id.
+    let ids: Vec<(String, i32)> = [cube, iso].iter().map(|m| (m.ns.clone(), m.id)).collect();
+    let mut deleted = Vec::new();
+    while deleted.len() < 2 {
+        let sample = within("markers", markers.recv_async()).await.unwrap();
+        let array: MarkerArray = dmp_ros2::decode(&sample.payload().to_bytes()).unwrap();
+        deleted
+            .extend(array.markers.into_iter().filter(|m| m.action == Marker::DELETE).map(|m| (m.ns, m.id)));
+    }
+    deleted.sort();
+    let mut want = ids.clone();
+    want.sort();
+    assert_eq!(deleted, want);
 
     let before = h.malformed_payloads();
     let sent = p.send("wrong-frame");
