@@ -234,7 +234,7 @@ async fn apply(
 
 /// What a replication sample asks for.
 enum Incoming {
-    Version(v1::PrimitiveRecord),
+    Version(Box<v1::PrimitiveRecord>),
     Delete { robot_id: String, name: String },
 }
 
@@ -269,7 +269,7 @@ fn check(limits: &Limits, sample: &Sample) -> Result<Incoming, ServerError> {
             let proto =
                 record.primitive.as_ref().ok_or_else(|| ServerError::invalid("primitive", "is required"))?;
             primitive_from_proto(proto, limits)?.validate()?;
-            Ok(Incoming::Version(record))
+            Ok(Incoming::Version(Box::new(record)))
         }
         _ => Err(ServerError::invalid("key", "a put names a version, a delete none")),
     }
