@@ -39,6 +39,7 @@ mod tests {
             version: 2,
             created_unix_ms: 1,
             primitive: Some(dmp_proto::primitive::primitive_to_proto(&p)),
+            ..Default::default()
         };
         let v = record_json(&record).unwrap();
         assert_eq!(v["version"], 2);

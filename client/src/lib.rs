@@ -7,6 +7,7 @@
 //! | the setpoints in force after a stream of segments (supersession) | [`setpoints`] |
 //! | the JSON of a stored record (the wire's conversions are `dmp_proto`'s) | [`convert`] |
 //! | publishing obstacles over Zenoh (perception nodes; feature `zenoh`) | `zenoh_pub` |
+//! | finding a cell's server in a plant of servers, over Zenoh (feature `zenoh`) | `discovery` |
 //! | errors | [`error`] |
 //!
 //! The `dmpctl` command line is the `dmpctl` crate; simulated robots and the load generator are `dmp-sim`; figures
@@ -14,6 +15,8 @@
 
 pub mod connect;
 pub mod convert;
+#[cfg(feature = "zenoh")]
+pub mod discovery;
 pub mod error;
 pub mod grpc;
 pub mod session;

@@ -6,6 +6,14 @@
 //! | `dmp/<cell>/robots/<robot-id>/state` | `dmp.v1.RobotState` (protobuf); a delete forgets the robot |
 //! | `dmp/<cell>/robots/<robot-id>/alive` | a Zenoh liveliness token of the robot's publisher: when it goes, the robot goes |
 //!
+//! | `dmp/@servers/<server-id>` | a server's liveliness token, and its queryable answering `dmp.v1.PlantServer` |
+//! | `dmp/@cells/<cell>` | the queryable of the server serving the cell, answering `dmp.v1.PlantServer` |
+//! | `dmp/@primitives/<robot-id>/<name>/<version>` | `dmp.v1.PrimitiveRecord` (protobuf), one stored version, replicated between servers |
+//! | `dmp/@primitives/<robot-id>/<name>` delete | every version of the primitive deleted |
+//!
+//! The plant's keys start with a verbatim chunk (`@...`): `dmp/*/...` and `dmp/**` do not match them, so the cells'
+//! subscribers never see them and access rules name them explicitly.
+//!
 //! [`EVERY_CELL`] in place of a cell (or `*` in place of an id) makes the expression that a subscriber declares.
 
 use crate::WireError;
@@ -64,6 +72,66 @@ pub fn robot_alive_key(cell: &str, robot_id: &str) -> String {
 /// `dmp/<cell>/robots/*/alive`.
 pub fn robots_alive_of(cell: &str) -> String {
     robot_alive_key(cell, "*")
+}
+
+/// The key of a server of a plant: its liveliness token and its queryable, `dmp/@servers/<server-id>`.
+pub fn server_key(server_id: &str) -> String {
+    format!("{ROOT}/@servers/{server_id}")
+}
+
+/// Every server's key: `dmp/@servers/*`.
+pub fn every_server() -> String {
+    server_key("*")
+}
+
+/// The server id of `dmp/@servers/<server-id>`; None for any other key.
+pub fn parse_server_key(key: &str) -> Option<&str> {
+    match key.split('/').collect::<Vec<_>>()[..] {
+        [ROOT, "@servers", id] => Some(id),
+        _ => None,
+    }
+}
+
+/// The key a cell's server answers on: `dmp/@cells/<cell>`.
+pub fn cell_server_key(cell: &str) -> String {
+    format!("{ROOT}/@cells/{cell}")
+}
+
+/// The key of one replicated version of a primitive: `dmp/@primitives/<robot-id>/<name>/<version>`.
+pub fn primitive_version_key(robot_id: &str, name: &str, version: u64) -> String {
+    format!("{ROOT}/@primitives/{robot_id}/{name}/{version}")
+}
+
+/// The key of a primitive, every version (a delete): `dmp/@primitives/<robot-id>/<name>`.
+pub fn primitive_key(robot_id: &str, name: &str) -> String {
+    format!("{ROOT}/@primitives/{robot_id}/{name}")
+}
+
+/// Every replicated primitive: `dmp/@primitives/**`.
+pub fn every_primitive() -> String {
+    format!("{ROOT}/@primitives/**")
+}
+
+/// A primitive's key: robot id, name, and the version (None: every version).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PrimitiveKey<'a> {
+    /// The robot.
+    pub robot_id: &'a str,
+    /// The primitive's name.
+    pub name: &'a str,
+    /// The version; None for the key of every version.
+    pub version: Option<u64>,
+}
+
+/// The names of `dmp/@primitives/<robot-id>/<name>[/<version>]`; None for any other key.
+pub fn parse_primitive_key(key: &str) -> Option<PrimitiveKey<'_>> {
+    match key.split('/').collect::<Vec<_>>()[..] {
+        [ROOT, "@primitives", robot_id, name] => Some(PrimitiveKey { robot_id, name, version: None }),
+        [ROOT, "@primitives", robot_id, name, v] => {
+            Some(PrimitiveKey { robot_id, name, version: Some(v.parse().ok()?) })
+        }
+        _ => None,
+    }
 }
 
 /// The names a key holds.
@@ -132,5 +200,14 @@ mod tests {
         assert_eq!(parse_robot_state_key(&obstacle_key("c1", "box1")), None);
         assert_eq!(parse_obstacle_key("dmp/c1/obstacles/a/b"), None);
         assert_eq!(parse_obstacle_key("other/c1/obstacles/a"), None);
+        assert_eq!(parse_server_key(&server_key("s1")), Some("s1"));
+        assert_eq!(every_server(), "dmp/@servers/*");
+        assert_eq!(cell_server_key("a"), "dmp/@cells/a");
+        let k = PrimitiveKey { robot_id: "r", name: "n", version: Some(7) };
+        assert_eq!(parse_primitive_key(&primitive_version_key("r", "n", 7)), Some(k));
+        let k = PrimitiveKey { version: None, ..k };
+        assert_eq!(parse_primitive_key(&primitive_key("r", "n")), Some(k));
+        assert_eq!(parse_primitive_key("dmp/@primitives/r/n/x"), None);
+        assert_eq!(parse_primitive_key(&obstacle_key("c1", "box1")), None);
     }
 }

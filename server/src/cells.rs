@@ -4,7 +4,7 @@
 //! Cells are created on first use, up to `limits.max_cells`, and reclaimed when nothing uses them any more (no
 //! obstacle, no robot, no stream, no watch): a delete never creates one.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::sync::{Arc, Mutex};
 
 use dmp_proto::keys::check_name;
@@ -13,6 +13,7 @@ use crate::cell::Cell;
 use crate::config::Limits;
 use crate::error::ServerError;
 use crate::memory::MemoryBudget;
+use crate::plant::directory::Directory;
 use crate::staleness::SceneConfig;
 
 /// Every cell's scene, by name. Cheap to clone.
@@ -29,6 +30,12 @@ pub struct Cells {
     scene: Arc<SceneConfig>,
     /// The lock is held only to look up or insert, never across an await.
     map: Arc<Mutex<HashMap<Arc<str>, Cell>>>,
+    /// The cells served (`cells` of the configuration); None: any.
+    served: Option<Arc<BTreeSet<String>>>,
+    /// For a cell, the cells of this server whose robots avoid its robots (`plant.neighbours`, reversed).
+    avoiders: Arc<HashMap<String, Vec<String>>>,
+    /// The plant's servers, to name the one serving a cell this server does not.
+    directory: Directory,
 }
 
 impl Cells {
@@ -58,9 +65,41 @@ impl Cells {
             workspace_m: limits.workspace_m,
             scene: Arc::new(scene),
             map: Arc::default(),
+            served: None,
+            avoiders: Arc::default(),
+            directory: Directory::default(),
         };
         cells.get("")?;
         Ok(cells)
+    }
+
+    /// The same cells, serving only `cells` (empty: any cell); the default cell must be one of them.
+    pub fn serving(mut self, cells: &[String]) -> Self {
+        if !cells.is_empty() {
+            let mut set: BTreeSet<String> = cells.iter().cloned().collect();
+            set.insert(self.default.to_string());
+            self.served = Some(Arc::new(set));
+        }
+        self
+    }
+
+    /// The same cells, whose robots also avoid those of their neighbours: `neighbours` lists, for a cell, the cells
+    /// whose robots it avoids.
+    pub fn with_neighbours(mut self, neighbours: &BTreeMap<String, Vec<String>>) -> Self {
+        let mut avoiders: HashMap<String, Vec<String>> = HashMap::new();
+        for (cell, others) in neighbours {
+            for other in others.iter().filter(|o| *o != cell) {
+                avoiders.entry(other.clone()).or_default().push(cell.clone());
+            }
+        }
+        self.avoiders = Arc::new(avoiders);
+        self
+    }
+
+    /// The same cells, naming the plant's server of a cell they do not serve from `directory`.
+    pub fn with_directory(mut self, directory: Directory) -> Self {
+        self.directory = directory;
+        self
     }
 
     /// The default cell's name.
@@ -68,11 +107,46 @@ impl Cells {
         &self.default
     }
 
+    /// The plant's live servers as this server knows them.
+    pub fn directory(&self) -> &Directory {
+        &self.directory
+    }
+
+    /// The cells served; None: any.
+    pub fn served(&self) -> Option<Vec<String>> {
+        self.served.as_ref().map(|s| s.iter().cloned().collect())
+    }
+
+    /// Whether this server serves `cell` (a checked name).
+    pub fn serves(&self, cell: &str) -> bool {
+        self.served.as_ref().is_none_or(|s| s.contains(cell))
+    }
+
+    /// The cells of this server whose robots avoid the robots of `cell` (its neighbours that list it).
+    pub fn avoiders_of(&self, cell: &str) -> &[String] {
+        self.avoiders.get(cell).map_or(&[], Vec::as_slice)
+    }
+
+    /// The refusal of a cell this server does not serve, naming the server that does when one is known.
+    fn not_served(&self, cell: &str) -> ServerError {
+        let served = self.served().unwrap_or_default().join(", ");
+        let owner = match self.directory.owner_of(cell) {
+            Some(s) => format!("it is served by server `{}` at {}", s.server_id, s.grpc_address),
+            None => "no server of the plant is known to serve it".into(),
+        };
+        ServerError::FailedPrecondition(format!(
+            "cell `{cell}` is not served by this server (it serves {served}): {owner}"
+        ))
+    }
+
     /// The name of `cell` (empty: the default cell's), checked: what access rules are matched against, before any
-    /// cell is created.
+    /// cell is created. A cell this server does not serve is refused ([`Cells::serving`]).
     pub fn resolve<'a>(&'a self, cell: &'a str) -> Result<&'a str, ServerError> {
         let name = if cell.is_empty() { &*self.default } else { cell };
         check_name("cell", name)?;
+        if !self.serves(name) {
+            return Err(self.not_served(name));
+        }
         Ok(name)
     }
 
@@ -85,6 +159,9 @@ impl Cells {
             return Ok(s.clone());
         }
         check_name("cell", name)?;
+        if !self.serves(name) {
+            return Err(self.not_served(name));
+        }
         if map.len() >= self.max_cells {
             self.reclaim_in(&mut map);
         }
@@ -112,6 +189,9 @@ impl Cells {
     pub fn find(&self, cell: &str) -> Result<Option<Cell>, ServerError> {
         let name = if cell.is_empty() { &*self.default } else { cell };
         check_name("cell", name)?;
+        if !self.serves(name) {
+            return Ok(None);
+        }
         Ok(self.map.lock().unwrap_or_else(|p| p.into_inner()).get(name).cloned())
     }
 
@@ -148,6 +228,7 @@ impl Cells {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use dmp_proto::v1;
 
     #[test]
     fn cells_are_created_once_named_and_bounded() {
@@ -188,6 +269,34 @@ mod tests {
         assert_eq!(cells.reclaim(), 1);
         assert_eq!(cells.len(), 1);
         assert!(cells.find("home").unwrap().is_some() && cells.find("").unwrap().is_some());
+    }
+
+    #[test]
+    fn only_the_cells_served_are_and_a_refusal_names_their_server() {
+        let directory = Directory::default();
+        let cells = Cells::new("a", 10, 10)
+            .unwrap()
+            .serving(&["a".into(), "b".into()])
+            .with_neighbours(&BTreeMap::from([("a".into(), vec!["c".into()])]))
+            .with_directory(directory.clone());
+        assert!(cells.get("b").is_ok() && cells.resolve("").unwrap() == "a");
+        let e = cells.get("c").unwrap_err().to_string();
+        assert!(
+            e.contains("cell `c` is not served") && e.contains("serves a, b") && e.contains("no server"),
+            "{e}"
+        );
+        assert!(cells.find("c").unwrap().is_none());
+        directory.insert(v1::PlantServer {
+            server_id: "s2".into(),
+            grpc_address: "http://s2:1".into(),
+            cells: vec!["c".into()],
+        });
+        let e = cells.resolve("c").unwrap_err();
+        assert!(
+            matches!(&e, ServerError::FailedPrecondition(m) if m.contains("served by server `s2` at http://s2:1"))
+        );
+        assert_eq!(cells.avoiders_of("c"), ["a"]);
+        assert!(cells.avoiders_of("a").is_empty());
     }
 
     #[test]

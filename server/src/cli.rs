@@ -27,6 +27,21 @@ pub struct Args {
     /// The robot cell: Zenoh keys are `dmp/<cell>/...` [default: default].
     #[arg(long, value_name = "NAME")]
     pub cell: Option<String>,
+    /// The cells this server serves, e.g. `a,b` (replaces the file's list); a request for another cell is
+    /// refused [default: any cell].
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    pub cells: Vec<String>,
+    /// This server's id in a plant of servers on one Zenoh network: discovery, replicated primitives [default:
+    /// none, a lone server].
+    #[arg(long, value_name = "ID")]
+    pub server_id: Option<String>,
+    /// The gRPC address the plant is told to reach this server at [default: the bound address].
+    #[arg(long, value_name = "URL")]
+    pub advertise_addr: Option<String>,
+    /// A cell and the cells whose robots its robots also avoid, e.g. `a=b,c` (repeatable; replaces the file's
+    /// entry of that cell).
+    #[arg(long = "neighbours", value_name = "CELL=CELLS")]
+    pub neighbours: Vec<String>,
     /// Address of the Prometheus endpoint (`GET /metrics`, plain HTTP, no authentication), e.g. `0.0.0.0:9464`;
     /// port 0 picks a free port [default: off].
     #[arg(long, value_name = "ADDR")]
@@ -141,6 +156,23 @@ pub fn load_config(args: &Args) -> anyhow::Result<Config> {
         config.otlp_endpoint.clone_from(&args.otlp_endpoint);
     }
     dmp_proto::keys::check_name("cell", &config.cell).map_err(|e| anyhow::anyhow!("{e}"))?;
+    if !args.cells.is_empty() {
+        config.cells = args.cells.clone();
+    }
+    if args.server_id.is_some() {
+        config.plant.server_id.clone_from(&args.server_id);
+    }
+    if args.advertise_addr.is_some() {
+        config.plant.advertise_addr.clone_from(&args.advertise_addr);
+    }
+    for n in &args.neighbours {
+        let (cell, others) = n
+            .split_once('=')
+            .ok_or_else(|| anyhow::anyhow!("--neighbours: `{n}` is not CELL=CELLS (e.g. a=b,c)"))?;
+        let others = others.split(',').filter(|o| !o.is_empty()).map(str::to_owned).collect();
+        config.plant.neighbours.insert(cell.to_owned(), others);
+    }
+    config.check_plant().map_err(|e| anyhow::anyhow!("{e}"))?;
     if let Some(mode) = &args.zenoh_mode {
         config.zenoh.mode = mode.clone();
     }

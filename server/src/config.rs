@@ -15,8 +15,14 @@ pub struct Config {
     pub grpc_addr: SocketAddr,
     /// Directory of the embedded store.
     pub data_dir: PathBuf,
-    /// The robot cell this server serves: Zenoh keys are `dmp/<cell>/...`.
+    /// The robot cell this server serves: Zenoh keys are `dmp/<cell>/...`; with `cells`, the default one of them
+    /// (the first of `cells` when it is not among them).
     pub cell: String,
+    /// The cells this server serves (`--cells a,b`); a request for another cell is refused, naming the server of
+    /// the plant that serves it when one is known. Empty: any cell, created on first use.
+    pub cells: Vec<String>,
+    /// Several servers on one Zenoh network ([`crate::plant`]).
+    pub plant: PlantConfig,
     /// Address of the Prometheus endpoint (`GET /metrics`, plain HTTP, no authentication); none: off.
     pub metrics_addr: Option<SocketAddr>,
     /// The OTLP/gRPC collector the tracing spans go to, e.g. `http://collector:4317`; none: off.
@@ -35,6 +41,49 @@ pub struct Config {
     pub security: SecurityConfig,
     /// ROS 2 over rmw_zenoh ([`crate::ros2`]); off unless its domain is set.
     pub ros2: crate::ros2::config::Ros2Config,
+}
+
+/// Several servers on one Zenoh network: discovery, replicated primitives, neighbouring cells.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PlantConfig {
+    /// This server's id in the plant (`--server-id`): with it (and Zenoh), the server declares its liveliness
+    /// token and its cells' queryables, and replicates primitives with the others. None: a lone server.
+    pub server_id: Option<String>,
+    /// The gRPC address the plant is told to reach this server at, e.g. `https://cell-a.plant:50051`
+    /// (`--advertise-addr`) [default: the bound address, `http://` or `https://`].
+    pub advertise_addr: Option<String>,
+    /// For each cell this server serves, the cells whose robots its robots also avoid (robot states cross
+    /// servers on their Zenoh keys). List both directions for robots of two cells to avoid each other.
+    pub neighbours: std::collections::BTreeMap<String, Vec<String>>,
+}
+
+impl Config {
+    /// The default cell: `cell`, unless `cells` is given without it, then the first of `cells`.
+    pub fn default_cell(&self) -> &str {
+        match self.cells.first() {
+            Some(first) if !self.cells.contains(&self.cell) => first,
+            _ => &self.cell,
+        }
+    }
+
+    /// Checks the plant's names: the cells, the server id, the neighbours (naming the field at fault).
+    pub fn check_plant(&self) -> Result<(), dmp_proto::WireError> {
+        use dmp_proto::keys::check_name;
+        for (i, c) in self.cells.iter().enumerate() {
+            check_name(&format!("cells[{i}]"), c)?;
+        }
+        if let Some(id) = &self.plant.server_id {
+            check_name("plant.server_id", id)?;
+        }
+        for (cell, others) in &self.plant.neighbours {
+            check_name("plant.neighbours", cell)?;
+            for (i, o) in others.iter().enumerate() {
+                check_name(&format!("plant.neighbours.{cell}[{i}]"), o)?;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// TLS and access control. Without an access file and TLS the server listens on loopback only, unless `insecure`.
@@ -60,6 +109,8 @@ impl Default for Config {
             grpc_addr: "127.0.0.1:50051".parse().expect("a valid literal address"),
             data_dir: PathBuf::from("data"),
             cell: "default".into(),
+            cells: Vec::new(),
+            plant: PlantConfig::default(),
             metrics_addr: None,
             otlp_endpoint: None,
             zenoh: ZenohConfig::default(),

@@ -24,6 +24,7 @@
 //! | who may open a stream: pools, per connection, per client | [`stream_permits`] |
 //! | the server's memory budget and its reservations | [`memory`] |
 //! | traces to OpenTelemetry (`--otlp-endpoint`) | [`telemetry`] |
+//! | several servers on one Zenoh network: discovery, replicated primitives | [`plant`] |
 //! | the Prometheus endpoint: the counters above and two histograms, at each scrape | [`metrics`] |
 
 pub mod access;
@@ -41,6 +42,7 @@ pub mod executor;
 pub mod exposure;
 pub mod memory;
 pub mod metrics;
+pub mod plant;
 pub mod robots;
 pub mod ros2;
 pub mod run;

@@ -18,6 +18,7 @@ use zenoh::pubsub::Publisher;
 use zenoh::sample::Locality;
 
 use crate::cell::Cell;
+use crate::cells::Cells;
 
 /// Publishes executing robots' states: into their cell's scene always (every segment), and on Zenoh when the
 /// server has a session (at most once per `period` per robot: other servers extrapolate with the velocity). Cheap to
@@ -25,6 +26,8 @@ use crate::cell::Cell;
 #[derive(Debug, Clone)]
 pub struct RobotBus {
     zenoh: Option<Arc<ZenohRobotBus>>,
+    /// The server's cells, to record a robot also in the cells that list its cell as a neighbour.
+    cells: Option<Cells>,
 }
 
 /// A robot's Zenoh publisher, whether any remote subscriber matches it, and the stamp of its last state sent.
@@ -56,12 +59,28 @@ impl RobotBus {
         let zenoh = zenoh.map(|(session, period_s)| {
             Arc::new(ZenohRobotBus { session, period_s, publishers: Mutex::new(HashMap::new()) })
         });
-        Self { zenoh }
+        Self { zenoh, cells: None }
+    }
+
+    /// The same bus, recording each robot also in the cells of `cells` that avoid its cell's robots
+    /// (`plant.neighbours`).
+    pub fn mirroring(mut self, cells: Cells) -> Self {
+        self.cells = Some(cells);
+        self
+    }
+
+    /// The cells of this server, other than `cell`, whose robots avoid those of `cell`.
+    fn avoiders(&self, cell: &str) -> Vec<Cell> {
+        let Some(cells) = &self.cells else { return Vec::new() };
+        cells.avoiders_of(cell).iter().filter_map(|a| cells.get(a).ok()).collect()
     }
 
     /// Records a robot's state in its cell's scene and publishes it on Zenoh (encoding `application/protobuf`)
     /// unless the robot's last state went out less than the period ago.
     pub async fn publish(&self, scene: &Cell, state: v1::RobotState, footprint: Option<dmp::Shape>) {
+        for other in self.avoiders(scene.name()) {
+            other.update_robot(state.clone(), footprint.clone());
+        }
         let Some(z) = &self.zenoh else {
             scene.update_robot(state, footprint);
             return;
@@ -91,6 +110,9 @@ impl RobotBus {
     /// Forgets a robot whose run ended, locally and on Zenoh (a delete on its key).
     pub async fn retire(&self, scene: &Cell, robot_id: &str) {
         scene.remove_robot(robot_id);
+        for other in self.avoiders(scene.name()) {
+            other.remove_robot(robot_id);
+        }
         let Some(z) = &self.zenoh else { return };
         let out = {
             let mut map = z.publishers.lock().unwrap_or_else(|p| p.into_inner());
@@ -188,7 +210,6 @@ impl ZenohRobotBus {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cells::Cells;
     use crate::config::ZenohConfig;
     use crate::zenoh_bridge::{ZenohBridge, open_session};
     use dmp_proto::keys::obstacle_key;

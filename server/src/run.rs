@@ -130,7 +130,13 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         .map_err(|e| ServerError::Internal(e.to_string()))??;
     config.scene.check()?;
     let memory = MemoryBudget::new(config.limits.max_server_bytes);
-    let cells = Cells::with_limits(&config.cell, &config.limits, memory.clone(), config.scene.clone())?;
+    config.check_plant()?;
+    let directory = crate::plant::directory::Directory::default();
+    let cells =
+        Cells::with_limits(config.default_cell(), &config.limits, memory.clone(), config.scene.clone())?
+            .serving(&config.cells)
+            .with_neighbours(&config.plant.neighbours)
+            .with_directory(directory.clone());
     let shutdown = CancellationToken::new();
     let state_admission = StateAdmission::new(&config.limits);
 
@@ -151,7 +157,8 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         )
         .await?;
         let locs = locators(&session).await;
-        let robots = RobotBus::new(Some((session.clone(), config.defaults.robot_state_period_s)));
+        let robots = RobotBus::new(Some((session.clone(), config.defaults.robot_state_period_s)))
+            .mirroring(cells.clone());
         (Some(session), Some(bridge), robots, locs)
     };
     let bridge_malformed = bridge.as_ref().map(|b| b.malformed_counter());
@@ -166,6 +173,39 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
     };
     let ros2 = ros2_bridge.as_ref().map(|b| b.counters());
     let ros2_out = ros2_bridge.as_ref().map(|b| b.outbox()).unwrap_or_default();
+    // A server of a plant: its version clock, its announcement, and the replication of its store.
+    let (store, plant) = match (&session, &config.plant.server_id) {
+        (Some(s), Some(id)) => {
+            let store = store.stamped(id, crate::plant::version_clock(s));
+            let scheme = if tls.is_some() { "https" } else { "http" };
+            let server = dmp_proto::v1::PlantServer {
+                server_id: id.clone(),
+                grpc_address: config
+                    .plant
+                    .advertise_addr
+                    .clone()
+                    .unwrap_or_else(|| format!("{scheme}://{grpc_addr}")),
+                cells: crate::plant::announced_cells(&cells),
+            };
+            let plant = crate::plant::Plant::start(
+                s,
+                server,
+                directory,
+                store.clone(),
+                config.limits.clone(),
+                shutdown.clone(),
+            )
+            .await?;
+            (store, Some(plant))
+        }
+        (None, Some(_)) => {
+            return Err(ServerError::FailedPrecondition(
+                "plant.server_id needs Zenoh (not --no-zenoh)".into(),
+            ));
+        }
+        _ => (store, None),
+    };
+    let replicator = plant.as_ref().map(|p| p.replicator());
 
     let compute = Compute::start(&config.compute)
         .map_err(|e| ServerError::Internal(format!("cannot start the compute threads: {e}")))?;
@@ -177,6 +217,7 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         config,
         store,
         cells,
+        replicator,
         robots,
         shutdown: shutdown.clone(),
         counters: Default::default(),
@@ -280,6 +321,9 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
                 Ok(())
             }
         };
+        if let Some(p) = plant {
+            p.close().await;
+        }
         if let Some(b) = ros2_bridge {
             b.close().await;
         }
@@ -298,7 +342,9 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
     info!(
         grpc = %grpc_addr,
         zenoh = ?zenoh_locators,
-        cell = %state.config.cell,
+        cell = %state.cells.default_cell(),
+        cells = ?state.cells.served(),
+        server_id = ?state.config.plant.server_id,
         metrics = ?metrics_addr,
         tls = security.tls_cert.is_some(),
         mutual_tls = security.tls_client_ca.is_some(),

@@ -30,6 +30,8 @@ pub struct AppState {
     /// The primitives.
     pub store: Store,
     /// Every cell's obstacles and robot states.
+    /// On a server of a plant: what puts the versions it stores for the other servers ([`crate::plant`]).
+    pub replicator: Option<crate::plant::replication::Replicator>,
     pub cells: Cells,
     /// Publishes executing robots' states (over Zenoh when it is on).
     pub robots: RobotBus,
@@ -119,6 +121,7 @@ impl AppState {
                 Default::default(),
             )
             .expect("cell c"),
+            replicator: None,
             compute: Compute::start(&config.compute).expect("compute threads start"),
             memory,
             executing: Executing::default(),

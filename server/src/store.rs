@@ -51,7 +51,12 @@ pub struct Store {
     max_versions: usize,
     /// Operations so far, by kind (in the order of [`Store::operations`]).
     operations: Arc<[AtomicU64; 4]>,
+    /// On a server of a plant: its id and its clock of versions ([`Store::stamped`]).
+    origin: Option<(Arc<str>, VersionClock)>,
 }
+
+/// Gives the version of a new primitive on a server of a plant: its HLC time, NTP64 (`crate::plant`).
+pub type VersionClock = Arc<dyn Fn() -> u64 + Send + Sync>;
 
 /// The kinds of operation, in the order of [`Store::operations`].
 const PUT: usize = 0;
@@ -110,6 +115,7 @@ impl Store {
             path: Arc::new(path.clone()),
             max_versions: usize::MAX,
             operations: Arc::default(),
+            origin: None,
         };
         store.check_or_initialise()?;
         Ok(store)
@@ -119,6 +125,14 @@ impl Store {
     /// removes the oldest, in its own transaction (all versions are kept by default).
     pub fn keep_versions(mut self, max_versions: usize) -> Self {
         self.max_versions = max_versions.max(1);
+        self
+    }
+
+    /// The same store on a server of a plant: a new version is the later of `clock()` (the server's HLC time) and
+    /// the last version plus one, and its record names `server_id` as its origin; versions of other servers come
+    /// through [`Store::insert_replica`].
+    pub fn stamped(mut self, server_id: &str, clock: VersionClock) -> Self {
+        self.origin = Some((server_id.into(), clock));
         self
     }
 
@@ -196,6 +210,7 @@ impl Store {
                 .map_err(|e| storage("read last_versions", e))?
                 .map_or(0, |v| v.value())
                 + 1;
+            let version = self.origin.as_ref().map_or(version, |(_, clock)| version.max(clock()));
             last.insert((robot_id, name), version).map_err(|e| storage("write last_versions", e))?;
             let record = v1::PrimitiveRecord {
                 robot_id: robot_id.into(),
@@ -203,25 +218,92 @@ impl Store {
                 version,
                 created_unix_ms: now_unix_ms,
                 primitive: Some(primitive_to_proto(primitive)),
+                origin_server: self.origin.as_ref().map(|(id, _)| id.to_string()).unwrap_or_default(),
             };
             let mut prims = tx.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
             prims
                 .insert((robot_id, name, version), record.encode_to_vec().as_slice())
                 .map_err(|e| storage("write primitive", e))?;
-            // The oldest versions beyond `max_versions` go in the same transaction: a crash keeps both or neither.
-            let kept: Vec<u64> = prims
-                .range((robot_id, name, 0)..=(robot_id, name, version))
-                .map_err(|e| storage("read primitives", e))?
-                .map(|entry| entry.map(|(k, _)| k.value().2))
-                .collect::<Result<_, _>>()
-                .map_err(|e| storage("read primitives", e))?;
-            for v in &kept[..kept.len().saturating_sub(self.max_versions)] {
-                prims.remove((robot_id, name, *v)).map_err(|e| storage("prune primitive", e))?;
-            }
+            self.prune(&mut prims, robot_id, name)?;
             record
         };
         tx.commit().map_err(|e| storage("commit", e))?;
         Ok(record)
+    }
+
+    /// Removes the oldest versions of `(robot_id, name)` beyond `max_versions`, in the caller's transaction: a
+    /// crash keeps both the new version and the removal or neither.
+    fn prune(
+        &self,
+        prims: &mut redb::Table<'_, (&str, &str, u64), &[u8]>,
+        robot_id: &str,
+        name: &str,
+    ) -> Result<(), ServerError> {
+        let kept: Vec<u64> = prims
+            .range((robot_id, name, 0)..=(robot_id, name, u64::MAX))
+            .map_err(|e| storage("read primitives", e))?
+            .map(|entry| entry.map(|(k, _)| k.value().2))
+            .collect::<Result<_, _>>()
+            .map_err(|e| storage("read primitives", e))?;
+        for v in &kept[..kept.len().saturating_sub(self.max_versions)] {
+            prims.remove((robot_id, name, *v)).map_err(|e| storage("prune primitive", e))?;
+        }
+        Ok(())
+    }
+
+    /// Stores a version that another server of the plant stored (its record, checked by the caller) unless this
+    /// store holds it already; durable when it returns. Returns whether it was stored. The same version from two
+    /// origins (two servers stamping the same HLC time) keeps the record of the smaller origin id, on every server.
+    /// A version older than the `max_versions` kept is pruned at once, as it would have been.
+    pub fn insert_replica(&self, record: &v1::PrimitiveRecord) -> Result<bool, ServerError> {
+        self.count(PUT);
+        let (robot_id, name, version) = (record.robot_id.as_str(), record.name.as_str(), record.version);
+        let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
+        tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
+        let stored = {
+            let mut prims = tx.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
+            let held = prims
+                .get((robot_id, name, version))
+                .map_err(|e| storage("read primitives", e))?
+                .map(|v| decode(v.value()))
+                .transpose()?;
+            let replace = held.is_none_or(|h| record.origin_server < h.origin_server);
+            if replace {
+                prims
+                    .insert((robot_id, name, version), record.encode_to_vec().as_slice())
+                    .map_err(|e| storage("write primitive", e))?;
+                self.prune(&mut prims, robot_id, name)?;
+                let mut last = tx.open_table(LAST_VERSIONS).map_err(|e| storage("open last_versions", e))?;
+                let known = last
+                    .get((robot_id, name))
+                    .map_err(|e| storage("read last_versions", e))?
+                    .map_or(0, |v| v.value());
+                if version > known {
+                    last.insert((robot_id, name), version).map_err(|e| storage("write last_versions", e))?;
+                }
+            }
+            replace
+        };
+        if stored {
+            tx.commit().map_err(|e| storage("commit", e))?;
+        } else {
+            tx.abort().map_err(|e| storage("abort", e))?;
+        }
+        Ok(stored)
+    }
+
+    /// Every stored version of every primitive, in key order (what a server of the plant answers a catch-up query
+    /// with).
+    pub fn all_records(&self) -> Result<Vec<v1::PrimitiveRecord>, ServerError> {
+        self.count(LIST);
+        let read = self.db.begin_read().map_err(|e| storage("begin read", e))?;
+        let prims = read.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
+        let mut out = Vec::new();
+        for entry in prims.iter().map_err(|e| storage("read primitives", e))? {
+            let (_, value) = entry.map_err(|e| storage("read primitives", e))?;
+            out.push(decode(value.value())?);
+        }
+        Ok(out)
     }
 
     /// One version of `(robot_id, name)`; `version` 0 means the latest.

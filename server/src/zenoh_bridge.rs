@@ -171,6 +171,10 @@ impl SceneUpdater {
                 }
             }
             SampleKind::Put => {
+                if !self.cells.serves(names.cell) {
+                    debug!(key, "obstacle over zenoh for a cell this server does not serve");
+                    return Ok(());
+                }
                 let scene = self.cells.get(names.cell)?;
                 let bytes = sample.payload().to_bytes();
                 // The encoding's name, with its schema if any (`application/protobuf;dmp.v1.Obstacle`).
@@ -202,17 +206,25 @@ impl SceneUpdater {
         let id = names.id;
         match sample.kind() {
             SampleKind::Delete => {
-                if let Some(scene) = self.cells.find(names.cell)? {
+                for scene in self.robot_cells(names.cell, false)? {
                     scene.remove_robot(id);
-                    debug!(key, "robot retired over zenoh");
+                    debug!(key, cell = scene.name(), "robot retired over zenoh");
                 }
             }
             SampleKind::Put => {
                 check_name("robot_id", id)?;
-                let scene = self.cells.get(names.cell)?;
+                let scenes = self.robot_cells(names.cell, true)?;
+                if scenes.is_empty() {
+                    debug!(key, "robot state of a cell this server neither serves nor neighbours");
+                    return Ok(());
+                }
                 let (state, footprint) = decode_robot_state(&sample.payload().to_bytes(), id)?;
                 match self.admission.admit(&state, self.clock.now_unix_s()) {
-                    Ok(()) => scene.update_robot(state, footprint),
+                    Ok(()) => {
+                        for scene in &scenes {
+                            scene.update_robot(state.clone(), footprint.clone());
+                        }
+                    }
                     Err(e) => {
                         warn!(key, reason = %e, dropped = self.admission.dropped(), "robot state dropped")
                     }
@@ -230,14 +242,35 @@ impl SceneUpdater {
                 .refuse(sample, ServerError::invalid("key", "is not dmp/<cell>/robots/<robot-id>/alive"));
         };
         if sample.kind() == SampleKind::Delete {
-            match self.cells.get(names.cell) {
-                Ok(scene) => {
-                    scene.remove_robot(names.id);
-                    debug!(key, "robot gone with its liveliness token");
+            match self.robot_cells(names.cell, false) {
+                Ok(scenes) => {
+                    for scene in scenes {
+                        scene.remove_robot(names.id);
+                        debug!(key, cell = scene.name(), "robot gone with its liveliness token");
+                    }
                 }
                 Err(e) => self.refuse(sample, e),
             }
         }
+    }
+
+    /// The scenes a robot of `cell` counts in: its cell's when this server serves it, and those of the cells that
+    /// list it as a neighbour (`plant.neighbours`). `create`: created if need be (a put), else only those that
+    /// exist (a delete never creates a cell).
+    fn robot_cells(&self, cell: &str, create: bool) -> Result<Vec<crate::cell::Cell>, ServerError> {
+        check_name("cell", cell)?;
+        let names = std::iter::once(cell)
+            .filter(|c| self.cells.serves(c))
+            .chain(self.cells.avoiders_of(cell).iter().map(String::as_str));
+        let mut out = Vec::new();
+        for name in names {
+            if create {
+                out.push(self.cells.get(name)?);
+            } else if let Some(scene) = self.cells.find(name)? {
+                out.push(scene);
+            }
+        }
+        Ok(out)
     }
 
     fn refuse(&self, sample: &Sample, reason: ServerError) {

@@ -28,8 +28,9 @@ pub use self::motion_args::{MotionArgs, PlanArgs, StreamArgs};
     about = "Learn, plan and replay Dynamic Movement Primitives around obstacles"
 )]
 pub struct Cli {
-    /// gRPC address of the server [default: http://127.0.0.1:50051]. `scenario run` uses the server only when
-    /// this is given.
+    /// gRPC address of the server [default: with `--cell` and `--zenoh-connect` (or `--zenoh-config`), the server
+    /// of the plant serving the cell, asked over Zenoh; else http://127.0.0.1:50051]. `scenario run` uses the
+    /// server only when this is given.
     #[arg(long, global = true, value_name = "URL")]
     pub server: Option<String>,
     /// The robot cell of every command: its scene, its motions and its Zenoh keys `dmp/<cell>/...` [default: the
@@ -288,7 +289,7 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
     let options =
         cli.connect.options(std::env::var(TOKEN_ENV).ok(), |w| eprintln!("dmpctl: warning: {w}"))?;
     let default_server = if options.tls.is_some() { "https://127.0.0.1:50051" } else { DEFAULT_SERVER };
-    let server = cli.server.clone().unwrap_or_else(|| default_server.to_string());
+    let server = crate::place::resolve_server(&cli, default_server).await;
     // Local inputs first: a bad file is refused before the server is asked anything.
     let obstacles = match &cli.command {
         Command::Scene(SceneCommand::Put { file, ttl, .. }) => server_commands::read_obstacles(file, *ttl)?,

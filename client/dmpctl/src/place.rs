@@ -30,6 +30,46 @@ impl Place {
     }
 }
 
+/// The gRPC server of the command: `--server`; else, with `--cell` and Zenoh endpoints (`--zenoh-connect` or
+/// `--zenoh-config`), the server of the plant that serves the cell, asked over Zenoh
+/// (`dmp_client::discovery`); else `default`. A plant that does not answer is said on stderr and `default` is
+/// used. Commands that only publish over Zenoh (`scene ... --via zenoh`) ask nothing.
+pub async fn resolve_server(cli: &Cli, default: &str) -> String {
+    if let Some(s) = &cli.server {
+        return s.clone();
+    }
+    let zenoh_only = matches!(
+        &cli.command,
+        Command::Scene(
+            SceneCommand::Put { via: Via::Zenoh, .. } | SceneCommand::Delete { via: Via::Zenoh, .. }
+        )
+    );
+    let Some(cell) = &cli.cell else { return default.to_owned() };
+    if zenoh_only || (cli.zenoh_connect.is_empty() && cli.zenoh_config.is_none()) {
+        return default.to_owned();
+    }
+    let timeout = dmp_client::discovery::RESOLVE_TIMEOUT;
+    match dmp_client::discovery::resolve_cell_via(
+        &cli.zenoh_connect,
+        cli.zenoh_config.as_deref(),
+        cell,
+        timeout,
+    )
+    .await
+    {
+        Ok(found) => {
+            eprintln!("dmpctl: cell `{cell}` is served by `{}` at {}", found.server_id, found.grpc_address);
+            found.grpc_address
+        }
+        Err(e) => {
+            eprintln!(
+                "dmpctl: warning: could not find the server of cell `{cell}` over Zenoh ({e}); using {default}"
+            );
+            default.to_owned()
+        }
+    }
+}
+
 /// Resolves the command's [`Place`]. A `--cell` is checked against the naming rule. Commands that use Zenoh (scene
 /// changes `--via zenoh`, `sim`, `load --scene-updates`) ask the server (GetInfo) for what they were not given, so
 /// that their Zenoh keys name the server's cell; if it cannot be asked (no gRPC access, only a Zenoh certificate),

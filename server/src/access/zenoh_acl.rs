@@ -7,8 +7,12 @@
 //! | perception | `dmp/<cell>/obstacles/**` of its cells | publish and delete obstacles, answer the server's catch-up queries, see its subscribers |
 //! | planner | `dmp/<cell>/obstacles/**` of its cells; `dmp/<cell>/**` read | the same, and subscribe to its cells |
 //! | observer | `dmp/<cell>/**` of its cells | subscribe and query only |
-//! | server | `dmp/<cell>/**` of its cells | everything: robot states are taken only from servers |
-//! | admin | `dmp/**` | everything |
+//! | server | `dmp/<cell>/**` of its cells; the plant's keys `dmp/@servers/**`, `dmp/@cells/**`, `dmp/@primitives/**` | everything: robot states and primitives are taken only from servers |
+//! | admin | `dmp/**` and the plant's keys | everything |
+//!
+//! Perception, planner and observer identities may also ask the plant which server serves a cell (query and be
+//! answered on `dmp/@cells/**` and `dmp/@servers/**`). The plant's keys start with a verbatim chunk, which `dmp/**`
+//! does not match: they are named apart.
 //!
 //! Robots stream over gRPC and get nothing on Zenoh. A peer without a certificate of the cell's CA cannot connect
 //! to a `tls/` endpoint with mutual TLS; one that connects otherwise (a `tcp/` endpoint) matches no subject and is
@@ -38,6 +42,11 @@ const ALL: &[&str] = &[
     "liveliness_query",
 ];
 
+/// The plant's keys: servers' tokens and announcements, cells' servers, replicated primitives.
+const PLANT_KEYS: &[&str] = &["dmp/@servers/**", "dmp/@cells/**", "dmp/@primitives/**"];
+/// The plant's directory: which server serves a cell.
+const DIRECTORY_KEYS: &[&str] = &["dmp/@servers/**", "dmp/@cells/**"];
+
 /// What an identity may send in (ingress) and be sent (egress), on which keys.
 struct Grant {
     what: &'static str,
@@ -64,13 +73,22 @@ pub fn access_control(access: &Access) -> Value {
         let read = || Grant { what: "read", ingress: (READ, keys("**")), egress: (SAMPLES, keys("**")) };
         let all =
             |keys: Vec<String>| Grant { what: "all", ingress: (ALL, keys.clone()), egress: (ALL, keys) };
+        let owned = |k: &[&str]| k.iter().map(|k| k.to_string()).collect::<Vec<_>>();
+        let plant =
+            || Grant { what: "plant", ingress: (ALL, owned(PLANT_KEYS)), egress: (ALL, owned(PLANT_KEYS)) };
+        let directory = || Grant {
+            what: "directory",
+            ingress: (READ, owned(DIRECTORY_KEYS)),
+            egress: (SAMPLES, owned(DIRECTORY_KEYS)),
+        };
         let grants: Vec<Grant> = match identity.role {
-            Role::Admin => vec![all(vec!["dmp/**".to_owned()])],
-            // A server of some cells publishes and reads those cells only; `*` gives `dmp/*/**`.
-            Role::Server => vec![all(keys("**"))],
-            Role::Perception => vec![obstacles()],
-            Role::Planner => vec![obstacles(), read()],
-            Role::Observer => vec![read()],
+            Role::Admin => vec![all(vec!["dmp/**".to_owned()]), plant()],
+            // A server of some cells publishes and reads those cells only; `*` gives `dmp/*/**`. Every server
+            // takes part in the plant: only servers publish primitives.
+            Role::Server => vec![all(keys("**")), plant()],
+            Role::Perception => vec![obstacles(), directory()],
+            Role::Planner => vec![obstacles(), read(), directory()],
+            Role::Observer => vec![read(), directory()],
             Role::Robot => Vec::new(),
         };
         if grants.is_empty() {
@@ -117,7 +135,12 @@ mod tests {
         assert_eq!(rule("eyes:obstacles:ingress")["key_exprs"], json!(["dmp/a/obstacles/**"]));
         assert_eq!(rule("eyes:obstacles:ingress")["messages"], json!(PUBLISH));
         assert_eq!(rule("eyes:obstacles:egress")["messages"], json!(READ));
-        assert_eq!(rules.iter().filter(|r| r["id"].as_str().unwrap().starts_with("eyes:")).count(), 2);
+        assert_eq!(rules.iter().filter(|r| r["id"].as_str().unwrap().starts_with("eyes:")).count(), 4);
+        assert_eq!(rule("eyes:directory:ingress")["messages"], json!(READ));
+        assert!(!rule("eyes:directory:ingress")["key_exprs"].to_string().contains("@primitives"));
+        // Only servers (and the admin) may publish primitives.
+        assert_eq!(rule("peer:plant:ingress")["key_exprs"], json!(PLANT_KEYS));
+        assert_eq!(rule("peer:plant:ingress")["messages"], json!(ALL));
         assert!(!rules.iter().any(|r| r["id"].as_str().unwrap().starts_with("panda")));
         assert_eq!(acl["subjects"].as_array().unwrap().len(), 2);
         // Zenoh reads it.

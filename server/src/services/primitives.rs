@@ -155,6 +155,9 @@ impl PrimitiveServiceImpl {
             })
             .await
             .map_err(|e| ServerError::Internal(e.to_string()))??;
+        if let Some(r) = &self.state.replicator {
+            r.publish(&record).await;
+        }
         info!(robot = %record.robot_id, name = %record.name, version = record.version, samples, dim, "learned");
         audit!(caller, "learn", robot = %record.robot_id, name = %record.name, version = record.version);
         Ok(v1::LearnResponse { record: Some(record) })
@@ -174,6 +177,9 @@ impl PrimitiveServiceImpl {
         let store = self.state.store.clone();
         let (robot_id, name) = (req.robot_id, req.name);
         let record = blocking(move || store.put(&robot_id, &name, &primitive, now_unix_ms())).await?;
+        if let Some(r) = &self.state.replicator {
+            r.publish(&record).await;
+        }
         info!(robot = %record.robot_id, name = %record.name, version = record.version, "stored");
         audit!(caller, "put", robot = %record.robot_id, name = %record.name, version = record.version);
         Ok(v1::LearnResponse { record: Some(record) })
@@ -230,6 +236,9 @@ impl PrimitiveServiceImpl {
         let store = self.state.store.clone();
         let (robot_id, name) = (req.robot_id.clone(), req.name.clone());
         let versions_deleted = blocking(move || store.delete(&robot_id, &name)).await?;
+        if let Some(r) = &self.state.replicator {
+            r.publish_delete(&req.robot_id, &req.name).await;
+        }
         info!(robot = %req.robot_id, name = %req.name, versions = versions_deleted, "deleted");
         audit!(caller, "delete", robot = %req.robot_id, name = %req.name, versions = versions_deleted);
         Ok(v1::DeletePrimitiveResponse { versions_deleted })

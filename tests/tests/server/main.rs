@@ -13,6 +13,7 @@ mod load;
 mod matches_the_engine;
 mod metrics;
 mod motion_limits;
+mod plant;
 mod poses;
 mod primitives;
 mod python_clients;

@@ -1,0 +1,67 @@
+//! The plant's servers as this server knows them: filled from their liveliness tokens (`dmp/@servers/<id>`, with
+//! history, so those declared before this server started count) and the answer of each one's queryable on the same
+//! key (`dmp.v1.PlantServer`); a server whose token goes is forgotten. It names the server of a cell that this one
+//! does not serve.
+
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex};
+
+use dmp_proto::v1;
+
+/// The live servers of the plant, by id. Cheap to clone; the lock is never held across an await.
+#[derive(Debug, Clone, Default)]
+pub struct Directory {
+    servers: Arc<Mutex<BTreeMap<String, v1::PlantServer>>>,
+}
+
+impl Directory {
+    /// Records (or replaces) a live server.
+    pub fn insert(&self, server: v1::PlantServer) {
+        self.lock().insert(server.server_id.clone(), server);
+    }
+
+    /// Forgets a server (its token went).
+    pub fn remove(&self, server_id: &str) {
+        self.lock().remove(server_id);
+    }
+
+    /// The live server serving `cell` (the smallest id when several say they do); None when none is known.
+    pub fn owner_of(&self, cell: &str) -> Option<v1::PlantServer> {
+        self.lock().values().find(|s| s.cells.iter().any(|c| c == cell)).cloned()
+    }
+
+    /// The ids of the live servers known, in order.
+    pub fn server_ids(&self) -> Vec<String> {
+        self.lock().keys().cloned().collect()
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, BTreeMap<String, v1::PlantServer>> {
+        self.servers.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn server(id: &str, cells: &[&str]) -> v1::PlantServer {
+        v1::PlantServer {
+            server_id: id.into(),
+            grpc_address: format!("http://{id}:1"),
+            cells: cells.iter().map(|c| c.to_string()).collect(),
+        }
+    }
+
+    #[test]
+    fn a_cell_is_owned_by_the_smallest_live_server_serving_it() {
+        let d = Directory::default();
+        assert!(d.owner_of("a").is_none());
+        d.insert(server("s2", &["a", "b"]));
+        d.insert(server("s1", &["a"]));
+        assert_eq!(d.owner_of("a").unwrap().server_id, "s1");
+        assert_eq!(d.owner_of("b").unwrap().server_id, "s2");
+        d.remove("s1");
+        assert_eq!(d.owner_of("a").unwrap().server_id, "s2");
+        assert_eq!(d.server_ids(), ["s2"]);
+    }
+}

@@ -1,0 +1,96 @@
+//! Several servers on one Zenoh network (a plant): each serves its own cells, and they find each other and share
+//! the primitives through Zenoh alone (routers, liveliness, queryables), without a protocol of their own.
+//!
+//! | concept | key | file |
+//! | --- | --- | --- |
+//! | a server is alive: its liveliness token, and a queryable answering `dmp.v1.PlantServer` (id, gRPC address, cells) | `dmp/@servers/<server-id>` | [`discovery`] |
+//! | which server serves a cell: a queryable per cell served, answering `dmp.v1.PlantServer` | `dmp/@cells/<cell>` | [`discovery`] |
+//! | the live servers this one knows, to name the server of a cell it does not serve | `dmp/@servers/*` (liveliness, with history) | [`directory`] |
+//! | replicated primitives: every version stored is put, the others store it; a queryable over the store answers a server that (re)starts | `dmp/@primitives/<robot>/<name>/<version>` | [`replication`] |
+//!
+//! The order of versions: a version stored on a server of a plant is numbered with that server's HLC time (NTP64,
+//! `Session::new_timestamp`), or the last version plus one if that is later, and keeps its number on every server.
+//! So every server orders the versions of a primitive alike, the latest being the largest number; two servers that
+//! learn the same (robot, name) at once both keep their versions (their clocks differ, and each HLC never gives one
+//! time twice), and the later stamp is the latest everywhere. Two records of one number from two servers (the same
+//! HLC time on both, which their HLCs make all but impossible) keep the record of the smaller server id everywhere.
+
+pub mod directory;
+pub mod discovery;
+pub mod replication;
+
+use std::sync::Arc;
+
+use dmp_proto::v1;
+use tokio_util::sync::CancellationToken;
+use tracing::info;
+use zenoh::Session;
+
+use crate::cells::Cells;
+use crate::config::Limits;
+use crate::error::ServerError;
+use crate::store::{Store, VersionClock};
+
+use self::directory::Directory;
+use self::discovery::Discovery;
+use self::replication::Replication;
+
+/// This server's part in the plant: its announcement and the replication of its store. Closed with
+/// [`Plant::close`] before the session.
+#[derive(Debug)]
+pub struct Plant {
+    server: v1::PlantServer,
+    discovery: Discovery,
+    replication: Replication,
+}
+
+/// The version clock of a plant's store: the session's HLC time, NTP64.
+pub fn version_clock(session: &Session) -> VersionClock {
+    let session = session.clone();
+    Arc::new(move || session.new_timestamp().get_time().as_u64())
+}
+
+impl Plant {
+    /// Announces `server` (its token and queryables), fills `directory` with the plant's live servers, and
+    /// replicates `store` (stamped by [`version_clock`]) with the other servers, catching up with them now and
+    /// whenever one (re)appears. Incoming primitives are checked against `limits`.
+    pub async fn start(
+        session: &Session,
+        server: v1::PlantServer,
+        directory: Directory,
+        store: Store,
+        limits: Limits,
+        shutdown: CancellationToken,
+    ) -> Result<Self, ServerError> {
+        let discovery = Discovery::start(session, &server, directory, shutdown.clone()).await?;
+        let replication = Replication::start(session, store, limits, shutdown).await?;
+        info!(server = %server.server_id, grpc = %server.grpc_address, cells = ?server.cells, "plant: joined");
+        Ok(Self { server, discovery, replication })
+    }
+
+    /// This server as the plant knows it.
+    pub fn server(&self) -> &v1::PlantServer {
+        &self.server
+    }
+
+    /// What puts the versions this server stores (the primitive service holds it).
+    pub fn replicator(&self) -> self::replication::Replicator {
+        self.replication.replicator()
+    }
+
+    /// Versions received from other servers and stored so far, and those refused.
+    pub fn replicated(&self) -> (u64, u64) {
+        self.replication.counts()
+    }
+
+    /// Leaves the plant: the token and queryables go (the others forget this server), the tasks stop.
+    pub async fn close(self) {
+        self.replication.close().await;
+        self.discovery.close().await;
+    }
+}
+
+/// The cells a server of the plant announces: those it serves, or its default cell when it serves any.
+pub fn announced_cells(cells: &Cells) -> Vec<String> {
+    cells.served().unwrap_or_else(|| vec![cells.default_cell().to_owned()])
+}

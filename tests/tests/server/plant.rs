@@ -1,0 +1,242 @@
+//! A plant: three servers, each serving its own cell, clients of one Zenoh router in the test process (router
+//! mode, loopback, scouting off). Primitives replicate, a cell resolves to its server, robots of neighbouring cells
+//! on two servers avoid each other, and a server that starts late or comes back catches up.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use dmp_client::grpc::DmpClient;
+use dmp_proto::v1;
+use dmp_proto::zenoh_session::locators;
+use dmp_server::run::{ServerHandle, start};
+use dmp_tests::{config, within};
+use tokio_stream::StreamExt;
+
+use crate::stale_scene::router;
+use crate::{line, spec, until};
+
+/// A server of the plant: id `id`, serving `cells`, a client of the router at `router`, its store in `dir`.
+async fn plant_server(
+    dir: &Path,
+    router: &[String],
+    id: &str,
+    cells: &[&str],
+    neighbours: &[(&str, &[&str])],
+) -> ServerHandle {
+    let mut c = config(dir);
+    (c.zenoh.mode, c.zenoh.listen, c.zenoh.connect) = ("client".into(), Vec::new(), router.to_vec());
+    c.cells = cells.iter().map(|s| s.to_string()).collect();
+    c.plant.server_id = Some(id.into());
+    c.plant.neighbours = neighbours
+        .iter()
+        .map(|(cell, others)| (cell.to_string(), others.iter().map(|o| o.to_string()).collect()))
+        .collect::<BTreeMap<_, _>>();
+    within("server start", start(c)).await.expect("server starts")
+}
+
+async fn client_of(h: &ServerHandle) -> DmpClient {
+    within("connect", DmpClient::connect(format!("http://{}", h.grpc_addr))).await.expect("connects")
+}
+
+/// Waits until every server knows every other (their tokens and announcements went through the router).
+async fn until_all_known(servers: &[&ServerHandle]) {
+    let n = servers.len();
+    until("every server knows the plant", || {
+        servers.iter().all(|h| h.state().cells.directory().server_ids().len() == n)
+    })
+    .await;
+}
+
+/// Whether `h` holds version `version` of `(robot, name)`.
+fn holds(h: &ServerHandle, robot: &str, name: &str, version: u64) -> bool {
+    h.state().store.get(robot, name, version).is_ok()
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn primitives_replicate_and_a_cell_resolves_to_its_server() {
+    let zenohd = router("tcp/127.0.0.1:0").await;
+    let endpoint = locators(&zenohd).await;
+    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
+    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
+    let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
+    until_all_known(&[&s1, &s2, &s3]).await;
+    let (c1, c2) = (client_of(&s1).await, client_of(&s2).await);
+
+    // Put on s1: readable on s2 and s3 within a second, the same version, bit for bit.
+    let p = line(vec![0.0, 0.0], vec![1.0, 0.5], 1.0);
+    let put = within("put", c1.put_primitive("r1", "reach", &p)).await.unwrap();
+    let stored = Instant::now();
+    until("replicated to s2 and s3", || {
+        holds(&s2, "r1", "reach", put.version) && holds(&s3, "r1", "reach", put.version)
+    })
+    .await;
+    let took = stored.elapsed();
+    assert!(took < Duration::from_secs(1), "replication took {took:?}");
+    let got = within("get on s2", c2.get("r1", "reach", 0)).await.unwrap();
+    assert_eq!(got.version, put.version);
+    assert_eq!(got.primitive, put.primitive);
+    assert_eq!(got.origin_server, "s1");
+
+    // The same (robot, name) learned on two servers at once: both versions everywhere, one latest everywhere.
+    let (q1, q2) = (line(vec![0.0], vec![1.0], 1.0), line(vec![0.0], vec![2.0], 1.0));
+    let (v1, v2) = tokio::join!(c1.put_primitive("r1", "dup", &q1), c2.put_primitive("r1", "dup", &q2));
+    let (v1, v2) = (v1.unwrap().version, v2.unwrap().version);
+    assert_ne!(v1, v2);
+    let servers = [&s1, &s2, &s3];
+    until("both versions on every server", || {
+        servers.iter().all(|h| holds(h, "r1", "dup", v1) && holds(h, "r1", "dup", v2))
+    })
+    .await;
+    let latest: Vec<u64> =
+        servers.iter().map(|h| h.state().store.get("r1", "dup", 0).unwrap().version).collect();
+    assert_eq!(latest, vec![v1.max(v2); 3], "every server agrees on the latest");
+
+    // A cell resolves to its server, over Zenoh, from a client of the router.
+    let found = within(
+        "resolve b",
+        dmp_client::discovery::resolve_cell_via(&endpoint, None, "b", Duration::from_secs(5)),
+    )
+    .await
+    .unwrap();
+    assert_eq!((found.server_id.as_str(), found.grpc_address), ("s2", format!("http://{}", s2.grpc_addr)));
+    let none =
+        dmp_client::discovery::resolve_cell_via(&endpoint, None, "nowhere", Duration::from_millis(500));
+    let e = within("resolve nowhere", none).await.unwrap_err();
+    assert!(e.to_string().contains("cell `nowhere`"), "{e}");
+    // dmpctl without --server finds it too.
+    let cli = <dmpctl::cli::Cli as clap::Parser>::try_parse_from([
+        "dmpctl",
+        "--cell",
+        "b",
+        "--zenoh-connect",
+        &endpoint[0],
+        "info",
+    ])
+    .unwrap();
+    let out = within("dmpctl info", dmpctl::cli::run_async(cli)).await.unwrap();
+    let info: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(info["cell"], "b", "{out}");
+
+    // A request for a cell s1 does not serve names the server that does.
+    let e = within("scene of b on s1", c1.clone().with_cell("b").list_obstacles()).await.unwrap_err();
+    assert_eq!(e.code(), Some(tonic::Code::FailedPrecondition), "{e}");
+    let said = e.to_string();
+    assert!(
+        said.contains("cell `b`") && said.contains("`s2`") && said.contains(&s2.grpc_addr.to_string()),
+        "{said}"
+    );
+
+    for h in [s1, s2, s3] {
+        within("shutdown", h.shutdown()).await.unwrap();
+    }
+    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn a_server_that_starts_late_or_comes_back_catches_up() {
+    let zenohd = router("tcp/127.0.0.1:0").await;
+    let endpoint = locators(&zenohd).await;
+    let (d1, d2) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let s1 = plant_server(d1.path(), &endpoint, "s1", &["a"], &[]).await;
+    let c1 = client_of(&s1).await;
+    let early =
+        within("put early", c1.put_primitive("r", "early", &line(vec![0.0], vec![1.0], 1.0))).await.unwrap();
+
+    // Started after the put: it asks s1 for what it lacks.
+    let s2 = plant_server(d2.path(), &endpoint, "s2", &["b"], &[]).await;
+    until("the late server gets the early primitive", || holds(&s2, "r", "early", early.version)).await;
+    within("s2 down", s2.shutdown()).await.unwrap();
+
+    // Learned while s2 was down: it gets it when it comes back on its store.
+    let missed = within("put missed", c1.put_primitive("r", "missed", &line(vec![0.0], vec![2.0], 1.0)))
+        .await
+        .unwrap();
+    let s2 = plant_server(d2.path(), &endpoint, "s2", &["b"], &[]).await;
+    until("the restarted server gets what it missed", || holds(&s2, "r", "missed", missed.version)).await;
+    assert!(holds(&s2, "r", "early", early.version), "kept in its store");
+    assert_eq!(s2.state().store.get("r", "missed", 0).unwrap().primitive, missed.primitive);
+
+    for h in [s1, s2] {
+        within("shutdown", h.shutdown()).await.unwrap();
+    }
+    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+}
+
+/// The closest that a planned path of `seg` (2-D) comes to `point`.
+fn closest(seg: &v1::Segment, point: [f64; 2]) -> f64 {
+    seg.positions.chunks(2).map(|p| (p[0] - point[0]).hypot(p[1] - point[1])).fold(f64::INFINITY, f64::min)
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn robots_of_neighbouring_cells_on_two_servers_avoid_each_other() {
+    let zenohd = router("tcp/127.0.0.1:0").await;
+    let endpoint = locators(&zenohd).await;
+    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[("a", &["b"])]).await;
+    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[("b", &["a"])]).await;
+    let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
+    until_all_known(&[&s1, &s2, &s3]).await;
+    let footprint = v1::Superquadric { semi_axes: vec![0.1, 0.1], exponents: vec![] };
+
+    // r1 in cell a on s1, creeping across (0.5, 0) in real time for a long while.
+    let c1 = client_of(&s1).await.with_cell("a");
+    within("put r1", c1.put_primitive("r1", "creep", &line(vec![0.5, -0.01], vec![0.5, 0.01], 60.0)))
+        .await
+        .unwrap();
+    let mut motion = spec("r1", "creep");
+    motion.footprint = Some(footprint.clone());
+    let request = v1::ExecuteRequest {
+        motion: Some(motion),
+        pacing: v1::Pacing::Realtime as i32,
+        ..Default::default()
+    };
+    let mut r1 = within("execute r1", c1.execute(request)).await.unwrap();
+    let reader = tokio::spawn(async move { while let Some(Ok(_)) = r1.next().await {} });
+    let sees_r1 = |h: &ServerHandle, cell: &str| {
+        h.state().cells.find(cell).unwrap().is_some_and(|c| {
+            c.other_robots("", dmp_server::clock::system_unix_s(), 0.5)
+                .iter()
+                .any(|r| r.state.robot_id == "r1")
+        })
+    };
+    until("s2's cell b sees r1 of cell a", || sees_r1(&s2, "b")).await;
+
+    // r2 crosses r1's place: in cell b (a neighbour, on s2) it goes round r1; in cell c (no neighbour, on s3) it
+    // goes straight through.
+    let plan = |h: &ServerHandle, cell: &'static str| {
+        let url = format!("http://{}", h.grpc_addr);
+        let footprint = footprint.clone();
+        async move {
+            let c = within("connect", DmpClient::connect(url)).await.unwrap().with_cell(cell);
+            within("put r2", c.put_primitive("r2", "cross", &line(vec![0.0, 0.0], vec![1.0, 0.0], 6.0)))
+                .await
+                .unwrap();
+            let mut motion = spec("r2", "cross");
+            motion.footprint = Some(footprint);
+            let request = v1::PlanRequest { motion: Some(motion), dt: 0.001, duration: 8.0 };
+            within("plan r2", c.plan(request)).await.unwrap().trajectory.unwrap()
+        }
+    };
+    let neighbour = plan(&s2, "b").await;
+    // Where s2 saw r1 (it creeps 0.33 mm/s: a plan's time moves it by less than a millimetre).
+    let seen = s2.state().cells.find("b").unwrap().unwrap().other_robots(
+        "",
+        dmp_server::clock::system_unix_s(),
+        0.5,
+    );
+    let r1_at =
+        seen.iter().find(|r| r.state.robot_id == "r1").expect("r1 still executing").state.position.clone();
+    let stranger = plan(&s3, "c").await;
+    let (near, far) = (closest(&neighbour, [r1_at[0], r1_at[1]]), closest(&stranger, [r1_at[0], r1_at[1]]));
+    assert!(far < 0.02, "without the neighbour r2 goes through r1's place ({far})");
+    assert!(near > 0.1 - 2e-3, "r2 keeps out of r1's footprint (radius 0.1): {near}");
+    assert!(!sees_r1(&s3, "c"), "cell c does not take cell a's robots");
+
+    reader.abort();
+    for h in [s1, s2, s3] {
+        within("shutdown", h.shutdown()).await.unwrap();
+    }
+    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+}
