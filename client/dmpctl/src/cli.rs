@@ -14,9 +14,9 @@ use crate::error::DmpctlError;
 use crate::offline::{RunSummary, bench_scenario, run_scenario};
 use crate::outputs::to_json;
 use crate::place::resolve_place;
+use crate::robot_commands;
 use crate::scenario_through_server::run_scenario_through_server;
 use crate::server_commands::{self, ZenohArgs};
-use crate::robot_commands;
 
 mod motion_args;
 pub use self::motion_args::{MotionArgs, PlanArgs, StreamArgs};
@@ -374,7 +374,8 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
             // Local inputs first: a bad file is refused before the server is asked anything.
             let limits = limits.as_deref().map(robot_commands::read_limits).transpose()?;
             let tool = tool.as_deref().map(robot_commands::read_tool).transpose()?;
-            let record = robot_commands::record(id, limits.as_ref(), footprint.as_ref().map(|f| &f.0[..]), tool);
+            let record =
+                robot_commands::record(id, limits.as_ref(), footprint.as_ref().map(|f| &f.0[..]), tool);
             robot_commands::put(&connect().await?, record).await
         }
         Command::Robot(RobotCommand::Show { id }) => robot_commands::show(&connect().await?, id).await,

@@ -14,7 +14,11 @@ impl DmpClient {
     }
 
     /// Stores a record of `robot` with `limits` and nothing else (no footprint, no tool).
-    pub async fn put_robot_limits(&self, robot: &str, limits: &dmp::Limits) -> Result<v1::RobotRecord, ClientError> {
+    pub async fn put_robot_limits(
+        &self,
+        robot: &str,
+        limits: &dmp::Limits,
+    ) -> Result<v1::RobotRecord, ClientError> {
         self.put_robot(v1::RobotRecord {
             robot_id: robot.into(),
             limits: Some(limits_to_proto(limits)),

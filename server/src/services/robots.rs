@@ -52,7 +52,11 @@ pub fn checked_record(
         if f.semi_axes.len() > limits.max_dim {
             return Err(ServerError::invalid(
                 "robot.footprint.semi_axes",
-                format!("at most {} dimensions (the server's limits.max_dim), found {}", limits.max_dim, f.semi_axes.len()),
+                format!(
+                    "at most {} dimensions (the server's limits.max_dim), found {}",
+                    limits.max_dim,
+                    f.semi_axes.len()
+                ),
             ));
         }
         superquadric_to_shape(f).map_err(|e| ServerError::from(e).within("robot.footprint"))?;
@@ -64,7 +68,11 @@ pub fn checked_record(
 }
 
 impl RobotServiceImpl {
-    async fn handle_put(&self, caller: &Caller, req: v1::PutRobotRequest) -> Result<v1::RobotRecord, ServerError> {
+    async fn handle_put(
+        &self,
+        caller: &Caller,
+        req: v1::PutRobotRequest,
+    ) -> Result<v1::RobotRecord, ServerError> {
         let robot = req.robot.as_ref().ok_or_else(|| ServerError::invalid("robot", "is required"))?;
         check_name("robot.robot_id", &robot.robot_id)?;
         caller.check(&Action::WritePrimitive { robot: &robot.robot_id })?;
@@ -79,7 +87,11 @@ impl RobotServiceImpl {
         Ok(record)
     }
 
-    async fn handle_get(&self, caller: &Caller, req: v1::GetRobotRequest) -> Result<v1::RobotRecord, ServerError> {
+    async fn handle_get(
+        &self,
+        caller: &Caller,
+        req: v1::GetRobotRequest,
+    ) -> Result<v1::RobotRecord, ServerError> {
         check_name("robot_id", &req.robot_id)?;
         caller.check(&Action::ReadPrimitive { robot: &req.robot_id })?;
         let store = self.state.store.clone();
@@ -109,14 +121,26 @@ impl RobotServiceImpl {
 
 #[tonic::async_trait]
 impl RobotService for RobotServiceImpl {
-    async fn put_robot(&self, request: Request<v1::PutRobotRequest>) -> Result<Response<v1::RobotRecord>, Status> {
+    async fn put_robot(
+        &self,
+        request: Request<v1::PutRobotRequest>,
+    ) -> Result<Response<v1::RobotRecord>, Status> {
         let caller = self.state.caller(&request).map_err(|e| status("put_robot", e))?;
-        self.handle_put(&caller, request.into_inner()).await.map(Response::new).map_err(|e| status("put_robot", e))
+        self.handle_put(&caller, request.into_inner())
+            .await
+            .map(Response::new)
+            .map_err(|e| status("put_robot", e))
     }
 
-    async fn get_robot(&self, request: Request<v1::GetRobotRequest>) -> Result<Response<v1::RobotRecord>, Status> {
+    async fn get_robot(
+        &self,
+        request: Request<v1::GetRobotRequest>,
+    ) -> Result<Response<v1::RobotRecord>, Status> {
         let caller = self.state.caller(&request).map_err(|e| status("get_robot", e))?;
-        self.handle_get(&caller, request.into_inner()).await.map(Response::new).map_err(|e| status("get_robot", e))
+        self.handle_get(&caller, request.into_inner())
+            .await
+            .map(Response::new)
+            .map_err(|e| status("get_robot", e))
     }
 
     async fn delete_robot(

@@ -39,9 +39,9 @@ impl Store {
         let Some(bytes) = robots.get(robot_id).map_err(|e| storage("read robots", e))? else {
             return Ok(None);
         };
-        v1::RobotRecord::decode(bytes.value())
-            .map(Some)
-            .map_err(|e| ServerError::Storage(format!("the stored record of robot `{robot_id}` is corrupt: {e}")))
+        v1::RobotRecord::decode(bytes.value()).map(Some).map_err(|e| {
+            ServerError::Storage(format!("the stored record of robot `{robot_id}` is corrupt: {e}"))
+        })
     }
 
     /// Deletes the record of `robot_id` (NotFound when it has none).

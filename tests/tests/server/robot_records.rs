@@ -71,11 +71,17 @@ async fn a_robot_record_survives_a_restart_and_bad_ones_are_refused_naming_the_f
         ),
         (
             "robot.tool.control_points",
-            v1::RobotRecord { tool: Some(v1::Tool { control_points: 257, ..bar_tool() }), ..panda_record("x") },
+            v1::RobotRecord {
+                tool: Some(v1::Tool { control_points: 257, ..bar_tool() }),
+                ..panda_record("x")
+            },
         ),
         (
             "robot.tool.offset",
-            v1::RobotRecord { tool: Some(v1::Tool { offset: vec![0.0; 2], ..bar_tool() }), ..panda_record("x") },
+            v1::RobotRecord {
+                tool: Some(v1::Tool { offset: vec![0.0; 2], ..bar_tool() }),
+                ..panda_record("x")
+            },
         ),
     ];
     for (field, record) in bad {
