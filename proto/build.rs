@@ -13,6 +13,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "dmp/v1/primitives.proto",
         "dmp/v1/scene.proto",
         "dmp/v1/motion.proto",
+        "dmp/v1/robots.proto",
         "dmp/v1/server.proto",
     ];
     for f in &files {

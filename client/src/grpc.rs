@@ -1,4 +1,5 @@
-//! A typed async client of the three gRPC services (`proto/dmp/v1`): primitives, scene and motion.
+//! A typed async client of the gRPC services (`proto/dmp/v1`): primitives, robot records (`grpc/robots.rs`), scene
+//! and motion.
 //!
 //! [`DmpClient`] is cheap to clone and every method takes `&self`, so one client serves many concurrent calls (each
 //! call clones the underlying HTTP/2 channel handle). Server-streaming calls return boxed streams whose items are
@@ -22,6 +23,7 @@ use dmp_proto::primitive::{primitive_from_proto, primitive_to_proto};
 use dmp_proto::v1;
 use dmp_proto::v1::motion_service_client::MotionServiceClient;
 use dmp_proto::v1::primitive_service_client::PrimitiveServiceClient;
+use dmp_proto::v1::robot_service_client::RobotServiceClient;
 use dmp_proto::v1::scene_service_client::SceneServiceClient;
 use dmp_proto::v1::server_service_client::ServerServiceClient;
 use dmp_proto::v1::session_request::Message;
@@ -67,6 +69,7 @@ pub struct DmpClient {
     raw: Channel,
     channel: Transport,
     primitives: PrimitiveServiceClient<Transport>,
+    robots: RobotServiceClient<Transport>,
     scene: SceneServiceClient<Transport>,
     motion: MotionServiceClient<Transport>,
     server: ServerServiceClient<Transport>,
@@ -136,6 +139,9 @@ impl DmpClient {
             url: url.into(),
             channel: transport.clone(),
             primitives: PrimitiveServiceClient::new(transport.clone())
+                .max_decoding_message_size(n)
+                .max_encoding_message_size(n),
+            robots: RobotServiceClient::new(transport.clone())
                 .max_decoding_message_size(n)
                 .max_encoding_message_size(n),
             scene: SceneServiceClient::new(transport.clone())
@@ -421,6 +427,8 @@ where
     }
     Ok(s)
 }
+
+mod robots;
 
 #[cfg(test)]
 mod tests;

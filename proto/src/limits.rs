@@ -50,6 +50,20 @@ pub fn tightest(a: &Limits, b: &Limits) -> Limits {
     }
 }
 
+/// The limits of a robot's record (`base`) overridden field by field by a request's (`over`): a field of `over`
+/// above 0 replaces the record's, a field left 0 keeps it.
+pub fn overridden(base: &Limits, over: &Limits) -> Limits {
+    let o = |b: f64, r: f64| if r > 0.0 { r } else { b };
+    Limits {
+        max_speed: o(base.max_speed, over.max_speed),
+        max_acceleration: o(base.max_acceleration, over.max_acceleration),
+        max_jerk: o(base.max_jerk, over.max_jerk),
+        max_angular_speed: o(base.max_angular_speed, over.max_angular_speed),
+        max_angular_acceleration: o(base.max_angular_acceleration, over.max_angular_acceleration),
+        max_angular_jerk: o(base.max_angular_jerk, over.max_angular_jerk),
+    }
+}
+
 /// The engine's `alpha_g` of `MotionSpec.goal_filter_alpha`: 0 is the default, a negative value is off (0 in the
 /// engine); not finite is refused (field `goal_filter_alpha`).
 pub fn goal_filter_alpha(v: f64) -> Result<f64, WireError> {
@@ -80,5 +94,9 @@ mod tests {
         let some = Limits { max_speed: 1.0, ..Limits::NONE };
         let t = tightest(&some, &Limits::PANDA);
         assert_eq!((t.max_speed, t.max_jerk), (1.0, Limits::PANDA.max_jerk));
+        let o = overridden(&Limits::PANDA, &some);
+        assert_eq!((o.max_speed, o.max_jerk), (1.0, Limits::PANDA.max_jerk));
+        assert_eq!(overridden(&Limits::PANDA, &Limits::NONE), Limits::PANDA);
+        assert_eq!(overridden(&Limits::NONE, &Limits::PANDA), Limits::PANDA);
     }
 }

@@ -7,6 +7,7 @@ use std::sync::Arc;
 
 use dmp_proto::v1::motion_service_server::MotionServiceServer;
 use dmp_proto::v1::primitive_service_server::PrimitiveServiceServer;
+use dmp_proto::v1::robot_service_server::RobotServiceServer;
 use dmp_proto::v1::scene_service_server::SceneServiceServer;
 use dmp_proto::v1::server_service_server::ServerServiceServer;
 use dmp_proto::zenoh_session::locators;
@@ -30,6 +31,7 @@ use crate::metrics::ServerCollector;
 use crate::robots::RobotBus;
 use crate::services::motion::MotionServiceImpl;
 use crate::services::primitives::PrimitiveServiceImpl;
+use crate::services::robots::RobotServiceImpl;
 use crate::services::scene::SceneServiceImpl;
 use crate::services::server::ServerServiceImpl;
 use crate::state::AppState;
@@ -242,6 +244,7 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
 
     let (health, health_service) = tonic_health::server::health_reporter();
     health.set_serving::<PrimitiveServiceServer<PrimitiveServiceImpl>>().await;
+    health.set_serving::<RobotServiceServer<RobotServiceImpl>>().await;
     health.set_serving::<SceneServiceServer<SceneServiceImpl>>().await;
     health.set_serving::<MotionServiceServer<MotionServiceImpl>>().await;
     health.set_serving::<ServerServiceServer<ServerServiceImpl>>().await;
@@ -275,6 +278,11 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
         .add_service(reflection)
         .add_service(
             PrimitiveServiceServer::new(PrimitiveServiceImpl::new(state.clone()))
+                .max_decoding_message_size(max)
+                .max_encoding_message_size(max),
+        )
+        .add_service(
+            RobotServiceServer::new(RobotServiceImpl::new(state.clone()))
                 .max_decoding_message_size(max)
                 .max_encoding_message_size(max),
         )

@@ -1,4 +1,4 @@
-//! The embedded, crash-safe store of primitives: one redb file, `<data_dir>/primitives.redb`.
+//! The embedded, crash-safe store of primitives and robot records: one redb file, `<data_dir>/primitives.redb`.
 //!
 //! Every write is one redb transaction committed with [`Durability::Immediate`] (redb's default, set explicitly):
 //! the new commit slot is written with checksums and `fsync`ed before `commit` returns, so a primitive whose
@@ -12,6 +12,7 @@
 //! | `meta` | `"schema_version"` | `u64`, written when the file is created and checked on every open |
 //! | `primitives` | `(robot_id, name, version)` | the protobuf-encoded `v1::PrimitiveRecord` |
 //! | `last_versions` | `(robot_id, name)` | the last version ever given to the name |
+//! | `robots` | `robot_id` | the protobuf-encoded `v1::RobotRecord` (`store/robots.rs`) |
 //!
 //! Versions start at 1 and are never reused, even after a delete: `(robot_id, name, version)` always names one
 //! primitive.
@@ -170,6 +171,7 @@ impl Store {
                 meta.insert(SCHEMA_KEY, SCHEMA_VERSION).map_err(|e| storage("write meta", e))?;
                 tx.open_table(PRIMITIVES).map_err(|e| storage("create table primitives", e))?;
                 tx.open_table(LAST_VERSIONS).map_err(|e| storage("create table last_versions", e))?;
+                tx.open_table(robots::ROBOTS).map_err(|e| storage("create table robots", e))?;
             }
             tx.commit().map_err(|e| storage("commit", e))?;
             return Ok(());
@@ -410,6 +412,8 @@ fn decode(bytes: &[u8]) -> Result<v1::PrimitiveRecord, ServerError> {
     v1::PrimitiveRecord::decode(bytes)
         .map_err(|e| ServerError::Storage(format!("a stored record is corrupt: {e}")))
 }
+
+mod robots;
 
 #[cfg(test)]
 mod tests;

@@ -61,6 +61,9 @@ fn assert_clean(report: &SimReport) {
     assert!(!report.collision);
     for (id, r) in &report.robots {
         assert!(r.reached_goal, "{id}");
+        // A robot that runs with a limit profile (in its robot record) has no setpoint over it.
+        assert_eq!(r.limit_violations, 0, "{id}: setpoints over the profile {:?}", r.profile);
+        assert!(r.finite_difference_peaks.peak_speed > 0.0, "{id}");
         assert!(r.peak_acceleration.is_finite(), "{id}");
         for (o, d) in &r.min_clearance_m {
             assert!(d.is_finite() && *d > 0.0, "{id}: clearance to {o} is {d}");
@@ -85,7 +88,8 @@ async fn panda_picks_and_places_past_the_red_peg() {
     for (id, r) in &report.robots {
         assert_eq!(r.late_setpoints, 0, "{id}");
         assert!(r.setpoints >= 1000, "{id}: {} setpoints at 1 kHz", r.setpoints);
-        // What a real Panda would accept.
+        // What a real Panda would accept: it runs with the PANDA profile in its robot record.
+        assert_eq!(r.profile, Some((&dmp::Limits::PANDA).into()), "{id}");
         assert!(r.peak_speed <= panda::MAX_SPEED, "{id}: peak speed {} m/s", r.peak_speed);
         assert!(r.peak_acceleration <= panda::MAX_ACCELERATION, "{id}: {} m/s^2", r.peak_acceleration);
         assert!(r.peak_jerk <= panda::MAX_JERK, "{id}: peak jerk {} m/s^3", r.peak_jerk);

@@ -14,6 +14,7 @@ use crate::error::DmpctlError;
 use crate::offline::{RunSummary, bench_scenario, run_scenario};
 use crate::outputs::to_json;
 use crate::place::resolve_place;
+use crate::robot_commands;
 use crate::scenario_through_server::run_scenario_through_server;
 use crate::server_commands::{self, ZenohArgs};
 
@@ -107,6 +108,9 @@ pub enum Command {
     /// The cell's obstacles.
     #[command(subcommand)]
     Scene(SceneCommand),
+    /// A robot's record: its limits, footprint and tool, the defaults of its motion requests.
+    #[command(subcommand)]
+    Robot(RobotCommand),
     /// Many robots streaming in real time against the server (cells of robots avoiding each other, obstacle
     /// updates over Zenoh); prints one JSON object: setpoints on time, lateness, scene update latency, server CPU
     /// and memory. With `--scene-updates`, `--zenoh-connect` defaults to the server's loopback Zenoh locators
@@ -185,6 +189,37 @@ pub enum Via {
     Grpc,
     /// A put or delete on `dmp/<cell>/obstacles/<id>`.
     Zenoh,
+}
+
+/// `dmpctl robot ...`
+#[derive(Debug, Subcommand)]
+pub enum RobotCommand {
+    /// Store the record of robot ID (replacing the one before), and print it as stored.
+    Put {
+        /// The robot.
+        id: String,
+        /// Its limits: a profile (`panda`, `psm`, `youbot`) or a JSON file of the six fields of `Limits`
+        /// (`max_speed`, `max_acceleration`, `max_jerk`, `max_angular_speed`, ...; a field left out is no limit).
+        #[arg(long)]
+        limits: Option<String>,
+        /// Its footprint: the semi-axes of an ellipsoid, metres, e.g. `0.4,0.3`.
+        #[arg(long, allow_hyphen_values = true)]
+        footprint: Option<Vector>,
+        /// The tool it holds in its pose runs: a JSON file `{"semi_axes": [...], "exponents": [...], "offset":
+        /// [...], "axis": true, "control_points": 25}`.
+        #[arg(long)]
+        tool: Option<PathBuf>,
+    },
+    /// The record of robot ID, as JSON.
+    Show {
+        /// The robot.
+        id: String,
+    },
+    /// Delete the record of robot ID (its primitives stay).
+    Delete {
+        /// The robot.
+        id: String,
+    },
 }
 
 /// `dmpctl scene ...`
@@ -336,6 +371,16 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
         Command::Stats => Ok(to_json(&server_commands::stats_json(&connect().await?.stats().await?))),
         Command::Health => server_commands::health(&connect().await?).await,
         Command::Scene(SceneCommand::List) => server_commands::scene_list(&connect().await?).await,
+        Command::Robot(RobotCommand::Put { id, limits, footprint, tool }) => {
+            // Local inputs first: a bad file is refused before the server is asked anything.
+            let limits = limits.as_deref().map(robot_commands::read_limits).transpose()?;
+            let tool = tool.as_deref().map(robot_commands::read_tool).transpose()?;
+            let record =
+                robot_commands::record(id, limits.as_ref(), footprint.as_ref().map(|f| &f.0[..]), tool);
+            robot_commands::put(&connect().await?, record).await
+        }
+        Command::Robot(RobotCommand::Show { id }) => robot_commands::show(&connect().await?, id).await,
+        Command::Robot(RobotCommand::Delete { id }) => robot_commands::delete(&connect().await?, id).await,
         Command::Load(a) => {
             let report = dmp_sim::load::run_with(a, &server, &place.zenoh_connect, &options).await?;
             Ok(to_json(&report))

@@ -11,6 +11,7 @@
 //! | demonstrations from CSV | [`demo_csv`] |
 //! | the commands that talk to the server (`learn`, `list`, `plan`, `stream`, `scene` ...) | [`server_commands`] |
 //! | the figure of `plan` and `stream` | [`server_plot`] |
+//! | `robot put`, `show`, `delete`: a robot's record | [`robot_commands`] |
 //! | `scenario run --server`: the offline experiment computed by the server | [`scenario_through_server`] |
 //! | errors and the exit code | [`error`] |
 
@@ -21,6 +22,7 @@ pub mod error;
 pub mod offline;
 pub mod outputs;
 pub mod place;
+pub mod robot_commands;
 pub mod scenario_file;
 pub mod scenario_through_server;
 pub mod server_commands;

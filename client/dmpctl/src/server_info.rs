@@ -90,8 +90,14 @@ pub fn stats_json(s: &v1::ServerStats) -> serde_json::Value {
 }
 
 /// The services `health` checks: the server as a whole, then each of its services.
-pub const HEALTH_SERVICES: [&str; 5] =
-    ["", "dmp.v1.PrimitiveService", "dmp.v1.SceneService", "dmp.v1.MotionService", "dmp.v1.ServerService"];
+pub const HEALTH_SERVICES: [&str; 6] = [
+    "",
+    "dmp.v1.PrimitiveService",
+    "dmp.v1.RobotService",
+    "dmp.v1.SceneService",
+    "dmp.v1.MotionService",
+    "dmp.v1.ServerService",
+];
 
 /// How long `health` waits for each answer.
 const HEALTH_TIMEOUT: Duration = Duration::from_secs(5);

@@ -1,15 +1,17 @@
-//! A motion request resolved against the access rules and the store: the primitive, the motion, the avoidance.
+//! A motion request resolved against the access rules and the store: the primitive, the motion, the avoidance,
+//! and the robot's record as the defaults of its limits, footprint and tool.
 
 use dmp::execution::GoalTolerance;
 use dmp::{Motion, Primitive};
 use dmp_proto::avoidance::avoidance_from_proto;
 use dmp_proto::check::{check_in_workspace, check_tau, check_vector};
 use dmp_proto::keys::check_name;
-use dmp_proto::limits::{goal_filter_alpha, limits_from_proto};
+use dmp_proto::limits::{goal_filter_alpha, limits_from_proto, overridden};
 use dmp_proto::shape::superquadric_to_shape;
 use dmp_proto::v1;
 
 use super::motion::MotionServiceImpl;
+use super::tool::tool_from_proto;
 use crate::access::{Action, Caller};
 use crate::cell::Cell;
 use crate::convert::{obstacle_from_proto, stored_primitive};
@@ -51,7 +53,7 @@ pub(super) struct ResolvedMotion {
     pub(super) chart: Option<nalgebra::UnitQuaternion<f64>>,
     /// A pose run's tool.
     pub(super) tool: Option<dmp::tool::Tool>,
-    /// The robot's limits (none when the request gives none).
+    /// The robot's limits: its record's, overridden field by field by the request's (none when neither gives any).
     pub(super) limits: dmp::Limits,
     /// The goal filter's `alpha_g` (0: off).
     pub(super) goal_filter_alpha: f64,
@@ -75,9 +77,13 @@ impl MotionServiceImpl {
         let cell = self.state.cells.get(cell).map_err(|e| e.within(prefix))?;
         let store = self.state.store.clone();
         let (robot, name, version) = (spec.robot_id.clone(), spec.primitive.clone(), spec.version);
-        let record = tokio::task::spawn_blocking(move || store.get(&robot, &name, version))
-            .await
-            .map_err(|e| ServerError::Internal(e.to_string()))??;
+        // The primitive, and the robot's record: the defaults of its limits, footprint and tool.
+        let (record, robot) = tokio::task::spawn_blocking(move || {
+            Ok::<_, ServerError>((store.get(&robot, &name, version)?, store.get_robot(&robot)?))
+        })
+        .await
+        .map_err(|e| ServerError::Internal(e.to_string()))??;
+        let robot = robot.unwrap_or_default();
         let proto = record
             .primitive
             .ok_or_else(|| ServerError::Internal("stored record without primitive".into()))?;
@@ -123,12 +129,25 @@ impl MotionServiceImpl {
         // Checked now, not when the first obstacle or robot appears (which would end a running stream).
         obstacles.0.method.validate(&format!("{prefix}.avoidance"), d)?;
         robots.0.method.validate(&format!("{prefix}.robot_avoidance"), d)?;
-        let footprint = spec
-            .footprint
+        // The request's footprint, or the record's.
+        let footprint_proto = spec.footprint.clone().or(robot.footprint);
+        let footprint = footprint_proto
             .as_ref()
             .map(superquadric_to_shape)
             .transpose()
             .map_err(|e| e.within(&format!("{prefix}.footprint")))?;
+        // The request's tool; or the record's, for a pose run in 3-D (a position run of the robot ignores it).
+        let tool = match (&spec.tool, &robot.tool) {
+            (Some(t), _) => Some(tool(t, chart.is_some(), d, prefix)?),
+            (None, Some(t)) if chart.is_some() && d == 3 => Some(tool_from_proto(t, "robot.tool")?),
+            _ => None,
+        };
+        // The record's limits, overridden field by field by the request's.
+        let stored = limits_from_proto(robot.limits.as_ref()).map_err(|e| {
+            ServerError::Internal(format!("the stored record of robot `{}`: {e}", spec.robot_id))
+        })?;
+        let requested =
+            limits_from_proto(spec.limits.as_ref()).map_err(|e| e.within(&format!("{prefix}.limits")))?;
         Ok(ResolvedMotion {
             robot_id: spec.robot_id.clone(),
             cell,
@@ -136,12 +155,11 @@ impl MotionServiceImpl {
             motion,
             avoidance: RunAvoidance { obstacles, robots, extra, ignore_scene: spec.ignore_scene },
             footprint,
-            footprint_proto: spec.footprint.clone(),
+            footprint_proto,
             goal_tolerance: goal_tolerance(spec.goal_tolerance.as_ref(), prefix)?,
-            tool: spec.tool.as_ref().map(|t| tool(t, chart.is_some(), d, prefix)).transpose()?,
+            tool,
             chart,
-            limits: limits_from_proto(spec.limits.as_ref())
-                .map_err(|e| e.within(&format!("{prefix}.limits")))?,
+            limits: overridden(&stored, &requested),
             goal_filter_alpha: goal_filter_alpha(spec.goal_filter_alpha).map_err(|e| e.within(prefix))?,
         })
     }
@@ -184,55 +202,15 @@ fn pose(
     Ok((m.motion, Some(m.chart)))
 }
 
-/// The most control points a request's tool may have.
-pub const MAX_TOOL_POINTS: usize = 256;
-
 /// The request's tool, for a pose primitive moving in 3-D; errors name `{prefix}.tool.*`.
 fn tool(t: &v1::Tool, pose: bool, dim: usize, prefix: &str) -> Result<dmp::tool::Tool, ServerError> {
-    use dmp::tool::ControlPoints;
-    use dmp::tool::sampling::{DEFAULT_AXIS_POINTS, DEFAULT_SURFACE_POINTS};
-    let field = |f: &str| format!("{prefix}.tool{f}");
     if !pose || dim != 3 {
         return Err(ServerError::invalid(
-            field(""),
+            format!("{prefix}.tool"),
             "a tool needs a pose primitive (learned with orientations) moving in 3-D",
         ));
     }
-    let shape = t.shape.as_ref().ok_or_else(|| ServerError::invalid(field(".shape"), "is required"))?;
-    let shape = superquadric_to_shape(shape).map_err(|e| e.within(&field(".shape")))?;
-    let offset = match t.offset.as_slice() {
-        [] => [0.0; 3],
-        &[x, y, z] => [x, y, z],
-        other => {
-            return Err(ServerError::invalid(
-                field(".offset"),
-                format!("must be empty or 3 numbers, found {}", other.len()),
-            ));
-        }
-    };
-    // Each control point costs a whole field evaluation per step: the server takes at most MAX_TOOL_POINTS.
-    if t.control_points as usize > MAX_TOOL_POINTS {
-        return Err(ServerError::invalid(
-            field(".control_points"),
-            format!(
-                "at most {MAX_TOOL_POINTS} (each one costs a field evaluation per step), not {}",
-                t.control_points
-            ),
-        ));
-    }
-    let count = |default: usize| if t.control_points == 0 { default } else { t.control_points as usize };
-    let sampling = if t.axis {
-        ControlPoints::Axis { count: count(DEFAULT_AXIS_POINTS) }
-    } else {
-        ControlPoints::Surface { count: count(DEFAULT_SURFACE_POINTS) }
-    };
-    dmp::tool::Tool::new(shape, offset, sampling).map_err(|e| match e {
-        dmp::DmpError::Invalid(i) => ServerError::invalid(
-            format!("{prefix}.{}", i.field.replacen("tool.control_points.count", "tool.control_points", 1)),
-            i.rule,
-        ),
-        other => ServerError::invalid(field(""), other.to_string()),
-    })
+    tool_from_proto(t, &format!("{prefix}.tool"))
 }
 
 /// The request's goal tolerance, a field left 0 (or the whole message unset) taking its default.

@@ -39,14 +39,14 @@ impl PrimitiveServiceImpl {
 }
 
 /// Milliseconds since the Unix epoch.
-fn now_unix_ms() -> i64 {
+pub(super) fn now_unix_ms() -> i64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| i64::try_from(d.as_millis()).unwrap_or(i64::MAX))
 }
 
 /// Runs blocking work (redb, the SVD) on tokio's blocking pool.
-async fn blocking<T: Send + 'static>(
+pub(super) async fn blocking<T: Send + 'static>(
     f: impl FnOnce() -> Result<T, ServerError> + Send + 'static,
 ) -> Result<T, ServerError> {
     tokio::task::spawn_blocking(f)
@@ -55,7 +55,7 @@ async fn blocking<T: Send + 'static>(
 }
 
 /// The status of a failed request; failures of the server itself are logged as errors, refusals at debug level.
-fn status(rpc: &'static str, e: ServerError) -> Status {
+pub(super) fn status(rpc: &'static str, e: ServerError) -> Status {
     match &e {
         ServerError::Storage(_) | ServerError::Internal(_) => error!(rpc, error = %e, "request failed"),
         _ => debug!(rpc, error = %e, "request refused"),

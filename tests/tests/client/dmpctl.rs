@@ -204,7 +204,7 @@ async fn every_command_acts_in_its_one_cell() {
         stats["uptime_s"].as_f64().unwrap() > 0.0 && stats["realtime_work_budget"].as_f64().unwrap() > 0.0
     );
     let health = run_at(&url, &["health"]).await.unwrap();
-    assert_eq!(health.lines().count(), 5, "{health}");
+    assert_eq!(health.lines().count(), 6, "{health}");
     assert!(health.lines().all(|l| l.ends_with("\tSERVING")), "{health}");
 
     run_at(&url, &["--cell", "lab2", "scene", "put", file]).await.unwrap();

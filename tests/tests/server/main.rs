@@ -17,6 +17,7 @@ mod plant;
 mod poses;
 mod primitives;
 mod python_clients;
+mod robot_records;
 mod ros2_bridge;
 mod ros2_golden;
 mod ros2_trajectories;

@@ -12,7 +12,7 @@ use crate::{line, rows, serve, spec};
 use dmp_tests::within;
 
 /// The points a robot keeps: each segment supersedes the earlier ones from its start time on.
-fn kept(segments: &[v1::Segment]) -> Vec<Vec<f64>> {
+pub(crate) fn kept(segments: &[v1::Segment]) -> Vec<Vec<f64>> {
     let mut out: Vec<Vec<f64>> = Vec::new();
     for s in segments {
         let first = (s.start_time / s.dt).round() as usize;
@@ -23,7 +23,7 @@ fn kept(segments: &[v1::Segment]) -> Vec<Vec<f64>> {
 }
 
 /// Peak speed, acceleration and jerk of `x` as backward differences at `dt`, at rest before the first point.
-fn peaks(x: &[Vec<f64>], dt: f64) -> [f64; 3] {
+pub(crate) fn peaks(x: &[Vec<f64>], dt: f64) -> [f64; 3] {
     let p = |k: isize| &x[k.max(0) as usize];
     let norm = |f: &dyn Fn(usize) -> f64| (0..x[0].len()).map(|i| f(i).powi(2)).sum::<f64>().sqrt();
     let mut peak = [0.0f64; 3];

@@ -82,11 +82,12 @@ pub fn measure_fast(
     exec: &Executed,
     dt: f64,
     goal: &[f64],
+    profile: Option<&dmp::Limits>,
     body: &Body,
     obstacles: &[Body],
     others: &[Other<'_>],
 ) -> RobotReport {
-    let mut r = measure(exec, dt, goal, body, &[], &[]);
+    let mut r = measure(exec, dt, goal, profile, body, &[], &[]);
     for o in obstacles {
         r.min_clearance_m.insert(o.id.clone(), clearance(&exec.traj, body, o, None));
     }

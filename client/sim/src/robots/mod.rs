@@ -9,6 +9,7 @@
 //! | a robot's controller: supersession, clock, lateness, continuity | `robot.rs` |
 //! | true shapes and distances (parry3d-f64) | `world.rs` |
 //! | `report.json` and figures | `report.rs` |
+//! | each robot's limit profile: its robot record, finite differences against it | `profile.rs` |
 //! | `report.html`: the figures, clearances, limits, pass or fail per check | `html.rs` |
 //! | clearance along a whole run, robots side by side, closest approach | `clearance.rs` |
 //! | the Panda pick and place | `panda.rs` |
@@ -24,6 +25,7 @@ pub mod ellipse_fit;
 pub mod html;
 pub mod panda;
 pub mod perception;
+pub mod profile;
 pub mod psm;
 pub mod report;
 pub mod robot;

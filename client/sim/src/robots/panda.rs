@@ -27,6 +27,7 @@
 //! must also stay within the Panda's Cartesian limits ([`MAX_SPEED`], [`MAX_ACCELERATION`], [`MAX_JERK`]), which
 //! the report's peaks are checked against.
 
+use super::profile::put_profile;
 use dmp_client::grpc::DmpClient;
 use dmp_proto::obstacle_json::JsonObstacle;
 use dmp_proto::v1;
@@ -56,6 +57,8 @@ pub const MAX_SPEED: f64 = 1.7;
 pub const MAX_ACCELERATION: f64 = 13.0;
 /// Jerk, m/s^3.
 pub const MAX_JERK: f64 = 6500.0;
+/// The arm's limits, in its robot record: every run keeps them, and the report counts setpoints over them.
+pub const PROFILE: dmp::Limits = dmp::Limits::PANDA;
 
 const HOME: [f64; 3] = [0.30, -0.40, 0.35];
 const RING: [f64; 3] = [0.45, -0.17, 0.06];
@@ -152,7 +155,7 @@ impl Motion {
     ) -> Result<(), SimError> {
         let body = robot_body(ROBOT, self.body);
         let world = world();
-        let r = measure(exec, DT, &self.goal, &body, &world, &[]);
+        let r = measure(exec, DT, &self.goal, Some(&PROFILE), &body, &world, &[]);
         report.add(&format!("{ROBOT}/{}", self.key), r);
         let free = free_plan(client, &self.spec(), DT).await?;
         let engine: Vec<dmp::Obstacle> = self
@@ -186,6 +189,7 @@ impl Motion {
 pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     learn(client, "move-to-ring", &HOME, &RING, TAU_REACH).await?;
     learn(client, "carry", &RING, &PLACE, TAU_CARRY).await?;
+    put_profile(client, ROBOT, &PROFILE).await?;
     let dynamic = Method::Dynamic { lambda: 10.0, beta: 2.0, eta: 2.0 };
     let to_ring = Motion {
         key: "move-to-ring",

@@ -313,7 +313,7 @@ async fn record(
     );
     let body = robot_body("youbot", Solid::rectangle(ROBOT_HALF[0], ROBOT_HALF[1]));
     let key = format!("youbot/{}-{name}", event.key);
-    report.add(&key, measure(exec, DT, &GOAL, &body, &world, &[]));
+    report.add(&key, measure(exec, DT, &GOAL, None, &body, &world, &[]));
     // How far the path left the straight line `y = 0`: over the whole run, and once past the box's centre.
     let traj = &exec.traj;
     let ys = (0..traj.len()).map(|k| (position(traj, k)[0], position(traj, k)[1].abs()));

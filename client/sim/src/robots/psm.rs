@@ -304,10 +304,10 @@ fn measure_leg(stage: &Stage, i: usize, runs: &[Executed; 2]) -> RobotReport {
     } else {
         jaws(leg.robot)
     };
-    let mut r = measure(&runs[i], DT, &leg.goal, &body, &world(), &[]);
+    let mut r = measure(&runs[i], DT, &leg.goal, None, &body, &world(), &[]);
     let other_jaws = jaws(other.robot);
     let with_arm = Other { id: other.robot, traj: &runs[1 - i].traj, body: &other_jaws };
-    let arms = measure(&runs[i], DT, &leg.goal, &jaws(leg.robot), &[], &[with_arm]);
+    let arms = measure(&runs[i], DT, &leg.goal, None, &jaws(leg.robot), &[], &[with_arm]);
     for (id, d) in arms.min_clearance_m {
         if d <= CONTACT_M {
             r.collisions.push(id.clone());

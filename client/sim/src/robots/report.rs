@@ -8,6 +8,7 @@ use dmp_plot::{Event, PlotInput, Series, SolidShape, render_svg};
 use dmp_proto::v1;
 use serde::Serialize;
 
+use super::profile::{Peaks, finite_differences};
 use super::robot::{Executed, check};
 use super::world::{Body, Solid, point3};
 use crate::error::SimError;
@@ -17,6 +18,23 @@ pub const GOAL_TOLERANCE_M: f64 = 1e-2;
 
 /// Clearance at or below this (metres) is a contact.
 pub const CONTACT_M: f64 = 1e-9;
+
+/// A robot's linear limits in a report, SI units (0: no limit).
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct ProfileLimits {
+    /// Speed, m/s.
+    pub max_speed: f64,
+    /// Acceleration, m/s².
+    pub max_acceleration: f64,
+    /// Jerk, m/s³.
+    pub max_jerk: f64,
+}
+
+impl From<&dmp::Limits> for ProfileLimits {
+    fn from(l: &dmp::Limits) -> Self {
+        Self { max_speed: l.max_speed, max_acceleration: l.max_acceleration, max_jerk: l.max_jerk }
+    }
+}
 
 /// One robot's figures.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -38,6 +56,13 @@ pub struct RobotReport {
     pub peak_speed: f64,
     /// Largest jerk norm of the executed setpoints (differences of consecutive accelerations).
     pub peak_jerk: f64,
+    /// Peak speed, acceleration and jerk as finite differences of the executed positions (what the profile is
+    /// checked on).
+    pub finite_difference_peaks: Peaks,
+    /// The robot's limit profile (put in its robot record before the run; unset: none).
+    pub profile: Option<ProfileLimits>,
+    /// Setpoints over the profile, as finite differences of the executed positions (expected 0).
+    pub limit_violations: u64,
     /// Setpoints that arrived after their time (real time only).
     pub late_setpoints: u64,
     /// Setpoints executed.
@@ -118,6 +143,9 @@ impl SimReport {
             if r.non_finite > 0 {
                 p.push(format!("{id}: {} non-finite values", r.non_finite));
             }
+            if r.limit_violations > 0 {
+                p.push(format!("{id}: {} setpoints over its limit profile", r.limit_violations));
+            }
             if r.setpoints == 0 {
                 p.push(format!("{id}: no setpoints"));
             }
@@ -159,18 +187,22 @@ pub struct Other<'a> {
     pub body: &'a Body,
 }
 
-/// Measures one robot: goal, checks, and clearance of `body` (around the controlled point) against the obstacles
-/// present at each time and the other robots at the same time.
+/// Measures one robot: goal, checks, its setpoints against its limit `profile` (none: [`dmp::Limits::NONE`]),
+/// and clearance of `body` (around the controlled point) against the obstacles present at each time and the other
+/// robots at the same time.
 pub fn measure(
     exec: &Executed,
     dt: f64,
     goal: &[f64],
+    profile: Option<&dmp::Limits>,
     body: &Body,
     obstacles: &[Body],
     others: &[Other<'_>],
 ) -> RobotReport {
     let traj = &exec.traj;
     let checks = check(traj, dt);
+    let (finite_difference_peaks, limit_violations) =
+        finite_differences(traj, profile.unwrap_or(&dmp::Limits::NONE));
     let mut min: BTreeMap<String, f64> = BTreeMap::new();
     for o in obstacles {
         min.insert(o.id.clone(), f64::INFINITY);
@@ -211,6 +243,9 @@ pub fn measure(
         peak_acceleration: checks.peak_acceleration,
         peak_speed: checks.peak_speed,
         peak_jerk: checks.peak_jerk,
+        finite_difference_peaks,
+        profile: profile.map(ProfileLimits::from),
+        limit_violations,
         late_setpoints: exec.late_setpoints,
         setpoints: traj.len() as u64,
         segments: exec.segments,

@@ -264,7 +264,10 @@ async fn run_one(
             .filter(|&j| j != i)
             .map(|j| Other { id: BOTS[j].id, traj: &runs[j].traj, body: &bodies[j] })
             .collect();
-        report.add(&format!("{}/{key}", b.id), measure_fast(exec, DT, &b.goal, &bodies[i], &world, &others));
+        report.add(
+            &format!("{}/{key}", b.id),
+            measure_fast(exec, DT, &b.goal, None, &bodies[i], &world, &others),
+        );
     }
     let executed: Vec<&Trajectory> = runs.iter().map(|r| &r.traj).collect();
     let (when, closest) = closest_approach(&executed);
@@ -291,7 +294,7 @@ async fn run_one(
             .filter(|&j| j != i)
             .map(|j| Other { id: BOTS[j].id, traj: &free[j], body: &bodies[j] })
             .collect();
-        let r = measure_fast(&as_run(&free[i]), FREE_DT, &b.goal, &bodies[i], &world, &others);
+        let r = measure_fast(&as_run(&free[i]), FREE_DT, &b.goal, None, &bodies[i], &world, &others);
         let cubes = r.min_clearance_m.iter().filter(|(id, _)| id.starts_with("cube"));
         let cube = cubes.map(|(_, d)| *d).fold(f64::INFINITY, f64::min);
         report.metrics.insert(format!("youbots/{key}/free_min_cube_clearance_m/{}", b.id), cube);
