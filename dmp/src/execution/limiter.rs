@@ -103,8 +103,10 @@ impl Limiter {
     }
 
     /// Checks the proposed point `p` (all dimensions), changes it where a group would exceed its bounds, and
-    /// records it. Where a group changed, `xd` and `xdd` get the limited motion at the point (`v' + a' h / 2` and
-    /// `a'`). With `brake`, every limited group brakes towards rest instead of following `p`.
+    /// records it. In every limited group, changed or not, `xd` and `xdd` become the motion of the output positions
+    /// at the point (`v' + a' h / 2` and `a'`, from the backward differences), so that they agree with the positions
+    /// on both sides of a limited stretch (the integrator's own derivatives run ahead of positions held back). With
+    /// `brake`, every limited group brakes towards rest instead of following `p`.
     pub(super) fn limit(&mut self, p: &mut [f64], xd: &mut [f64], xdd: &mut [f64], brake: bool) -> Verdict {
         let mut verdict = Verdict::default();
         for gi in 0..self.groups.len() {
@@ -145,6 +147,10 @@ impl Limiter {
                 verdict.decel_usage = verdict.decel_usage.max(against / b.a);
             }
             if !brake && speed <= v_max && acc <= a_max && jerk <= j_max && safe(v, want, h, v_max, j_max) {
+                for (k, &i) in dims.iter().enumerate() {
+                    xd[i] = (p[i] - self.prev[0][i]) / h + 0.5 * want[k] * h;
+                    xdd[i] = want[k];
+                }
                 self.groups[gi].dims = dims;
                 continue;
             }

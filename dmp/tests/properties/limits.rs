@@ -35,6 +35,8 @@ static REACH: LazyLock<Primitive> = LazyLock::new(|| {
 #[derive(Default)]
 struct Received {
     x: Vec<f64>,
+    /// The accelerations handed out with the points.
+    xdd: Vec<f64>,
 }
 
 impl Received {
@@ -43,6 +45,22 @@ impl Received {
         let keep = ((t / DT).round() as usize) * dim;
         self.x.truncate(keep);
         self.x.extend_from_slice(x);
+    }
+
+    /// The same for the accelerations.
+    fn supersede_acc(&mut self, t: f64, xdd: &[f64], dim: usize) {
+        self.xdd.truncate(((t / DT).round() as usize) * dim);
+        self.xdd.extend_from_slice(xdd);
+    }
+
+    /// The largest jerk of the accelerations handed out (their differences), dimensions `0..dim`.
+    fn reported_jerk(&self, dim: usize) -> f64 {
+        self.xdd
+            .chunks_exact(dim)
+            .collect::<Vec<_>>()
+            .windows(2)
+            .map(|w| w[1].iter().zip(w[0]).map(|(b, a)| ((b - a) / DT).powi(2)).sum::<f64>().sqrt())
+            .fold(0.0, f64::max)
     }
 
     /// Peak speed, acceleration and jerk of dimensions `dims` as backward differences, the robot at rest at its
@@ -173,6 +191,7 @@ proptest! {
         while e.time() < end {
             let s = e.advance(segment).unwrap();
             got.supersede(s.start_time, &s.x, 3);
+            got.supersede_acc(s.start_time, &s.xdd, 3);
             if s.outcome.is_final() {
                 break;
             }
@@ -199,6 +218,10 @@ proptest! {
             v <= l.max_speed && a <= l.max_acceleration && j <= l.max_jerk,
             "peaks {v} m/s, {a} m/s², {j} m/s³"
         );
+        // The accelerations handed out agree with the positions: they change by no more than the jerk allows
+        // either (a controller that feeds them forward sees no step where the limiter takes over or lets go).
+        let reported = got.reported_jerk(3);
+        prop_assert!(reported <= l.max_jerk, "the handed-out accelerations jump: {reported} m/s³");
     }
 }
 
