@@ -65,6 +65,12 @@ pub enum DmpctlError {
         /// What went wrong, one entry each.
         problems: Vec<String>,
     },
+    /// The command was interrupted (Ctrl-C) after cleaning up what it had stored (`dmpctl` exits with 130).
+    #[error("interrupted{}", if cleaned.is_empty() { String::new() } else { format!(" ({cleaned})") })]
+    Interrupted {
+        /// What the clean-up did, or why it could not.
+        cleaned: String,
+    },
 }
 
 impl DmpctlError {
@@ -78,14 +84,17 @@ impl DmpctlError {
             DmpctlError::Io { .. }
             | DmpctlError::Plot(_)
             | DmpctlError::Problems { .. }
+            | DmpctlError::Interrupted { .. }
             | DmpctlError::Unhealthy(_) => false,
         }
     }
 
-    /// The process's exit code: 3 for a run with problems, 2 for bad input, 1 for anything else.
+    /// The process's exit code: 3 for a run with problems, 2 for bad input, 130 when interrupted (128 + SIGINT,
+    /// as shells report it), 1 for anything else.
     pub fn exit_code(&self) -> u8 {
         match self {
             DmpctlError::Problems { .. } => 3,
+            DmpctlError::Interrupted { .. } => 130,
             e if e.is_bad_input() => 2,
             _ => 1,
         }

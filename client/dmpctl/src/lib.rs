@@ -12,6 +12,7 @@
 //! | the commands that talk to the server (`learn`, `list`, `plan`, `stream`, `scene` ...) | [`server_commands`] |
 //! | the figure of `plan` and `stream` | [`server_plot`] |
 //! | `scenario run --server`: the offline experiment computed by the server | [`scenario_through_server`] |
+//! | the tools with robots of their own (`sim`, `load`, `scenario run --server`): clean-up on Ctrl-C | [`tools`] |
 //! | errors and the exit code | [`error`] |
 
 pub mod cli;
@@ -26,5 +27,6 @@ pub mod scenario_through_server;
 pub mod server_commands;
 pub mod server_info;
 pub mod server_plot;
+pub mod tools;
 
 pub use error::DmpctlError;

@@ -101,6 +101,24 @@ pub async fn list(client: &DmpClient, robot: &str) -> Result<String, DmpctlError
     Ok(lines.join("\n"))
 }
 
+/// `robots`: one line per robot that has primitives (`sim.panda  2 primitives  updated 2026-11-26T06:51:00Z`).
+pub async fn robots(client: &DmpClient) -> Result<String, DmpctlError> {
+    let robots = client.list_robots().await?;
+    if robots.is_empty() {
+        return Ok("no robot has primitives (that this client may read)".into());
+    }
+    let width = robots.iter().map(|r| r.robot_id.len()).max().unwrap_or(0);
+    let lines: Vec<String> = robots
+        .iter()
+        .map(|r| {
+            let n = format!("{} primitive{}", r.primitives, if r.primitives == 1 { "" } else { "s" });
+            let updated = readable_time(r.updated_unix_ms.max(0) as u64);
+            format!("{:width$}  {n:>14}  updated {updated}", r.robot_id)
+        })
+        .collect();
+    Ok(lines.join("\n"))
+}
+
 /// A time in Unix milliseconds as RFC 3339 UTC, to the second (`2026-11-26T06:51:00Z`).
 pub fn readable_time(unix_ms: u64) -> String {
     let t = std::time::UNIX_EPOCH + Duration::from_millis(unix_ms);
