@@ -16,7 +16,9 @@ use crate::outputs::to_json;
 use crate::place::resolve_place;
 use crate::scenario_file::load_scenario;
 use crate::scenario_through_server::{self, robot_ids, run_scenario_through_server};
+use crate::progress::Progress;
 use crate::tools::{self, until_interrupted};
+use dmp_sim::robots::robot::segments_read;
 use crate::server_commands::{self, ZenohArgs};
 
 mod motion_args;
@@ -324,7 +326,10 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
                     Ok(tools::deleted(n, &robots))
                 };
                 let run = run_scenario_through_server(&client, file, out, *keep);
-                let summary = until_interrupted(run, (!keep).then_some(clean_up)).await?;
+                let progress = Progress::new(format!("scenario run {}", file.display()));
+                let n = plural(robots.len(), "robot");
+                let status = || format!("{n} through {url}");
+                let summary = until_interrupted(run, (!keep).then_some(clean_up), &progress, status).await?;
                 for n in &summary.notes {
                     eprintln!("dmpctl: note: {n}");
                 }
@@ -359,7 +364,9 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
                 dmp_sim::load::clean_up(a, &server, &options).await?;
                 Ok("deleted the robots' primitives and the cells' fixed obstacles".to_string())
             };
-            let report = until_interrupted(run, (!a.keep).then_some(clean_up)).await?;
+            let progress = Progress::new("load");
+            let status = || format!("{} streaming", plural(a.robots, "robot"));
+            let report = until_interrupted(run, (!a.keep).then_some(clean_up), &progress, status).await?;
             Ok(to_json(&report))
         }
         Command::Sim(a) => {
@@ -373,7 +380,10 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
                 let n = dmp_sim::robots::clean_up(&connect().await?.with_cell(cell), a.name).await?;
                 Ok(tools::deleted(n, &a.name.robot_ids()))
             };
-            let report = until_interrupted(run, (!a.keep).then_some(clean_up)).await?;
+            let progress = Progress::new(format!("sim {}", a.name.as_str()));
+            let robots = plural(a.name.robot_ids().len(), "robot");
+            let status = || format!("{robots}, {}", plural(segments_read() as usize, "segment"));
+            let report = until_interrupted(run, (!a.keep).then_some(clean_up), &progress, status).await?;
             let mut problems = report.problems_allowing(a.allow_collision);
             // Late setpoints fail the run too (a real robot would have executed stale ones).
             for (id, r) in &report.robots {
@@ -416,7 +426,11 @@ fn summary_line(file: &Path, summary: &RunSummary, out: &Path) -> String {
 }
 
 fn offline_run(file: &Path, out: &Path, allow_collision: bool) -> Result<String, DmpctlError> {
-    let summary = run_scenario(file, out)?;
+    let progress = Progress::new(format!("scenario run {}", file.display()));
+    progress.set_message("rolling out");
+    let summary = run_scenario(file, out);
+    drop(progress);
+    let summary = summary?;
     gate(summary_line(file, &summary, out), scenario_problems(&summary, allow_collision))
 }
 
@@ -447,7 +461,11 @@ fn gate(line: String, problems: Vec<String>) -> Result<String, DmpctlError> {
 }
 
 fn bench(file: &Path, repeat: usize) -> Result<String, DmpctlError> {
-    let report = bench_scenario(file, repeat)?;
+    let progress = Progress::new(format!("scenario bench {}", file.display()));
+    progress.set_message(format!("{} timed rollouts", repeat));
+    let report = bench_scenario(file, repeat);
+    drop(progress);
+    let report = report?;
     Ok(serde_json::to_string(&report).unwrap_or_else(|_| to_json(&report)))
 }
 

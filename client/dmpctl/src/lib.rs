@@ -13,6 +13,7 @@
 //! | the figure of `plan` and `stream` | [`server_plot`] |
 //! | `scenario run --server`: the offline experiment computed by the server | [`scenario_through_server`] |
 //! | the tools with robots of their own (`sim`, `load`, `scenario run --server`): clean-up on Ctrl-C | [`tools`] |
+//! | progress on a terminal (`indicatif`), nothing when piped | [`progress`] |
 //! | errors and the exit code | [`error`] |
 
 pub mod cli;
@@ -22,6 +23,7 @@ pub mod error;
 pub mod offline;
 pub mod outputs;
 pub mod place;
+pub mod progress;
 pub mod scenario_file;
 pub mod scenario_through_server;
 pub mod server_commands;

@@ -235,13 +235,15 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
     let mut versions = crate::server_plot::SceneVersions::default();
     let ctrl_c = tokio::signal::ctrl_c();
     tokio::pin!(ctrl_c);
+    let progress = crate::progress::Progress::new(format!("stream {}", a.motion.robot));
     loop {
         tokio::select! {
             next = segments.next() => match next {
                 None => break,
                 Some(seg) => {
                     let seg = seg?;
-                    eprintln!("{}", segment_line(&seg));
+                    progress.println(&segment_line(&seg));
+                    progress.tick(format!("{} segments, t = {:.3} s", s.segments() + 1, seg.start_time));
                     print_warnings(&seg.warnings, seg.scene_stale, &mut stale);
                     arrived = seg.goal_reached_time;
                     s.push(&seg)?;

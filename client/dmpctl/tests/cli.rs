@@ -210,3 +210,19 @@ fn server_commands_exit_1_when_the_server_is_unreachable_and_2_on_bad_arguments(
         assert!(err.contains("semi_axes[1]"), "{err}");
     }
 }
+
+/// A command that runs for more than the 2 s after which progress appears on a terminal, with stderr piped (as
+/// here): nothing of the progress is written, stderr stays empty and stdout has only the result.
+#[test]
+fn progress_stays_off_a_pipe() {
+    let file = scenarios().join("bench-3d-ten-dynamic-volumetric.json");
+    let started = std::time::Instant::now();
+    let o = dmpctl(&["scenario", "bench", file.to_str().unwrap(), "--repeat", "200"]);
+    let took = started.elapsed();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(took > std::time::Duration::from_secs(2), "took {took:?}: too short to show progress anyway");
+    assert_eq!(String::from_utf8_lossy(&o.stderr), "");
+    let stdout = String::from_utf8(o.stdout).unwrap();
+    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+    assert!(!stdout.contains('\r') && !stdout.contains('\u{1b}'), "{stdout:?}");
+}

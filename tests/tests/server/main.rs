@@ -15,6 +15,7 @@ mod metrics;
 mod motion_limits;
 mod poses;
 mod primitives;
+mod robots;
 mod python_clients;
 mod ros2_bridge;
 mod ros2_golden;

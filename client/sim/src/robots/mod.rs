@@ -98,6 +98,16 @@ pub enum SimName {
 }
 
 impl SimName {
+    /// Its name on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SimName::Panda => "panda",
+            SimName::YoubotPerception => "youbot-perception",
+            SimName::Youbots => "youbots",
+            SimName::Psm => "psm",
+        }
+    }
+
     /// The robots it stores primitives for, as the server knows them (`sim.<name>`).
     pub fn robot_ids(self) -> Vec<String> {
         let local = match self {
