@@ -24,11 +24,14 @@ pub enum DmpctlError {
         /// Why.
         source: std::io::Error,
     },
-    /// A scenario file is not valid JSON of the scenario format; `field` is the path of the bad value.
-    #[error("{path}: {field}: {message}")]
+    /// A scenario file is not valid JSON of the scenario format; `field` is the path of the bad value:
+    /// `FILE:LINE:COLUMN: FIELD: REASON` (the position when known).
+    #[error("{}{}: {field}: {message}", path.display(), position.map_or(String::new(), |(l, c)| format!(":{l}:{c}")))]
     Parse {
         /// The file.
         path: PathBuf,
+        /// Line and column (from 1) of the value at fault, when known.
+        position: Option<(usize, usize)>,
         /// Path of the value at fault, e.g. `obstacles[0].semi_axes`, or `(document)`.
         field: String,
         /// What is wrong.

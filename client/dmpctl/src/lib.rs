@@ -6,6 +6,8 @@
 //! | the command line: flags and dispatch | [`cli`] |
 //! | TLS and token flags | [`connect_args`] |
 //! | reading scenario files, errors at the field | [`scenario_file`] |
+//! | obstacles from JSON (`scene put`, a scenario's), one error style `FILE:LINE:COLUMN: FIELD: REASON` | [`obstacle_file`] |
+//! | the line and column of a value at a field path | [`json_position`] |
 //! | offline runs and timing | [`offline`] |
 //! | output files | [`outputs`] |
 //! | demonstrations from CSV | [`demo_csv`] |
@@ -20,6 +22,8 @@ pub mod cli;
 pub mod connect_args;
 pub mod demo_csv;
 pub mod error;
+pub mod json_position;
+pub mod obstacle_file;
 pub mod offline;
 pub mod outputs;
 pub mod place;

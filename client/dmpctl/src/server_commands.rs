@@ -288,33 +288,7 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
 /// the field.
 pub fn read_obstacles(path: &Path, ttl_s: Option<f64>) -> Result<Vec<JsonObstacle>, DmpctlError> {
     let text = std::fs::read_to_string(path).map_err(io(path))?;
-    let at_file =
-        |field: String, message: String| DmpctlError::Parse { path: path.to_path_buf(), field, message };
-    let value: Value =
-        serde_json::from_str(&text).map_err(|e| at_file("(document)".into(), e.to_string()))?;
-    let items: Vec<(String, &Value)> = match value.get("obstacles") {
-        Some(Value::Array(list)) => {
-            list.iter().enumerate().map(|(i, v)| (format!("obstacles[{i}]"), v)).collect()
-        }
-        Some(_) => return Err(at_file("obstacles".into(), "must be an array".into())),
-        None => vec![(String::new(), &value)],
-    };
-    if items.is_empty() {
-        return Err(at_file("obstacles".into(), "the file has no obstacles".into()));
-    }
-    let mut out = Vec::with_capacity(items.len());
-    for (prefix, v) in items {
-        let mut o = JsonObstacle::parse(v, &prefix).map_err(|e| at_file(e.field, e.rule))?;
-        if let Some(ttl) = ttl_s {
-            o.ttl_s = ttl;
-        }
-        o.validate().map_err(|e| {
-            let e = if prefix.is_empty() { e } else { e.within(&prefix) };
-            at_file(e.field, e.rule)
-        })?;
-        out.push(o);
-    }
-    Ok(out)
+    crate::obstacle_file::obstacles_of(&text, path, ttl_s)
 }
 
 /// Zenoh settings of the command line.
