@@ -328,7 +328,11 @@ impl Store {
                     s.primitives += 1;
                     s.updated_unix_ms = s.updated_unix_ms.max(created);
                 }
-                _ => out.push(v1::RobotSummary { robot_id: robot.into(), primitives: 1, updated_unix_ms: created }),
+                _ => out.push(v1::RobotSummary {
+                    robot_id: robot.into(),
+                    primitives: 1,
+                    updated_unix_ms: created,
+                }),
             }
             Ok::<_, ServerError>(())
         };

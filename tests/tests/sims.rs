@@ -34,7 +34,10 @@ async fn simulate_then(name: SimName, inspect: impl FnOnce(&std::path::Path)) ->
     let client = server.client().await;
     for robot in name.robot_ids() {
         assert!(robot.starts_with("sim."), "{robot}");
-        assert!(within("list", client.list(&robot)).await.unwrap().is_empty(), "{robot}'s primitives are left");
+        assert!(
+            within("list", client.list(&robot)).await.unwrap().is_empty(),
+            "{robot}'s primitives are left"
+        );
     }
     server.stop().await;
     let written: serde_json::Value =

@@ -14,12 +14,12 @@ use crate::error::DmpctlError;
 use crate::offline::{RunSummary, bench_scenario, run_scenario};
 use crate::outputs::to_json;
 use crate::place::resolve_place;
+use crate::progress::Progress;
 use crate::scenario_file::load_scenario;
 use crate::scenario_through_server::{self, robot_ids, run_scenario_through_server};
-use crate::progress::Progress;
+use crate::server_commands::{self, ZenohArgs};
 use crate::tools::{self, until_interrupted};
 use dmp_sim::robots::robot::segments_read;
-use crate::server_commands::{self, ZenohArgs};
 
 mod motion_args;
 pub use self::motion_args::{MotionArgs, PlanArgs, StreamArgs};
@@ -359,7 +359,8 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
         Command::Health => server_commands::health(&connect().await?).await,
         Command::Scene(SceneCommand::List) => server_commands::scene_list(&connect().await?).await,
         Command::Load(a) => {
-            let run = async { Ok(dmp_sim::load::run_with(a, &server, &place.zenoh_connect, &options).await?) };
+            let run =
+                async { Ok(dmp_sim::load::run_with(a, &server, &place.zenoh_connect, &options).await?) };
             let clean_up = async {
                 dmp_sim::load::clean_up(a, &server, &options).await?;
                 Ok("deleted the robots' primitives and the cells' fixed obstacles".to_string())
@@ -373,7 +374,8 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
             let zenoh_config = cli.zenoh_config.as_deref();
             let cell = place.zenoh_cell();
             let run = async {
-                let sim = dmp_sim::robots::run_sim(a, &server, &options, cell, &place.zenoh_connect, zenoh_config);
+                let sim =
+                    dmp_sim::robots::run_sim(a, &server, &options, cell, &place.zenoh_connect, zenoh_config);
                 Ok(sim.await?)
             };
             let clean_up = async {

@@ -149,6 +149,9 @@ mod tests {
         assert_eq!(locate(text, "obstacles[1]"), None);
         assert_eq!(locate(text, "missing"), None);
         assert_eq!(locate(text, "(document)"), None);
-        assert_eq!(steps("a[2][3].b"), Some(vec![Step::Key("a"), Step::Index(2), Step::Index(3), Step::Key("b")]));
+        assert_eq!(
+            steps("a[2][3].b"),
+            Some(vec![Step::Key("a"), Step::Index(2), Step::Index(3), Step::Key("b")])
+        );
     }
 }

@@ -100,7 +100,10 @@ pub async fn run_scenario_through_server(
         run_robot_group(client, &scenario, &p, &mut notes).await
     };
     if !keep && let Err(e) = clean_up(client, &robot_ids(&scenario)).await {
-        notes.push(format!("clean-up: the primitives of {} may be left: {e}", robot_ids(&scenario).join(", ")));
+        notes.push(format!(
+            "clean-up: the primitives of {} may be left: {e}",
+            robot_ids(&scenario).join(", ")
+        ));
     }
     let (free, adapted) = ran?;
     let stalls = detect_stalls(&p, &adapted)?;
@@ -183,13 +186,7 @@ async fn plan_one_robot(
     let name = sanitize(&s.name);
     let robot = scenario_robot(&s.name);
     let record = client
-        .learn(
-            &robot,
-            &name,
-            &s.demonstration.t,
-            &s.demonstration.x,
-            learn_parameters_to_proto(&s.dmp),
-        )
+        .learn(&robot, &name, &s.demonstration.t, &s.demonstration.x, learn_parameters_to_proto(&s.dmp))
         .await?;
     compare_primitive(&record, &p.primitive, &format!("{robot}/{name}"), notes)?;
     let motion = |avoidance: &Avoidance, obstacles: Vec<v1::Obstacle>| v1::MotionSpec {

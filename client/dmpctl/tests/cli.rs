@@ -249,7 +249,8 @@ fn one_error_style_for_the_same_bad_obstacle_in_scenario_run_and_scene_put() {
         assert_eq!(run_err, put_err);
         // The line and column of the value: in the pretty-printed file, the second entry of `semi_axes`.
         let text = std::fs::read_to_string(&file).unwrap();
-        let (line, text_line) = text.lines().enumerate().skip_while(|(_, l)| !l.contains("\"semi_axes\"")).nth(2).unwrap();
+        let (line, text_line) =
+            text.lines().enumerate().skip_while(|(_, l)| !l.contains("\"semi_axes\"")).nth(2).unwrap();
         let column = text_line.len() - text_line.trim_start().len() + 1;
         assert_eq!(run_err.trim_end(), format!("dmpctl: {f}:{}:{column}: {field}: {reason}", line + 1));
     }

@@ -321,7 +321,10 @@ fn robots_are_listed_in_pages_with_their_count_and_latest_update() {
         loop {
             let (robots, next) = store.list_robots_page(after.as_deref(), page, visible).unwrap();
             pages.push(
-                robots.iter().map(|r| (r.robot_id.clone(), r.primitives, r.updated_unix_ms)).collect::<Vec<_>>(),
+                robots
+                    .iter()
+                    .map(|r| (r.robot_id.clone(), r.primitives, r.updated_unix_ms))
+                    .collect::<Vec<_>>(),
             );
             match next {
                 Some(n) => after = Some(n),

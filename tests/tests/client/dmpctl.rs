@@ -268,10 +268,14 @@ async fn every_command_acts_in_its_one_cell() {
 async fn robots_lists_every_robot_that_has_primitives() {
     let server = TestServer::grpc_only().await;
     let url = server.url();
-    assert_eq!(run_at(&url, &["robots"]).await.unwrap(), "no robot has primitives (that this client may read)");
+    assert_eq!(
+        run_at(&url, &["robots"]).await.unwrap(),
+        "no robot has primitives (that this client may read)"
+    );
     let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/none.json");
     let scenario = scenario.to_str().unwrap();
-    for (robot, name) in [("panda", "reach"), ("panda", "place"), ("panda", "place"), ("sim.youbot1", "line")] {
+    for (robot, name) in [("panda", "reach"), ("panda", "place"), ("panda", "place"), ("sim.youbot1", "line")]
+    {
         run_at(&url, &["learn", "--robot", robot, "--name", name, "--scenario", scenario]).await.unwrap();
     }
     let said = run_at(&url, &["robots"]).await.unwrap();

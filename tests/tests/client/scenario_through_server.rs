@@ -117,12 +117,15 @@ async fn a_bad_scenario_is_refused_before_the_server_is_asked() {
     std::fs::write(&file, v.to_string()).unwrap();
     let server = TestServer::grpc_only().await;
     let client = server.client().await;
-    let e = within("scenario run", run_scenario_through_server(&client, &file, &dir.path().join("out"), false))
-        .await
-        .unwrap_err();
+    let e =
+        within("scenario run", run_scenario_through_server(&client, &file, &dir.path().join("out"), false))
+            .await
+            .unwrap_err();
     assert!(e.is_bad_input() && e.to_string().contains("rollout.dt"), "{e}");
     // Nothing reached the server: no primitive was learned.
-    assert!(within("list", client.list(&scenario_robot("paper-one-obstacle-none"))).await.unwrap().is_empty());
+    assert!(
+        within("list", client.list(&scenario_robot("paper-one-obstacle-none"))).await.unwrap().is_empty()
+    );
     assert!(!dir.path().join("out").exists());
     server.stop().await;
 }

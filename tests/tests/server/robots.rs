@@ -12,7 +12,9 @@ async fn robots_are_listed_as_far_as_the_caller_may_read_them() {
     let (server, tokens) = secured(set.path()).await;
     let admin = as_identity(&server, Some(&tokens["admin"])).await;
     let p = line(vec![0.0, 0.0], vec![1.0, 0.0], 1.0);
-    for (robot, name) in [("panda-1", "a"), ("panda-1", "b"), ("panda-1", "b"), ("panda-2", "a"), ("other", "a")] {
+    for (robot, name) in
+        [("panda-1", "a"), ("panda-1", "b"), ("panda-1", "b"), ("panda-2", "a"), ("other", "a")]
+    {
         within("put", admin.put_primitive(robot, name, &p)).await.unwrap();
     }
     // Deleted: a robot without primitives is not listed.

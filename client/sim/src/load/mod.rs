@@ -206,7 +206,7 @@ async fn measure(
     } else {
         None
     };
-    let setup_failed = setup::set_up(&p, &clients, &cells, &robots).await?;
+    let setup_failed = setup::set_up(p, &clients, &cells, &robots).await?;
     let setup_s = setup_started.elapsed().as_secs_f64();
 
     // The schedule, on both clocks.
@@ -228,7 +228,7 @@ async fn measure(
         let start_at = begin + Duration::from_secs_f64(p.stagger_s * i as f64 / robots.len() as f64);
         let task = RobotTask {
             plan: r.clone(),
-            start: setup::start_request(&p, r, &cells[r.cell]),
+            start: setup::start_request(p, r, &cells[r.cell]),
             start_at,
             end_at: end,
             start_unix: unix_of(start_at),

@@ -235,7 +235,9 @@ pub async fn run_with(
     // The simulation's own error first: a clean-up that failed after it says less.
     let mut report = ran?;
     if let Err(e) = cleaned {
-        report.notes.push(format!("clean-up: the primitives of {} may be left: {e}", name.robot_ids().join(", ")));
+        report
+            .notes
+            .push(format!("clean-up: the primitives of {} may be left: {e}", name.robot_ids().join(", ")));
     }
     report.write(&options.out)?;
     Ok(report)

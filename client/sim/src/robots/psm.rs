@@ -325,8 +325,11 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     for stage in &stages {
         for leg in &stage.legs {
             let (t, rows) = demonstration(&leg.start, &leg.goal);
-            within("learn", client.learn(&server_robot(leg.robot), stage.key, &t, &rows, super::learn_parameters(3050.0)))
-                .await??;
+            within(
+                "learn",
+                client.learn(&server_robot(leg.robot), stage.key, &t, &rows, super::learn_parameters(3050.0)),
+            )
+            .await??;
         }
     }
     let mut report = SimReport::new("psm", options.realtime);

@@ -217,7 +217,8 @@ async fn store_primitives(client: &DmpClient) -> Result<(f64, f64), SimError> {
         let (t, rows) = ramped_line(&b.start, &b.goal, duration, RAMP_S, DT);
         let parameters =
             v1::LearnParameters { n_basis: N_BASIS as u32, k: vec![K], d: Vec::new(), alpha: ALPHA };
-        within("learn", client.learn(&server_robot(b.id), Kind::ConstantSpeed.name(), &t, &rows, parameters)).await??;
+        within("learn", client.learn(&server_robot(b.id), Kind::ConstantSpeed.name(), &t, &rows, parameters))
+            .await??;
     }
     Ok((tau_line, duration))
 }
