@@ -72,6 +72,11 @@ impl ClientError {
     pub fn is_unimplemented(&self) -> bool {
         self.code() == Some(tonic::Code::Unimplemented)
     }
+
+    /// The server has no such thing (a primitive, an obstacle).
+    pub fn is_not_found(&self) -> bool {
+        self.code() == Some(tonic::Code::NotFound)
+    }
 }
 
 /// A value that breaks a rule of the wire (a field, a name in a key, a Zenoh setting) is bad input.

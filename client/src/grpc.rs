@@ -303,10 +303,37 @@ impl DmpClient {
         Ok(self.primitives.clone().list(request).await?.into_inner())
     }
 
+    /// The robots that have primitives (those whose primitives this client may read), sorted by id: every page, in
+    /// turn.
+    pub async fn list_robots(&self) -> Result<Vec<v1::RobotSummary>, ClientError> {
+        let mut robots = Vec::new();
+        let mut token = String::new();
+        loop {
+            let request = v1::ListRobotsRequest { page_size: 0, page_token: token.clone() };
+            let page = self.primitives.clone().list_robots(request).await?.into_inner();
+            robots.extend(page.robots);
+            // A token that does not move on would loop forever: the server's pages are sorted by id.
+            if page.next_page_token.is_empty() || page.next_page_token <= token {
+                return Ok(robots);
+            }
+            token = page.next_page_token;
+        }
+    }
+
     /// Deletes every version of `(robot, name)`; returns how many there were.
     pub async fn delete(&self, robot: &str, name: &str) -> Result<u64, ClientError> {
         let request = v1::DeletePrimitiveRequest { robot_id: robot.into(), name: name.into() };
         Ok(self.primitives.clone().delete(request).await?.into_inner().versions_deleted)
+    }
+
+    /// Deletes every version of every primitive of `robot` (what the tools do with their own robots when they
+    /// end); returns how many versions there were.
+    pub async fn delete_robot_primitives(&self, robot: &str) -> Result<u64, ClientError> {
+        let mut deleted = 0;
+        for record in self.list(robot).await? {
+            deleted += self.delete(robot, &record.name).await?;
+        }
+        Ok(deleted)
     }
 
     // --- Motion -----------------------------------------------------------------------------------------------

@@ -24,6 +24,8 @@ def test_learn_stores_the_demonstration_as_the_next_version(server, demonstratio
         assert second.version == 2
         names = {r.name: r.version for r in c.list_primitives(ROBOT)}
         assert names["reach-np"] == 2 and names["reach"] == learned.version
+        robots = {r.robot_id: r for r in c.list_robots()}
+        assert robots[ROBOT].primitives == len(names) and robots[ROBOT].updated_unix_ms > 0
         assert c.get_primitive(ROBOT, "reach-np", version=1).primitive.n_basis == 30
         assert c.delete_primitive(ROBOT, "reach-np") == 2
 

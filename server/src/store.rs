@@ -381,6 +381,66 @@ impl Store {
         Ok((out, None))
     }
 
+    /// One page of the robots that have primitives, sorted by id: at most `page_size` of those `visible` lets
+    /// through whose ids come after `after` (from the first when None), each with its number of names and the
+    /// creation time of its newest latest version; and the last id of the page when more may follow.
+    pub fn list_robots_page(
+        &self,
+        after: Option<&str>,
+        page_size: usize,
+        visible: impl Fn(&str) -> bool,
+    ) -> Result<(Vec<v1::RobotSummary>, Option<String>), ServerError> {
+        use std::ops::Bound;
+        self.count(LIST);
+        let read = self.db.begin_read().map_err(|e| storage("begin read", e))?;
+        let prims = read.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
+        let start = match after {
+            Some(robot) => Bound::Included((robot, "", 0)),
+            None => Bound::Unbounded,
+        };
+        let range = prims
+            .range::<(&str, &str, u64)>((start, Bound::Unbounded))
+            .map_err(|e| storage("read primitives", e))?;
+        let mut out: Vec<v1::RobotSummary> = Vec::new();
+        // The entry read last: (robot, name, its bytes); keys are sorted, so the last entry of a name is its
+        // latest version, the newest of that name.
+        let mut last: Option<(String, String, Vec<u8>)> = None;
+        let finish_name = |out: &mut Vec<v1::RobotSummary>, robot: &str, bytes: &[u8]| {
+            let created = decode(bytes)?.created_unix_ms;
+            match out.last_mut() {
+                Some(s) if s.robot_id == robot => {
+                    s.primitives += 1;
+                    s.updated_unix_ms = s.updated_unix_ms.max(created);
+                }
+                _ => out.push(v1::RobotSummary {
+                    robot_id: robot.into(),
+                    primitives: 1,
+                    updated_unix_ms: created,
+                }),
+            }
+            Ok::<_, ServerError>(())
+        };
+        for entry in range {
+            let (key, value) = entry.map_err(|e| storage("read primitives", e))?;
+            let (robot, name, _) = key.value();
+            if after.is_some_and(|a| robot <= a) || !visible(robot) {
+                continue;
+            }
+            if let Some((r, _, bytes)) = last.take_if(|(r, n, _)| r != robot || n != name) {
+                finish_name(&mut out, &r, &bytes)?;
+                if r != robot && out.len() >= page_size.max(1) {
+                    // Another robot follows: the page is full.
+                    return Ok((out, Some(r)));
+                }
+            }
+            last = Some((robot.to_string(), name.to_string(), value.value().to_vec()));
+        }
+        if let Some((r, _, bytes)) = last {
+            finish_name(&mut out, &r, &bytes)?;
+        }
+        Ok((out, None))
+    }
+
     /// Deletes every version of `(robot_id, name)`; returns how many were removed (NotFound when none).
     pub fn delete(&self, robot_id: &str, name: &str) -> Result<u64, ServerError> {
         self.count(DELETE);

@@ -27,8 +27,18 @@ async fn simulate_then(name: SimName, inspect: impl FnOnce(&std::path::Path)) ->
         cell: "default".into(),
         zenoh_config: None,
         tokens: None,
+        keep: false,
     };
     let report = within("simulation", run(&server.url(), name, &options)).await.expect("the simulation runs");
+    // The simulation's robots are its own (`sim.<name>`), and it deleted their primitives when it ended.
+    let client = server.client().await;
+    for robot in name.robot_ids() {
+        assert!(robot.starts_with("sim."), "{robot}");
+        assert!(
+            within("list", client.list(&robot)).await.unwrap().is_empty(),
+            "{robot}'s primitives are left"
+        );
+    }
     server.stop().await;
     let written: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
@@ -226,7 +236,8 @@ async fn sims_run_against_a_secured_server_each_robot_with_its_own_token() {
     use dmp_server::access::init::{InitOptions, init};
     let set = tempfile::tempdir().unwrap();
     let s = set.path();
-    let robots = ["panda", "youbot-static", "youbot-dynamic"].map(String::from).to_vec();
+    // The access file names the simulations' robots as the server knows them.
+    let robots = ["sim.panda", "sim.youbot-static", "sim.youbot-dynamic"].map(String::from).to_vec();
     let tokens =
         init(s, &InitOptions { cells: vec!["default".into()], robots, ..Default::default() }).unwrap().tokens;
     let server = TestServer::start_with(|c| {
@@ -247,15 +258,16 @@ async fn sims_run_against_a_secured_server_each_robot_with_its_own_token() {
         cell: "default".into(),
         zenoh_config: Some(s.join("zenoh-perception.json5")),
         tokens: Some(tokens.to_owned()),
+        keep: false,
     };
 
     // With another robot's token, the Panda's stream is refused: each robot streams as itself.
     let swapped = tempfile::tempdir().unwrap();
-    std::fs::copy(s.join("youbot-static.token"), swapped.path().join("panda.token")).unwrap();
+    std::fs::copy(s.join("sim.youbot-static.token"), swapped.path().join("sim.panda.token")).unwrap();
     let refused = within("simulation", run_with(&url, &connect, SimName::Panda, &options(swapped.path())))
         .await
         .expect_err("streamed with another robot's token");
-    assert!(refused.to_string().contains("(robot) may not execute robot `panda`"), "{refused}");
+    assert!(refused.to_string().contains("(robot) may not execute robot `sim.panda`"), "{refused}");
 
     let report = within("simulation", run_with(&url, &connect, SimName::YoubotPerception, &options(s)))
         .await

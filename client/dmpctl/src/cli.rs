@@ -14,9 +14,13 @@ use crate::error::DmpctlError;
 use crate::offline::{RunSummary, bench_scenario, run_scenario};
 use crate::outputs::to_json;
 use crate::place::resolve_place;
+use crate::progress::Progress;
 use crate::robot_commands;
-use crate::scenario_through_server::run_scenario_through_server;
+use crate::scenario_file::load_scenario;
+use crate::scenario_through_server::{self, robot_ids, run_scenario_through_server};
 use crate::server_commands::{self, ZenohArgs};
+use crate::tools::{self, until_interrupted};
+use dmp_sim::robots::robot::segments_read;
 
 mod motion_args;
 pub use self::motion_args::{MotionArgs, PlanArgs, StreamArgs};
@@ -73,6 +77,9 @@ pub enum Command {
     /// The gRPC health of the server and of each service, one line each (5 s per answer at most); exits with 1
     /// when one is not serving.
     Health,
+    /// Every robot that has primitives (those this client may read), one line each: its id, how many primitives,
+    /// and when the latest was stored.
+    Robots,
     /// The primitives of a robot (latest version of each).
     List {
         /// The robot.
@@ -133,6 +140,10 @@ pub enum ScenarioCommand {
         /// A collision is expected (the paper's run without avoidance): it does not make the exit code 3.
         #[arg(long)]
         allow_collision: bool,
+        /// With `--server`: keep the primitives of the run's robots (`scenario.<name>`), which are otherwise
+        /// deleted when it ends, also after an error or Ctrl-C.
+        #[arg(long)]
+        keep: bool,
     },
     /// Time the avoidance rollout and print one JSON object.
     Bench {
@@ -294,7 +305,7 @@ fn parse_avoidance(s: &str) -> Result<dmp::Avoidance, String> {
 /// the others on a multi-threaded tokio runtime (Zenoh needs one).
 pub fn run(cli: Cli) -> Result<String, DmpctlError> {
     match (&cli.command, &cli.server) {
-        (Command::Scenario(ScenarioCommand::Run { file, out, allow_collision }), None) => {
+        (Command::Scenario(ScenarioCommand::Run { file, out, allow_collision, .. }), None) => {
             offline_run(file, out, *allow_collision)
         }
         (Command::Scenario(ScenarioCommand::Bench { file, repeat }), _) => bench(file, *repeat),
@@ -340,10 +351,21 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
         Ok::<_, DmpctlError>(DmpClient::connect_with(&server, &options).await?.with_cell(place.grpc_cell()))
     };
     match &cli.command {
-        Command::Scenario(ScenarioCommand::Run { file, out, allow_collision }) => match &cli.server {
+        Command::Scenario(ScenarioCommand::Run { file, out, allow_collision, keep }) => match &cli.server {
             None => offline_run(file, out, *allow_collision),
             Some(url) => {
-                let summary = run_scenario_through_server(&connect().await?, file, out).await?;
+                let client = connect().await?;
+                // The robots to clean up after Ctrl-C (an unreadable file stores nothing).
+                let robots = load_scenario(file).map(|s| robot_ids(&s)).unwrap_or_default();
+                let clean_up = async {
+                    let n = scenario_through_server::clean_up(&client, &robots).await?;
+                    Ok(tools::deleted(n, &robots))
+                };
+                let run = run_scenario_through_server(&client, file, out, *keep);
+                let progress = Progress::new(format!("scenario run {}", file.display()));
+                let n = plural(robots.len(), "robot");
+                let status = || format!("{n} through {url}");
+                let summary = until_interrupted(run, (!keep).then_some(clean_up), &progress, status).await?;
                 for n in &summary.notes {
                     eprintln!("dmpctl: note: {n}");
                 }
@@ -354,6 +376,7 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
         Command::Scenario(ScenarioCommand::Bench { file, repeat }) => bench(file, *repeat),
         // Boxed, as the other large commands: one future per command, not the largest of all on the stack.
         Command::Learn(a) => Box::pin(server_commands::learn(&connect().await?, a)).await,
+        Command::Robots => server_commands::robots(&connect().await?).await,
         Command::List { robot } => server_commands::list(&connect().await?, robot).await,
         Command::Show { robot, name, version } => {
             server_commands::show(&connect().await?, robot, name, *version).await
@@ -382,20 +405,33 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
         Command::Robot(RobotCommand::Show { id }) => robot_commands::show(&connect().await?, id).await,
         Command::Robot(RobotCommand::Delete { id }) => robot_commands::delete(&connect().await?, id).await,
         Command::Load(a) => {
-            let report = dmp_sim::load::run_with(a, &server, &place.zenoh_connect, &options).await?;
+            let run =
+                async { Ok(dmp_sim::load::run_with(a, &server, &place.zenoh_connect, &options).await?) };
+            let clean_up = async {
+                dmp_sim::load::clean_up(a, &server, &options).await?;
+                Ok("deleted the robots' primitives and the cells' fixed obstacles".to_string())
+            };
+            let progress = Progress::new("load");
+            let status = || format!("{} streaming", plural(a.robots, "robot"));
+            let report = until_interrupted(run, (!a.keep).then_some(clean_up), &progress, status).await?;
             Ok(to_json(&report))
         }
         Command::Sim(a) => {
             let zenoh_config = cli.zenoh_config.as_deref();
-            let report = dmp_sim::robots::run_sim(
-                a,
-                &server,
-                &options,
-                place.zenoh_cell(),
-                &place.zenoh_connect,
-                zenoh_config,
-            )
-            .await?;
+            let cell = place.zenoh_cell();
+            let run = async {
+                let sim =
+                    dmp_sim::robots::run_sim(a, &server, &options, cell, &place.zenoh_connect, zenoh_config);
+                Ok(sim.await?)
+            };
+            let clean_up = async {
+                let n = dmp_sim::robots::clean_up(&connect().await?.with_cell(cell), a.name).await?;
+                Ok(tools::deleted(n, &a.name.robot_ids()))
+            };
+            let progress = Progress::new(format!("sim {}", a.name.as_str()));
+            let robots = plural(a.name.robot_ids().len(), "robot");
+            let status = || format!("{robots}, {}", plural(segments_read() as usize, "segment"));
+            let report = until_interrupted(run, (!a.keep).then_some(clean_up), &progress, status).await?;
             let mut problems = report.problems_allowing(a.allow_collision);
             // Late setpoints fail the run too (a real robot would have executed stale ones).
             for (id, r) in &report.robots {
@@ -438,7 +474,11 @@ fn summary_line(file: &Path, summary: &RunSummary, out: &Path) -> String {
 }
 
 fn offline_run(file: &Path, out: &Path, allow_collision: bool) -> Result<String, DmpctlError> {
-    let summary = run_scenario(file, out)?;
+    let progress = Progress::new(format!("scenario run {}", file.display()));
+    progress.set_message("rolling out");
+    let summary = run_scenario(file, out);
+    drop(progress);
+    let summary = summary?;
     gate(summary_line(file, &summary, out), scenario_problems(&summary, allow_collision))
 }
 
@@ -469,7 +509,11 @@ fn gate(line: String, problems: Vec<String>) -> Result<String, DmpctlError> {
 }
 
 fn bench(file: &Path, repeat: usize) -> Result<String, DmpctlError> {
-    let report = bench_scenario(file, repeat)?;
+    let progress = Progress::new(format!("scenario bench {}", file.display()));
+    progress.set_message(format!("{} timed rollouts", repeat));
+    let report = bench_scenario(file, repeat);
+    drop(progress);
+    let report = report?;
     Ok(serde_json::to_string(&report).unwrap_or_else(|_| to_json(&report)))
 }
 

@@ -26,8 +26,12 @@ const QUATERNION_COLUMNS: [&str; 4] = ["qx", "qy", "qz", "qw"];
 
 /// Parses CSV text; `path` only names the source in errors, which give the line and column (from 1).
 pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstration, DmpctlError> {
-    let err =
-        |field: String, message: String| DmpctlError::Parse { path: path.to_path_buf(), field, message };
+    let err = |field: String, message: String| DmpctlError::Parse {
+        path: path.to_path_buf(),
+        position: None,
+        field,
+        message,
+    };
     let mut lines = text
         .lines()
         .enumerate()

@@ -24,11 +24,14 @@ pub enum DmpctlError {
         /// Why.
         source: std::io::Error,
     },
-    /// A scenario file is not valid JSON of the scenario format; `field` is the path of the bad value.
-    #[error("{path}: {field}: {message}")]
+    /// A scenario file is not valid JSON of the scenario format; `field` is the path of the bad value:
+    /// `FILE:LINE:COLUMN: FIELD: REASON` (the position when known).
+    #[error("{}{}: {field}: {message}", path.display(), position.map_or(String::new(), |(l, c)| format!(":{l}:{c}")))]
     Parse {
         /// The file.
         path: PathBuf,
+        /// Line and column (from 1) of the value at fault, when known.
+        position: Option<(usize, usize)>,
         /// Path of the value at fault, e.g. `obstacles[0].semi_axes`, or `(document)`.
         field: String,
         /// What is wrong.
@@ -65,6 +68,12 @@ pub enum DmpctlError {
         /// What went wrong, one entry each.
         problems: Vec<String>,
     },
+    /// The command was interrupted (Ctrl-C) after cleaning up what it had stored (`dmpctl` exits with 130).
+    #[error("interrupted{}", if cleaned.is_empty() { String::new() } else { format!(" ({cleaned})") })]
+    Interrupted {
+        /// What the clean-up did, or why it could not.
+        cleaned: String,
+    },
 }
 
 impl DmpctlError {
@@ -78,14 +87,17 @@ impl DmpctlError {
             DmpctlError::Io { .. }
             | DmpctlError::Plot(_)
             | DmpctlError::Problems { .. }
+            | DmpctlError::Interrupted { .. }
             | DmpctlError::Unhealthy(_) => false,
         }
     }
 
-    /// The process's exit code: 3 for a run with problems, 2 for bad input, 1 for anything else.
+    /// The process's exit code: 3 for a run with problems, 2 for bad input, 130 when interrupted (128 + SIGINT,
+    /// as shells report it), 1 for anything else.
     pub fn exit_code(&self) -> u8 {
         match self {
             DmpctlError::Problems { .. } => 3,
+            DmpctlError::Interrupted { .. } => 130,
             e if e.is_bad_input() => 2,
             _ => 1,
         }

@@ -6,15 +6,41 @@ use std::path::Path;
 use dmp::scenario::Scenario;
 
 use crate::error::DmpctlError;
+use crate::obstacle_file::{check_scenario_obstacles, error_at, without_position};
 
-/// Parses a scenario from text; `path` only names the source in errors.
+/// Parses a scenario from text; `path` only names the source in errors, which give the value's line and column.
+/// Its obstacles are read as `scene put` reads them ([`check_scenario_obstacles`]): the same broken obstacle gives
+/// the same error.
 pub fn parse_scenario(text: &str, path: &Path) -> Result<Scenario, DmpctlError> {
     let mut de = json5::Deserializer::from_str(text);
-    serde_path_to_error::deserialize(&mut de).map_err(|e| {
-        let field = e.path().to_string();
-        let field = if field == "." || field.is_empty() { "(document)".to_string() } else { field };
-        DmpctlError::Parse { path: path.to_path_buf(), field, message: e.into_inner().to_string() }
-    })
+    let parsed: Result<Scenario, _> = serde_path_to_error::deserialize(&mut de);
+    match parsed {
+        Ok(scenario) => {
+            check_scenario_obstacles(text, path)?;
+            Ok(scenario)
+        }
+        Err(e) => {
+            let field = e.path().to_string();
+            let field = if field == "." || field.is_empty() { "(document)".to_string() } else { field };
+            if field.starts_with("obstacles") {
+                check_scenario_obstacles(text, path)?;
+            }
+            let message = e.into_inner().to_string();
+            let mut error = error_at(path, text, field, without_position(&message));
+            // Where the parser stopped, when the value could not be found (a syntax error).
+            if let DmpctlError::Parse { position: p @ None, .. } = &mut error {
+                *p = parser_position(&message);
+            }
+            Err(error)
+        }
+    }
+}
+
+/// `line L column C` at the end of a parser's message.
+fn parser_position(message: &str) -> Option<(usize, usize)> {
+    let rest = &message[message.rfind(" at line ")? + " at line ".len()..];
+    let (line, column) = rest.split_once(" column ")?;
+    Some((line.trim().parse().ok()?, column.trim().parse().ok()?))
 }
 
 /// Reads and parses a scenario file.

@@ -3,13 +3,13 @@
 //! The scenario is validated and learned locally too ([`dmp::scenario::prepare`]): the local [`Prepared`] gives the
 //! metrics their scene, and its primitive is compared with the server's. Then:
 //!
-//! - **one robot** (no `robots`): the demonstration is learned under robot [`SCENARIO_ROBOT`], name = the
-//!   scenario's name sanitized; two `Plan`s with the scenario's `dt`, `duration`, start, goal and `tau`: one with
+//! - **one robot** (no `robots`): the demonstration is learned under robot `scenario.<name>` ([`robot_ids`]),
+//!   name = the scenario's name sanitized; two `Plan`s with the scenario's `dt`, `duration`, start, goal and `tau`: one with
 //!   the scenario's obstacles as `extra_obstacles` (`ignore_scene = true`, so the cell's own scene is left out) and
 //!   its avoidance, one with method `none` and no obstacles (the obstacle-free twin). A plan is the engine's
 //!   rollout, so the metrics are the offline run's.
 //! - **several robots**: each robot's dimensions of the demonstration are learned as its own primitive (robot
-//!   `scenario-<id>`), and the two runs are `ExecuteGroup` streams paced as fast as read, one member per robot,
+//!   `scenario.<name>.<id>`), and the two runs are `ExecuteGroup` streams paced as fast as read, one member per robot,
 //!   `max_duration_s` = the scenario's duration; the members' setpoints are put back together in the scenario's
 //!   dimension order. Learning is per dimension, so each robot's primitive is the rows of the whole one, and the
 //!   server's group run is the engine's joint rollout: the metrics are the offline run's
@@ -17,7 +17,8 @@
 //!   Rows past the scenario's duration (streams end on segment boundaries) are cut; a shorter run is cut to the
 //!   shorter length, and a note says so.
 //!
-//! Every run learns a new version of its primitives on the server (nothing is deleted afterwards).
+//! The robots are the run's own (`scenario.` is no real robot's prefix): their primitives are deleted when the run
+//! ends, also after an error, unless `keep` (`--keep`).
 //!
 //! Contacts are not needed by the metrics; stalls are: they are detected again here, with the engine's detector on
 //! the server's trajectory, exactly as the rollout does.
@@ -42,8 +43,32 @@ use crate::error::DmpctlError;
 use crate::offline::{RunSummary, write_outputs};
 use crate::scenario_file::load_scenario;
 
-/// The robot a single-robot scenario's primitive is stored under.
-pub const SCENARIO_ROBOT: &str = "scenario";
+/// The namespace of the robots of `scenario run --server`: `scenario.<name>` (`.` is allowed in robot ids).
+pub const ROBOT_PREFIX: &str = "scenario.";
+
+/// The robot a single-robot scenario named `name` is stored under: `scenario.<name>`, sanitized.
+pub fn scenario_robot(name: &str) -> String {
+    sanitize(&format!("{ROBOT_PREFIX}{}", sanitize(name)))
+}
+
+/// The robots the run of `s` stores primitives for: `scenario.<name>` for one robot, `scenario.<name>.<id>` for
+/// each robot of a group.
+pub fn robot_ids(s: &Scenario) -> Vec<String> {
+    if s.robots.is_empty() {
+        vec![scenario_robot(&s.name)]
+    } else {
+        s.robots.iter().map(|r| sanitize(&format!("{}.{}", scenario_robot(&s.name), r.id))).collect()
+    }
+}
+
+/// Deletes every primitive of `robots` (the run's own); returns how many versions were deleted.
+pub async fn clean_up(client: &DmpClient, robots: &[String]) -> Result<u64, ClientError> {
+    let mut deleted = 0;
+    for robot in robots {
+        deleted += client.delete_robot_primitives(robot).await?;
+    }
+    Ok(deleted)
+}
 
 /// A robot id or primitive name the server accepts: 1 to 128 characters of `[A-Za-z0-9_.-]`, others replaced by
 /// `_`; empty gives `scenario`.
@@ -57,10 +82,12 @@ pub fn sanitize(name: &str) -> String {
 }
 
 /// Runs the scenario at `path` through the server and writes the three files of the offline run into `out`.
+/// The primitives it stored are deleted at the end (also after an error) unless `keep`.
 pub async fn run_scenario_through_server(
     client: &DmpClient,
     path: &Path,
     out: &Path,
+    keep: bool,
 ) -> Result<RunSummary, DmpctlError> {
     let started = Instant::now();
     let scenario = load_scenario(path)?;
@@ -77,11 +104,18 @@ pub async fn run_scenario_through_server(
         });
     }
     let mut notes = Vec::new();
-    let (free, adapted) = if scenario.robots.is_empty() {
-        plan_one_robot(client, &scenario, &p, &mut notes).await?
+    let ran = if scenario.robots.is_empty() {
+        plan_one_robot(client, &scenario, &p, &mut notes).await
     } else {
-        run_robot_group(client, &scenario, &p, &mut notes).await?
+        run_robot_group(client, &scenario, &p, &mut notes).await
     };
+    if !keep && let Err(e) = clean_up(client, &robot_ids(&scenario)).await {
+        notes.push(format!(
+            "clean-up: the primitives of {} may be left: {e}",
+            robot_ids(&scenario).join(", ")
+        ));
+    }
+    let (free, adapted) = ran?;
     let stalls = detect_stalls(&p, &adapted)?;
     let free =
         Rollout { trajectory: free, contacts: vec![], stalls: vec![], orientations: Default::default() };
@@ -161,18 +195,13 @@ async fn plan_one_robot(
     notes: &mut Vec<String>,
 ) -> Result<(Trajectory, Trajectory), ClientError> {
     let name = sanitize(&s.name);
+    let robot = scenario_robot(&s.name);
     let record = client
-        .learn(
-            SCENARIO_ROBOT,
-            &name,
-            &s.demonstration.t,
-            &s.demonstration.x,
-            learn_parameters_to_proto(&s.dmp),
-        )
+        .learn(&robot, &name, &s.demonstration.t, &s.demonstration.x, learn_parameters_to_proto(&s.dmp))
         .await?;
-    compare_primitive(&record, &p.primitive, &format!("{SCENARIO_ROBOT}/{name}"), notes)?;
+    compare_primitive(&record, &p.primitive, &format!("{robot}/{name}"), notes)?;
     let motion = |avoidance: &Avoidance, obstacles: Vec<v1::Obstacle>| v1::MotionSpec {
-        robot_id: SCENARIO_ROBOT.into(),
+        robot_id: robot.clone(),
         primitive: name.clone(),
         version: record.version,
         start: p.motion.start.clone(),
@@ -210,8 +239,7 @@ async fn run_robot_group(
     let name = sanitize(&s.name);
     let whole = learn_parameters_to_proto(&s.dmp);
     let mut members = Vec::with_capacity(s.robots.len());
-    for r in &s.robots {
-        let robot = sanitize(&format!("scenario-{}", r.id));
+    for (r, robot) in s.robots.iter().zip(robot_ids(s)) {
         let x: Vec<Vec<f64>> =
             s.demonstration.x.iter().map(|row| r.dims.iter().map(|&i| row[i]).collect()).collect();
         let params = v1::LearnParameters {

@@ -101,6 +101,24 @@ pub async fn list(client: &DmpClient, robot: &str) -> Result<String, DmpctlError
     Ok(lines.join("\n"))
 }
 
+/// `robots`: one line per robot that has primitives (`sim.panda  2 primitives  updated 2026-11-26T06:51:00Z`).
+pub async fn robots(client: &DmpClient) -> Result<String, DmpctlError> {
+    let robots = client.list_robots().await?;
+    if robots.is_empty() {
+        return Ok("no robot has primitives (that this client may read)".into());
+    }
+    let width = robots.iter().map(|r| r.robot_id.len()).max().unwrap_or(0);
+    let lines: Vec<String> = robots
+        .iter()
+        .map(|r| {
+            let n = format!("{} primitive{}", r.primitives, if r.primitives == 1 { "" } else { "s" });
+            let updated = readable_time(r.updated_unix_ms.max(0) as u64);
+            format!("{:width$}  {n:>14}  updated {updated}", r.robot_id)
+        })
+        .collect();
+    Ok(lines.join("\n"))
+}
+
 /// A time in Unix milliseconds as RFC 3339 UTC, to the second (`2026-11-26T06:51:00Z`).
 pub fn readable_time(unix_ms: u64) -> String {
     let t = std::time::UNIX_EPOCH + Duration::from_millis(unix_ms);
@@ -217,13 +235,15 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
     let mut versions = crate::server_plot::SceneVersions::default();
     let ctrl_c = tokio::signal::ctrl_c();
     tokio::pin!(ctrl_c);
+    let progress = crate::progress::Progress::new(format!("stream {}", a.motion.robot));
     loop {
         tokio::select! {
             next = segments.next() => match next {
                 None => break,
                 Some(seg) => {
                     let seg = seg?;
-                    eprintln!("{}", segment_line(&seg));
+                    progress.println(&segment_line(&seg));
+                    progress.tick(format!("{} segments, t = {:.3} s", s.segments() + 1, seg.start_time));
                     print_warnings(&seg.warnings, seg.scene_stale, &mut stale);
                     arrived = seg.goal_reached_time;
                     s.push(&seg)?;
@@ -268,33 +288,7 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
 /// the field.
 pub fn read_obstacles(path: &Path, ttl_s: Option<f64>) -> Result<Vec<JsonObstacle>, DmpctlError> {
     let text = std::fs::read_to_string(path).map_err(io(path))?;
-    let at_file =
-        |field: String, message: String| DmpctlError::Parse { path: path.to_path_buf(), field, message };
-    let value: Value =
-        serde_json::from_str(&text).map_err(|e| at_file("(document)".into(), e.to_string()))?;
-    let items: Vec<(String, &Value)> = match value.get("obstacles") {
-        Some(Value::Array(list)) => {
-            list.iter().enumerate().map(|(i, v)| (format!("obstacles[{i}]"), v)).collect()
-        }
-        Some(_) => return Err(at_file("obstacles".into(), "must be an array".into())),
-        None => vec![(String::new(), &value)],
-    };
-    if items.is_empty() {
-        return Err(at_file("obstacles".into(), "the file has no obstacles".into()));
-    }
-    let mut out = Vec::with_capacity(items.len());
-    for (prefix, v) in items {
-        let mut o = JsonObstacle::parse(v, &prefix).map_err(|e| at_file(e.field, e.rule))?;
-        if let Some(ttl) = ttl_s {
-            o.ttl_s = ttl;
-        }
-        o.validate().map_err(|e| {
-            let e = if prefix.is_empty() { e } else { e.within(&prefix) };
-            at_file(e.field, e.rule)
-        })?;
-        out.push(o);
-    }
-    Ok(out)
+    crate::obstacle_file::obstacles_of(&text, path, ttl_s)
 }
 
 /// Zenoh settings of the command line.

@@ -210,3 +210,48 @@ fn server_commands_exit_1_when_the_server_is_unreachable_and_2_on_bad_arguments(
         assert!(err.contains("semi_axes[1]"), "{err}");
     }
 }
+
+/// A command that runs for more than the 2 s after which progress appears on a terminal, with stderr piped (as
+/// here): nothing of the progress is written, stderr stays empty and stdout has only the result.
+#[test]
+fn progress_stays_off_a_pipe() {
+    let file = scenarios().join("bench-3d-ten-dynamic-volumetric.json");
+    let started = std::time::Instant::now();
+    let o = dmpctl(&["scenario", "bench", file.to_str().unwrap(), "--repeat", "200"]);
+    let took = started.elapsed();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(took > std::time::Duration::from_secs(2), "took {took:?}: too short to show progress anyway");
+    assert_eq!(String::from_utf8_lossy(&o.stderr), "");
+    let stdout = String::from_utf8(o.stdout).unwrap();
+    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+    assert!(!stdout.contains('\r') && !stdout.contains('\u{1b}'), "{stdout:?}");
+}
+
+/// The same broken obstacle, in a scenario given to `scenario run` and to `scene put`: the same error line,
+/// `FILE:LINE:COLUMN: FIELD: REASON`, and exit code 2 (`scene put` refuses its file before asking the server).
+#[test]
+fn one_error_style_for_the_same_bad_obstacle_in_scenario_run_and_scene_put() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    for (bad, field, reason) in [
+        (Value::from("wide"), "obstacles[0].semi_axes[1]", "invalid type: string \"wide\", expected f64"),
+        (Value::from(-1.0), "obstacles[0].semi_axes[1]", "must be a finite number greater than zero"),
+    ] {
+        let mut v = paper("dynamic_volumetric");
+        v["obstacles"][0]["semi_axes"][1] = bad;
+        let file = dir.path().join("bad.json");
+        std::fs::write(&file, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+        let f = file.to_str().unwrap();
+        let run = dmpctl(&["scenario", "run", f, "--out", out.to_str().unwrap()]);
+        let put = dmpctl(&["--server", "http://127.0.0.1:1", "--cell", "c", "scene", "put", f]);
+        let (run_err, put_err) = (String::from_utf8_lossy(&run.stderr), String::from_utf8_lossy(&put.stderr));
+        assert_eq!((run.status.code(), put.status.code()), (Some(2), Some(2)), "{run_err}\n{put_err}");
+        assert_eq!(run_err, put_err);
+        // The line and column of the value: in the pretty-printed file, the second entry of `semi_axes`.
+        let text = std::fs::read_to_string(&file).unwrap();
+        let (line, text_line) =
+            text.lines().enumerate().skip_while(|(_, l)| !l.contains("\"semi_axes\"")).nth(2).unwrap();
+        let column = text_line.len() - text_line.trim_start().len() + 1;
+        assert_eq!(run_err.trim_end(), format!("dmpctl: {f}:{}:{column}: {field}: {reason}", line + 1));
+    }
+}

@@ -179,6 +179,19 @@ class Client:
                 return records
             token = page.next_page_token
 
+    def list_robots(self) -> List[primitives.RobotSummary]:
+        """The robots that have primitives (those this client may read), sorted by id (every page): each with
+        `robot_id`, `primitives` (its number of names) and `updated_unix_ms`."""
+        robots: List[primitives.RobotSummary] = []
+        token = ""
+        while True:
+            page = self._call(self._primitives.ListRobots, primitives.ListRobotsRequest(page_token=token))
+            robots.extend(page.robots)
+            # A token that does not move on would loop forever: the server's pages are sorted by id.
+            if not page.next_page_token or page.next_page_token <= token:
+                return robots
+            token = page.next_page_token
+
     def delete_primitive(self, robot: str, name: str) -> int:
         """Deletes every version of `(robot, name)`; returns how many there were."""
         return self._call(self._primitives.Delete, primitives.DeletePrimitiveRequest(robot_id=robot, name=name)

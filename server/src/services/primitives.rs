@@ -225,6 +225,32 @@ impl PrimitiveServiceImpl {
         Ok(v1::ListPrimitivesResponse { records, next_page_token: next.unwrap_or_default() })
     }
 
+    async fn handle_list_robots(
+        &self,
+        caller: &Caller,
+        req: v1::ListRobotsRequest,
+    ) -> Result<v1::ListRobotsResponse, ServerError> {
+        // The token is the last robot of the previous page.
+        let after = (!req.page_token.is_empty()).then_some(req.page_token);
+        if let Some(token) = &after {
+            check_name("page_token", token)?;
+        }
+        let limits = &self.state.config.limits;
+        let page_size = match req.page_size as usize {
+            0 => limits.list_page_size,
+            n => n,
+        }
+        .clamp(1, limits.max_list_page_size.max(1));
+        let store = self.state.store.clone();
+        // Only the robots whose primitives the caller may read: the others are not even named.
+        let reader = caller.clone();
+        let visible = move |robot: &str| reader.check(&Action::ReadPrimitive { robot }).is_ok();
+        let (robots, next) =
+            blocking(move || store.list_robots_page(after.as_deref(), page_size, visible)).await?;
+        debug!(count = robots.len(), more = next.is_some(), identity = %caller.name(), "listed robots");
+        Ok(v1::ListRobotsResponse { robots, next_page_token: next.unwrap_or_default() })
+    }
+
     async fn handle_delete(
         &self,
         caller: &Caller,
@@ -269,6 +295,17 @@ impl PrimitiveService for PrimitiveServiceImpl {
     ) -> Result<Response<v1::PrimitiveRecord>, Status> {
         let caller = self.state.caller(&request).map_err(|e| status("get", e))?;
         self.handle_get(&caller, request.into_inner()).await.map(Response::new).map_err(|e| status("get", e))
+    }
+
+    async fn list_robots(
+        &self,
+        request: Request<v1::ListRobotsRequest>,
+    ) -> Result<Response<v1::ListRobotsResponse>, Status> {
+        let caller = self.state.caller(&request).map_err(|e| status("list_robots", e))?;
+        self.handle_list_robots(&caller, request.into_inner())
+            .await
+            .map(Response::new)
+            .map_err(|e| status("list_robots", e))
     }
 
     async fn list(

@@ -303,3 +303,39 @@ fn store_survives_kill_9() {
     // the loop above; this bound only catches a store that invents records.
     assert!(names.len() <= stored.len() + 2, "{} stored, {} acknowledged", names.len(), stored.len());
 }
+
+#[test]
+fn robots_are_listed_in_pages_with_their_count_and_latest_update() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = Store::open(dir.path()).unwrap();
+    store.put("a", "x", &primitive(0.0), 10).unwrap();
+    store.put("a", "x", &primitive(0.0), 30).unwrap();
+    store.put("a", "y", &primitive(0.0), 20).unwrap();
+    store.put("b", "x", &primitive(0.0), 5).unwrap();
+    store.put("c", "x", &primitive(0.0), 7).unwrap();
+    store.put("d", "x", &primitive(0.0), 8).unwrap();
+    store.put("d", "z", &primitive(0.0), 9).unwrap();
+    store.delete("d", "x").unwrap();
+    let all = |visible: &dyn Fn(&str) -> bool, page: usize| {
+        let (mut pages, mut after) = (Vec::new(), None::<String>);
+        loop {
+            let (robots, next) = store.list_robots_page(after.as_deref(), page, visible).unwrap();
+            pages.push(
+                robots
+                    .iter()
+                    .map(|r| (r.robot_id.clone(), r.primitives, r.updated_unix_ms))
+                    .collect::<Vec<_>>(),
+            );
+            match next {
+                Some(n) => after = Some(n),
+                None => return pages,
+            }
+        }
+    };
+    let s = |r: &str, n: u64, t: i64| (r.to_string(), n, t);
+    assert_eq!(all(&|_| true, 2), [vec![s("a", 2, 30), s("b", 1, 5)], vec![s("c", 1, 7), s("d", 1, 9)]]);
+    assert_eq!(all(&|_| true, 100), [vec![s("a", 2, 30), s("b", 1, 5), s("c", 1, 7), s("d", 1, 9)]]);
+    // What the caller may not read is left out before the page is cut.
+    assert_eq!(all(&|r| r != "a" && r != "c", 1), [vec![s("b", 1, 5)], vec![s("d", 1, 9)]]);
+    assert_eq!(all(&|_| false, 1), [Vec::new()]);
+}

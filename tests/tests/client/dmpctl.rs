@@ -263,3 +263,27 @@ async fn every_command_acts_in_its_one_cell() {
     assert!(bent > 1e-3, "the plan in lab2 did not go round its box: {bent}");
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread")]
+async fn robots_lists_every_robot_that_has_primitives() {
+    let server = TestServer::grpc_only().await;
+    let url = server.url();
+    assert_eq!(
+        run_at(&url, &["robots"]).await.unwrap(),
+        "no robot has primitives (that this client may read)"
+    );
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/none.json");
+    let scenario = scenario.to_str().unwrap();
+    for (robot, name) in [("panda", "reach"), ("panda", "place"), ("panda", "place"), ("sim.youbot1", "line")]
+    {
+        run_at(&url, &["learn", "--robot", robot, "--name", name, "--scenario", scenario]).await.unwrap();
+    }
+    let said = run_at(&url, &["robots"]).await.unwrap();
+    let lines: Vec<&str> = said.lines().collect();
+    assert_eq!(lines.len(), 2, "{said}");
+    // One line per robot, sorted, with its number of primitives (names, not versions) and a readable time.
+    assert!(lines[0].starts_with("panda ") && lines[0].contains(" 2 primitives  updated 20"), "{said}");
+    assert!(lines[1].starts_with("sim.youbot1 ") && lines[1].contains(" 1 primitive  updated 20"), "{said}");
+    assert!(lines.iter().all(|l| l.ends_with('Z')), "{said}");
+    server.stop().await;
+}

@@ -6,7 +6,8 @@ use std::path::Path;
 use dmp_client::DmpClient;
 use dmp_tests::{TestServer, within};
 use dmpctl::offline::run_scenario;
-use dmpctl::scenario_through_server::{SCENARIO_ROBOT, run_scenario_through_server};
+use dmpctl::scenario_file::load_scenario;
+use dmpctl::scenario_through_server::{robot_ids, run_scenario_through_server, scenario_robot};
 
 /// Runs `file` offline and through the server (plans and group runs step through the same `dmp::Execution` as the
 /// offline rollout): the metrics must be the same, `compute_seconds` aside, and the trajectories agree to the bit
@@ -24,10 +25,15 @@ async fn same_metrics_at(client: &DmpClient, path: &Path) -> (dmp::metrics::Metr
     let offline = run_scenario(path, &dir.path().join("offline")).unwrap();
     let through_server = within(
         &format!("scenario run {file}"),
-        run_scenario_through_server(client, path, &dir.path().join("through-server")),
+        run_scenario_through_server(client, path, &dir.path().join("through-server"), false),
     )
     .await
     .unwrap();
+    // The run's robots (`scenario.<name>...`) have no primitive left.
+    for robot in robot_ids(&load_scenario(path).unwrap()) {
+        assert!(robot.starts_with("scenario."), "{robot}");
+        assert!(within("list", client.list(&robot)).await.unwrap().is_empty(), "{robot} is left");
+    }
     let (mut a, mut b) = (offline.metrics, through_server.metrics);
     a.compute_seconds = 0.0;
     b.compute_seconds = 0.0;
@@ -57,6 +63,24 @@ async fn stalls_are_reported_as_offline() {
     let server = TestServer::grpc_only().await;
     let (metrics, _) = same_metrics_at(&server.client().await, &file).await;
     assert_eq!(metrics.stalls.len(), 1);
+    server.stop().await;
+}
+
+/// `--keep` keeps the run's primitive; without it, the next run deletes every version of its robot's.
+#[tokio::test(flavor = "multi_thread")]
+async fn the_runs_primitives_are_deleted_unless_kept() {
+    let server = TestServer::grpc_only().await;
+    let client = server.client().await;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-one-obstacle/none.json");
+    let dir = tempfile::tempdir().unwrap();
+    let robot = scenario_robot("paper-one-obstacle-none");
+    assert_eq!(robot, "scenario.paper-one-obstacle-none");
+    let run = |keep| run_scenario_through_server(&client, &path, dir.path(), keep);
+    within("scenario run --keep", run(true)).await.unwrap();
+    let kept = within("list", client.list(&robot)).await.unwrap();
+    assert_eq!(kept.iter().map(|r| r.name.as_str()).collect::<Vec<_>>(), ["paper-one-obstacle-none"]);
+    within("scenario run", run(false)).await.unwrap();
+    assert!(within("list", client.list(&robot)).await.unwrap().is_empty());
     server.stop().await;
 }
 
@@ -93,12 +117,15 @@ async fn a_bad_scenario_is_refused_before_the_server_is_asked() {
     std::fs::write(&file, v.to_string()).unwrap();
     let server = TestServer::grpc_only().await;
     let client = server.client().await;
-    let e = within("scenario run", run_scenario_through_server(&client, &file, &dir.path().join("out")))
-        .await
-        .unwrap_err();
+    let e =
+        within("scenario run", run_scenario_through_server(&client, &file, &dir.path().join("out"), false))
+            .await
+            .unwrap_err();
     assert!(e.is_bad_input() && e.to_string().contains("rollout.dt"), "{e}");
     // Nothing reached the server: no primitive was learned.
-    assert!(within("list", client.list(SCENARIO_ROBOT)).await.unwrap().is_empty());
+    assert!(
+        within("list", client.list(&scenario_robot("paper-one-obstacle-none"))).await.unwrap().is_empty()
+    );
     assert!(!dir.path().join("out").exists());
     server.stop().await;
 }

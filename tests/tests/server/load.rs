@@ -162,6 +162,12 @@ async fn a_load_against_a_secured_server_streams_each_robot_as_itself() {
     assert!(report.errors.is_empty(), "{:#?}", report.errors);
     assert_eq!((report.streams_started, report.streams_failed), (6, 0));
     assert!(report.setpoints_on_time > 0);
+    // The load's robots are its own (`load.c<cell>.r<k>`), and their primitives are gone once it ended.
+    let admin_client = dmp_client::DmpClient::connect_with(&url, &options).await.unwrap();
+    for r in &robots {
+        assert!(r.id.starts_with("load.c"), "{}", r.id);
+        assert!(within("list", admin_client.list(&r.id)).await.unwrap().is_empty(), "{} is left", r.id);
+    }
 
     // Two robots swap their tokens: each is refused as the other.
     let (a, b) = (

@@ -18,6 +18,7 @@ mod poses;
 mod primitives;
 mod python_clients;
 mod robot_records;
+mod robots;
 mod ros2_bridge;
 mod ros2_golden;
 mod ros2_trajectories;

@@ -24,7 +24,7 @@ async fn scenario_run_through_the_server_gives_the_offline_metrics() {
         let offline = dmpctl::offline::run_scenario(&path, &off).unwrap().metrics;
         let remote = within(
             "remote scenario",
-            dmpctl::scenario_through_server::run_scenario_through_server(&client, &path, &on),
+            dmpctl::scenario_through_server::run_scenario_through_server(&client, &path, &on, false),
         )
         .await
         .unwrap()

@@ -101,7 +101,7 @@ pub struct LoadArgs {
     /// and leaves the rest of a small machine to the server under test; more spread it over more cores.
     #[arg(long, default_value_t = DEFAULT_THREADS, value_name = "N")]
     pub threads: usize,
-    /// Prefix of the cells (`<prefix>-<c>`) and robots (`<prefix>-<c>-<k>`).
+    /// Prefix of the cells (`<prefix>-<c>`) and robots (`<prefix>.c<c>.r<k>`).
     #[arg(long, default_value = DEFAULT_PREFIX)]
     pub prefix: String,
     /// Also write the JSON report to `DIR/load.json` (the directory is created).
@@ -111,6 +111,10 @@ pub struct LoadArgs {
     /// `dmp-server access init` writes them); set-up and monitoring use the command's own credentials.
     #[arg(long, value_name = "DIR")]
     pub tokens: Option<PathBuf>,
+    /// Keep the robots' primitives and the cells' fixed obstacles; by default they are deleted when the load ends,
+    /// also after an error or Ctrl-C.
+    #[arg(long)]
+    pub keep: bool,
 }
 
 impl Default for LoadArgs {
@@ -133,6 +137,7 @@ impl Default for LoadArgs {
             prefix: DEFAULT_PREFIX.into(),
             out: None,
             tokens: None,
+            keep: false,
         }
     }
 }

@@ -46,7 +46,7 @@ pub const PRIMITIVE: &str = "load";
 /// One robot of the load.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RobotPlan {
-    /// Its id: `<prefix>-<cell>-<k>`.
+    /// Its id: `<prefix>.c<cell>.r<k>` ([`robot_id`]).
     pub id: String,
     /// Index of its cell.
     pub cell: usize,
@@ -59,6 +59,12 @@ pub struct RobotPlan {
 /// The name of cell `c`.
 pub fn cell_name(prefix: &str, c: usize) -> String {
     format!("{prefix}-{c}")
+}
+
+/// The id of robot `k` of cell `c`: `<prefix>.c<c>.r<k>` (`load.c3.r7`). The load's robots are its own, named
+/// apart from any real robot's (`.` is allowed in robot ids, `[A-Za-z0-9_.-]`), and deleted when it ends.
+pub fn robot_id(prefix: &str, c: usize, k: usize) -> String {
+    format!("{prefix}.c{c}.r{k}")
 }
 
 /// Cells for `robots` robots in cells of `cell_size`.
@@ -84,7 +90,7 @@ pub fn robots(count: usize, cell_size: usize, dim: usize, prefix: &str) -> Vec<R
             let angle = 2.0 * PI * k as f64 / mates as f64;
             let start = point(dim, angle, START_RADIUS, 0.0);
             let far = point(dim, angle + PI + SKEW, START_RADIUS, CLIMB);
-            RobotPlan { id: format!("{prefix}-{cell}-{k}"), cell, start: start.clone(), goals: [far, start] }
+            RobotPlan { id: robot_id(prefix, cell, k), cell, start: start.clone(), goals: [far, start] }
         })
         .collect()
 }
@@ -143,7 +149,7 @@ mod tests {
         assert_eq!(cell_count(25, 10), 3);
         let all = robots(25, 10, 3, "load");
         assert_eq!(all.len(), 25);
-        assert_eq!((all[24].id.as_str(), all[24].cell), ("load-2-4", 2));
+        assert_eq!((all[24].id.as_str(), all[24].cell), ("load.c2.r4", 2));
         for cell in 0..3 {
             let mates: Vec<&RobotPlan> = all.iter().filter(|r| r.cell == cell).collect();
             for (i, a) in mates.iter().enumerate() {

@@ -138,7 +138,9 @@ pub async fn run(args: &LoadArgs, server: &str, zenoh_connect: &[String]) -> Res
     run_with(args, server, zenoh_connect, &ConnectOptions::default()).await
 }
 
-/// [`run`] with TLS and credentials (`options`); with `--tokens`, each robot streams as its own identity.
+/// [`run`] with TLS and credentials (`options`); with `--tokens`, each robot streams as its own identity. Unless
+/// `--keep`, the robots' primitives and the cells' fixed obstacles are deleted at the end ([`clean_up`]), also
+/// when the run failed.
 pub async fn run_with(
     args: &LoadArgs,
     server: &str,
@@ -146,6 +148,39 @@ pub async fn run_with(
     options: &ConnectOptions,
 ) -> Result<LoadReport, SimError> {
     let p = args.validate()?;
+    let measured = measure(&p, server, zenoh_connect, options).await;
+    let cleaned = if args.keep { Ok(()) } else { clean_up(args, server, options).await };
+    // The run's own error first: a clean-up that failed after it says less.
+    let mut report = measured?;
+    if let Err(e) = cleaned {
+        report.errors.push(ErrorCount { message: format!("clean-up: {e}"), count: 1, robot: None });
+    }
+    if let Some(dir) = &args.out {
+        let json = serde_json::to_string_pretty(&report).unwrap_or_default();
+        std::fs::create_dir_all(dir).map_err(|source| SimError::Io { path: dir.clone(), source })?;
+        let path = dir.join("load.json");
+        std::fs::write(&path, json + "\n").map_err(|source| SimError::Io { path, source })?;
+    }
+    Ok(report)
+}
+
+/// Deletes what the load with `args` stored on the server at `server`: each robot's primitive and each cell's
+/// fixed obstacles (the robots and cells are the load's own, [`layout::robot_id`] and [`layout::cell_name`]).
+pub async fn clean_up(args: &LoadArgs, server: &str, options: &ConnectOptions) -> Result<(), SimError> {
+    let p = args.validate()?;
+    let client = DmpClient::connect_with(server, options).await?;
+    let cells: Vec<String> = (0..p.cells).map(|c| layout::cell_name(&args.prefix, c)).collect();
+    let robots = layout::robots(args.robots, args.cell_size, args.dim, &args.prefix);
+    setup::clean_up(&client, &cells, &robots).await
+}
+
+/// The run itself, its report not yet written.
+async fn measure(
+    p: &args::Params,
+    server: &str,
+    zenoh_connect: &[String],
+    options: &ConnectOptions,
+) -> Result<LoadReport, SimError> {
     let a = &p.args;
     let setup_started = Instant::now();
     let mut clients = Vec::with_capacity(p.connections);
@@ -171,7 +206,7 @@ pub async fn run_with(
     } else {
         None
     };
-    let setup_failed = setup::set_up(&p, &clients, &cells, &robots).await?;
+    let setup_failed = setup::set_up(p, &clients, &cells, &robots).await?;
     let setup_s = setup_started.elapsed().as_secs_f64();
 
     // The schedule, on both clocks.
@@ -193,7 +228,7 @@ pub async fn run_with(
         let start_at = begin + Duration::from_secs_f64(p.stagger_s * i as f64 / robots.len() as f64);
         let task = RobotTask {
             plan: r.clone(),
-            start: setup::start_request(&p, r, &cells[r.cell]),
+            start: setup::start_request(p, r, &cells[r.cell]),
             start_at,
             end_at: end,
             start_unix: unix_of(start_at),
@@ -332,12 +367,6 @@ pub async fn run_with(
         generator_cpu_percent: watched.own_cpu_percent(),
         errors: errors.sorted(),
     };
-    if let Some(dir) = &a.out {
-        let json = serde_json::to_string_pretty(&report).unwrap_or_default();
-        std::fs::create_dir_all(dir).map_err(|source| SimError::Io { path: dir.clone(), source })?;
-        let path = dir.join("load.json");
-        std::fs::write(&path, json + "\n").map_err(|source| SimError::Io { path, source })?;
-    }
     Ok(report)
 }
 

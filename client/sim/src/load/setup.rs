@@ -107,3 +107,48 @@ pub fn start_request(p: &Params, r: &RobotPlan, cell: &str) -> v1::ExecuteReques
         take_over: false,
     }
 }
+
+/// Deletes each robot's primitive and each cell's fixed obstacles, at most [`SETUP_CONCURRENCY`] calls at once; a
+/// robot or obstacle that is not there (never set up, or deleted already) is no error.
+pub async fn clean_up(client: &DmpClient, cells: &[String], robots: &[RobotPlan]) -> Result<(), SimError> {
+    let permits = Arc::new(Semaphore::new(SETUP_CONCURRENCY));
+    let mut calls = JoinSet::new();
+    for r in robots {
+        let (client, permits, id) = (client.clone(), permits.clone(), r.id.clone());
+        calls.spawn(async move {
+            let _permit = permits.acquire_owned().await;
+            let deleted = client.delete(&id, PRIMITIVE).await;
+            // A robot that was never set up has nothing to delete.
+            let deleted = match deleted {
+                Err(e) if e.is_not_found() => Ok(0),
+                other => other,
+            };
+            setup_call("deleting a primitive", std::future::ready(deleted)).await.map(drop)
+        });
+    }
+    for cell in cells {
+        let client = client.clone().with_cell(cell.clone());
+        let scene = setup_call("listing a cell's obstacles", client.list_obstacles()).await;
+        let scene = scene.map_err(SimError::protocol)?;
+        for k in 0..FIXED_OBSTACLES {
+            let id = layout::obstacle_id(k);
+            if scene.obstacles.iter().any(|o| o.id == id) {
+                let (client, permits) = (client.clone(), permits.clone());
+                calls.spawn(async move {
+                    let _permit = permits.acquire_owned().await;
+                    setup_call("deleting a fixed obstacle", client.delete_obstacle(&id)).await.map(drop)
+                });
+            }
+        }
+    }
+    let mut first_error = None;
+    while let Some(done) = calls.join_next().await {
+        let e = match done {
+            Ok(Ok(())) => continue,
+            Ok(Err(e)) => e,
+            Err(e) => format!("a clean-up task: {e}"),
+        };
+        first_error.get_or_insert(e.replacen("setup: ", "", 1));
+    }
+    first_error.map_or(Ok(()), |e| Err(SimError::protocol(e)))
+}

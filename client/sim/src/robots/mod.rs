@@ -73,6 +73,16 @@ pub fn learn_parameters(k: f64) -> v1::LearnParameters {
     v1::LearnParameters { n_basis: 50, k: vec![k], d: Vec::new(), alpha: 4.0 }
 }
 
+/// The namespace of the simulations' robots on the server: the Panda of `dmpctl sim panda` is `sim.panda`, never
+/// the quick start's `panda`, so a simulation neither reads nor bumps a real robot's primitives. `.` is allowed in
+/// robot ids (`[A-Za-z0-9_.-]`) and in no name of the simulations, so the prefix cannot be mistaken for part of one.
+pub const ROBOT_PREFIX: &str = "sim.";
+
+/// The id the server knows a simulated robot by: [`ROBOT_PREFIX`] and its local name (`panda` is `sim.panda`).
+pub fn server_robot(local: &str) -> String {
+    format!("{ROBOT_PREFIX}{local}")
+}
+
 /// Longest wait for any one answer of the server (a segment, a put).
 pub const STEP_TIMEOUT: Duration = Duration::from_secs(30);
 
@@ -87,6 +97,38 @@ pub enum SimName {
     Youbots,
     /// Two da Vinci PSMs on one 6-D phase: pick, hand over and place a ring among pegs, 3-D each at 1 kHz.
     Psm,
+}
+
+impl SimName {
+    /// Its name on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SimName::Panda => "panda",
+            SimName::YoubotPerception => "youbot-perception",
+            SimName::Youbots => "youbots",
+            SimName::Psm => "psm",
+        }
+    }
+
+    /// The robots it stores primitives for, as the server knows them (`sim.<name>`).
+    pub fn robot_ids(self) -> Vec<String> {
+        let local = match self {
+            SimName::Panda => panda::ROBOT_IDS,
+            SimName::YoubotPerception => &perception::ROBOT_IDS[..],
+            SimName::Youbots => youbots::ROBOT_IDS,
+            SimName::Psm => psm::ROBOT_IDS,
+        };
+        local.iter().map(|id| server_robot(id)).collect()
+    }
+
+    /// The obstacles it puts into the cell's scene (each run removes its own; [`clean_up`] removes what an
+    /// interrupted run left).
+    pub fn obstacle_ids(self) -> Vec<&'static str> {
+        match self {
+            SimName::YoubotPerception => perception::events().iter().map(|e| e.id).collect(),
+            _ => Vec::new(),
+        }
+    }
 }
 
 /// `dmpctl sim NAME [--server URL] [--realtime] [--tokens DIR] --out DIR`.
@@ -110,6 +152,10 @@ pub struct SimArgs {
     /// A collision is expected: it does not make the exit code 3 (the other problems still do).
     #[arg(long)]
     pub allow_collision: bool,
+    /// Keep the primitives the simulation stored (robots `sim.<name>`); by default they are deleted when it ends,
+    /// also after an error or Ctrl-C.
+    #[arg(long)]
+    pub keep: bool,
 }
 
 /// How a simulation runs.
@@ -126,8 +172,11 @@ pub struct SimOptions {
     /// A stock Zenoh configuration for the perception node (`--zenoh-config`; `zenoh_connect` still overrides its
     /// endpoints).
     pub zenoh_config: Option<PathBuf>,
-    /// Each robot's token, `<dir>/<robot>.token`, for its own stream (none: the client's credentials).
+    /// Each robot's token, `<dir>/<robot>.token` (`<robot>` as the server knows it: `sim.panda`), for its own
+    /// stream (none: the client's credentials).
     pub tokens: Option<PathBuf>,
+    /// Keep the primitives stored (else [`clean_up`] deletes them when the simulation ends, even on an error).
+    pub keep: bool,
 }
 
 impl SimOptions {
@@ -158,6 +207,7 @@ pub async fn run_sim(
         cell: cell.to_string(),
         zenoh_config: zenoh_config.map(Path::to_owned),
         tokens: args.tokens.clone(),
+        keep: args.keep,
     };
     run_with(server, connect, args.name, &options).await
 }
@@ -177,14 +227,40 @@ pub async fn run_with(
     let client = DmpClient::connect_with(url, connect).await?.with_cell(options.cell.as_str());
     std::fs::create_dir_all(&options.out)
         .map_err(|source| SimError::Io { path: options.out.clone(), source })?;
-    let report = match name {
-        SimName::Panda => panda::run(&client, options).await?,
-        SimName::YoubotPerception => perception::run(&client, options).await?,
-        SimName::Youbots => youbots::run(&client, options).await?,
-        SimName::Psm => psm::run(&client, options).await?,
+    let ran = match name {
+        SimName::Panda => panda::run(&client, options).await,
+        SimName::YoubotPerception => perception::run(&client, options).await,
+        SimName::Youbots => youbots::run(&client, options).await,
+        SimName::Psm => psm::run(&client, options).await,
     };
+    let cleaned = if options.keep { Ok(0) } else { clean_up(&client, name).await };
+    // The simulation's own error first: a clean-up that failed after it says less.
+    let mut report = ran?;
+    if let Err(e) = cleaned {
+        report
+            .notes
+            .push(format!("clean-up: the primitives of {} may be left: {e}", name.robot_ids().join(", ")));
+    }
     report.write(&options.out)?;
     Ok(report)
+}
+
+/// Deletes every primitive of the simulation's robots and the obstacles it may have left in `client`'s cell;
+/// returns how many primitive versions were deleted. Each robot's primitives are all the simulation's: its ids are
+/// its own ([`server_robot`]).
+pub async fn clean_up(client: &DmpClient, name: SimName) -> Result<u64, SimError> {
+    let mut deleted = 0;
+    for robot in name.robot_ids() {
+        deleted += within("clean-up", client.delete_robot_primitives(&robot)).await??;
+    }
+    let ids = name.obstacle_ids();
+    if !ids.is_empty() {
+        let scene = within("clean-up: scene", client.list_obstacles()).await??;
+        for o in scene.obstacles.iter().filter(|o| ids.contains(&o.id.as_str())) {
+            within("clean-up: obstacle", client.delete_obstacle(&o.id)).await??;
+        }
+    }
+    Ok(deleted)
 }
 
 /// `f`, failing after [`STEP_TIMEOUT`].

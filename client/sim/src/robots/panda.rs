@@ -36,7 +36,7 @@ use super::demonstration::min_jerk;
 use super::report::{Figure, SimReport, measure, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
-use super::{Method, SimOptions, avoidance, execute, free_plan, pacing, superquadric, within};
+use super::{Method, SimOptions, avoidance, execute, free_plan, pacing, server_robot, superquadric, within};
 use crate::error::SimError;
 
 /// Control period: 1 kHz.
@@ -71,6 +71,8 @@ const RED: [f64; 3] = [0.5, 0.0, 0.08];
 const GREEN: [f64; 3] = [0.55, 0.17, 0.08];
 
 const ROBOT: &str = "panda";
+/// The robots of this simulation (the server knows them as [`server_robot`] of these).
+pub const ROBOT_IDS: &[&str] = &[ROBOT];
 
 /// A z-axis cylinder's superquadric of exponents (1, 1, 2) (module documentation).
 fn peg(id: &str, center: &[f64], margin: f64) -> JsonObstacle {
@@ -103,7 +105,7 @@ async fn learn(
 ) -> Result<(), SimError> {
     let (t, rows) = min_jerk(start, goal, tau, 0.0, 0.01);
     let parameters = super::learn_parameters(3050.0);
-    within("learn", client.learn(ROBOT, name, &t, &rows, parameters)).await??;
+    within("learn", client.learn(&server_robot(ROBOT), name, &t, &rows, parameters)).await??;
     Ok(())
 }
 
@@ -122,7 +124,7 @@ struct Motion {
 impl Motion {
     fn spec(&self) -> v1::MotionSpec {
         v1::MotionSpec {
-            robot_id: ROBOT.into(),
+            robot_id: server_robot(ROBOT),
             primitive: self.primitive.into(),
             start: self.start.clone(),
             goal: self.goal.clone(),
@@ -143,7 +145,7 @@ impl Motion {
             max_duration_s: 4.0 * self.tau,
             ..Default::default()
         };
-        execute(&options.robot_client(client, ROBOT)?, request, options.realtime, |_| {}).await
+        execute(&options.robot_client(client, &server_robot(ROBOT))?, request, options.realtime, |_| {}).await
     }
 
     async fn record(

@@ -47,7 +47,7 @@ use super::ellipse_fit::Ellipse;
 use super::report::{Figure, SimReport, measure, position, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
-use super::{Method, SimOptions, avoidance, execute, free_plan, within};
+use super::{Method, SimOptions, avoidance, execute, free_plan, server_robot, within};
 use crate::error::SimError;
 
 /// Control period (and integration step): 1 kHz.
@@ -64,6 +64,8 @@ pub const TAU: f64 = ramped_duration(2.0, CRUISE_SPEED, RAMP_S);
 pub const ROBOT_RADIUS: f64 = 0.35;
 /// Half-sides of the youBot.
 pub const ROBOT_HALF: [f64; 2] = [0.29, 0.19];
+/// The robots of this simulation, one per potential (the server knows them as [`server_robot`] of these).
+pub const ROBOT_IDS: [&str; 2] = ["youbot-static", "youbot-dynamic"];
 /// Half-side of the unknown box.
 pub const BOX_HALF: f64 = 0.1;
 
@@ -242,11 +244,11 @@ async fn open_publisher(options: &SimOptions) -> Result<ObstaclePublisher, dmp_c
 pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     let (t, rows) = ramped_line(&START, &GOAL, TAU, RAMP_S, DT);
     let parameters = super::learn_parameters(STIFFNESS);
-    let robots = ["youbot-static", "youbot-dynamic"];
-    for robot in robots {
+    let robots = ROBOT_IDS.map(server_robot);
+    for robot in &robots {
         within("learn", client.learn(robot, "corridor", &t, &rows, parameters.clone())).await??;
     }
-    let as_robot = [options.robot_client(client, robots[0])?, options.robot_client(client, robots[1])?];
+    let as_robot = [options.robot_client(client, &robots[0])?, options.robot_client(client, &robots[1])?];
     let mut publisher = within("zenoh open", open_publisher(options)).await??;
     // A server that restarts or reconnects mid-run asks for the boxes it missed.
     within("zenoh queryable", publisher.serve_latest()).await??;
@@ -268,11 +270,11 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
                     }
                 };
                 tokio::join!(
-                    execute(&as_robot[0], request(robots[0], methods[0].1), true, |c| set(
+                    execute(&as_robot[0], request(&robots[0], methods[0].1), true, |c| set(
                         &tx0,
                         c.origin_unix()
                     )),
-                    execute(&as_robot[1], request(robots[1], methods[1].1), true, |c| set(
+                    execute(&as_robot[1], request(&robots[1], methods[1].1), true, |c| set(
                         &tx1,
                         c.origin_unix()
                     )),
@@ -322,7 +324,7 @@ async fn record(
     });
     report.metrics.insert(format!("{key}/max_abs_y_m"), all);
     report.metrics.insert(format!("{key}/max_abs_y_past_box_m"), past);
-    let free = free_plan(client, &spec("youbot-static", method), DT).await?;
+    let free = free_plan(client, &spec(&server_robot(ROBOT_IDS[0]), method), DT).await?;
     let mut planned: Vec<dmp::Obstacle> = walls(ROBOT_RADIUS)
         .iter()
         .map(JsonObstacle::to_engine)

@@ -65,7 +65,7 @@ use super::demonstration::min_jerk;
 use super::report::{CONTACT_M, Figure, Other, RobotReport, SimReport, measure, position, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
-use super::{Method, SimOptions, avoidance, execute_group, pacing, superquadric, within};
+use super::{Method, SimOptions, avoidance, execute_group, pacing, server_robot, superquadric, within};
 use crate::error::SimError;
 
 /// Control period: 1 kHz.
@@ -101,6 +101,8 @@ pub const ROBOT_ETA: f64 = 2.0;
 
 const PSM1: &str = "psm1";
 const PSM2: &str = "psm2";
+/// The robots of this simulation (the server knows them as [`server_robot`] of these).
+pub const ROBOT_IDS: &[&str] = &[PSM1, PSM2];
 const HOME1: [f64; 3] = [0.07, 0.02, 0.05];
 const HOME2: [f64; 3] = [-0.06, 0.04, 0.05];
 const STANDBY2: [f64; 3] = [-0.02, 0.025, 0.03];
@@ -246,7 +248,7 @@ impl Stage {
             .zip(starts)
             .map(|(leg, start)| v1::GroupMember {
                 motion: Some(v1::MotionSpec {
-                    robot_id: leg.robot.into(),
+                    robot_id: server_robot(leg.robot),
                     primitive: self.key.into(),
                     start: start.clone(),
                     goal: leg.goal.clone(),
@@ -323,8 +325,11 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     for stage in &stages {
         for leg in &stage.legs {
             let (t, rows) = demonstration(&leg.start, &leg.goal);
-            within("learn", client.learn(leg.robot, stage.key, &t, &rows, super::learn_parameters(3050.0)))
-                .await??;
+            within(
+                "learn",
+                client.learn(&server_robot(leg.robot), stage.key, &t, &rows, super::learn_parameters(3050.0)),
+            )
+            .await??;
         }
     }
     let mut report = SimReport::new("psm", options.realtime);

@@ -14,6 +14,8 @@
 //! `|x_{k+1} - x_k - v_k dt| <= CONT_FACTOR a dt^2 + CONT_ABS` and `|v_{k+1} - v_k| <= CONT_FACTOR a dt + CONT_ABS`.
 //! A jump of a superseding segment that does not continue from the current state breaks one of the two.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use dmp::Trajectory;
 use dmp_client::setpoints::Setpoints;
 use dmp_proto::v1;
@@ -24,6 +26,14 @@ use crate::error::SimError;
 pub const CONT_FACTOR: f64 = 1.5;
 /// Absolute slack of the continuity bounds (rounding).
 pub const CONT_ABS: f64 = 1e-9;
+
+/// Segments read by every simulated robot of this process so far: what `dmpctl sim` shows as its progress.
+static SEGMENTS_READ: AtomicU64 = AtomicU64::new(0);
+
+/// Segments read by every simulated robot of this process so far.
+pub fn segments_read() -> u64 {
+    SEGMENTS_READ.load(Ordering::Relaxed)
+}
 
 /// What one robot executed.
 #[derive(Debug, Clone)]
@@ -104,6 +114,7 @@ impl Controller {
     /// Reads one segment (arriving now).
     pub fn push(&mut self, seg: &v1::Segment) -> Result<(), SimError> {
         self.segments += 1;
+        SEGMENTS_READ.fetch_add(1, Ordering::Relaxed);
         self.status = v1::SegmentStatus::try_from(seg.status).unwrap_or(v1::SegmentStatus::Unspecified);
         let now = if self.realtime && seg.start_unix_s > 0.0 {
             let origin = *self.origin_unix.get_or_insert(seg.start_unix_s - seg.start_time);

@@ -62,7 +62,7 @@ use super::demonstration::{ramped_duration, ramped_line};
 use super::report::{Figure, Other, SimReport, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
-use super::{Method, SimOptions, avoidance, execute_group, free_plan, pacing, within};
+use super::{Method, SimOptions, avoidance, execute_group, free_plan, pacing, server_robot, within};
 use crate::error::SimError;
 
 /// Control period (and integration step): 1 kHz.
@@ -100,10 +100,13 @@ struct Bot {
     goal: [f64; 2],
 }
 
+/// The robots of this simulation (the server knows them as [`server_robot`] of these).
+pub const ROBOT_IDS: &[&str] = &["youbot1", "youbot2", "youbot3"];
+
 const BOTS: [Bot; 3] = [
-    Bot { id: "youbot1", start: [1.06, 1.56], goal: [4.34, 2.44] },
-    Bot { id: "youbot2", start: [4.26, 2.75], goal: [0.98, 1.87] },
-    Bot { id: "youbot3", start: [5.2, 0.9], goal: [4.3, 3.3] },
+    Bot { id: ROBOT_IDS[0], start: [1.06, 1.56], goal: [4.34, 2.44] },
+    Bot { id: ROBOT_IDS[1], start: [4.26, 2.75], goal: [0.98, 1.87] },
+    Bot { id: ROBOT_IDS[2], start: [5.2, 0.9], goal: [4.3, 3.3] },
 ];
 
 /// A box on the floor.
@@ -210,18 +213,19 @@ async fn store_primitives(client: &DmpClient) -> Result<(f64, f64), SimError> {
             b.goal.to_vec(),
         )
         .map_err(|e| SimError::argument("primitive", e.to_string()))?;
-        within("put", client.put_primitive(b.id, Kind::Line.name(), &line)).await??;
+        within("put", client.put_primitive(&server_robot(b.id), Kind::Line.name(), &line)).await??;
         let (t, rows) = ramped_line(&b.start, &b.goal, duration, RAMP_S, DT);
         let parameters =
             v1::LearnParameters { n_basis: N_BASIS as u32, k: vec![K], d: Vec::new(), alpha: ALPHA };
-        within("learn", client.learn(b.id, Kind::ConstantSpeed.name(), &t, &rows, parameters)).await??;
+        within("learn", client.learn(&server_robot(b.id), Kind::ConstantSpeed.name(), &t, &rows, parameters))
+            .await??;
     }
     Ok((tau_line, duration))
 }
 
 fn spec(b: &Bot, kind: Kind, method: Method, tau: f64) -> v1::MotionSpec {
     v1::MotionSpec {
-        robot_id: b.id.into(),
+        robot_id: server_robot(b.id),
         primitive: kind.name().into(),
         start: b.start.to_vec(),
         goal: b.goal.to_vec(),
