@@ -134,8 +134,8 @@ impl Execution {
         if self.braking {
             let speed = xd.iter().map(|v| v * v).sum::<f64>().sqrt();
             if speed <= ARRIVED_SPEED {
-                // At rest: the DMP goes on from here.
-                xd.fill(0.0);
+                // At rest, within rounding: the DMP goes on from here. The point keeps the velocity of the
+                // positions handed out (zeroing it would tell the robot it stands while they still creep).
                 self.braking = false;
             }
         }

@@ -245,13 +245,17 @@ pub async fn run_with(
     Ok(report)
 }
 
-/// Deletes every primitive of the simulation's robots and the obstacles it may have left in `client`'s cell;
-/// returns how many primitive versions were deleted. Each robot's primitives are all the simulation's: its ids are
+/// Deletes every primitive and the record of the simulation's robots and the obstacles it may have left in
+/// `client`'s cell; returns how many primitive versions were deleted. Each robot's primitives are all the simulation's: its ids are
 /// its own ([`server_robot`]).
 pub async fn clean_up(client: &DmpClient, name: SimName) -> Result<u64, SimError> {
     let mut deleted = 0;
     for robot in name.robot_ids() {
         deleted += within("clean-up", client.delete_robot_primitives(&robot)).await??;
+        match within("clean-up: record", client.delete_robot(&robot)).await? {
+            Err(e) if !e.is_not_found() => return Err(e.into()),
+            _ => {}
+        }
     }
     let ids = name.obstacle_ids();
     if !ids.is_empty() {

@@ -191,7 +191,7 @@ impl Motion {
 pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     learn(client, "move-to-ring", &HOME, &RING, TAU_REACH).await?;
     learn(client, "carry", &RING, &PLACE, TAU_CARRY).await?;
-    put_profile(client, ROBOT, &PROFILE).await?;
+    put_profile(client, &server_robot(ROBOT), &PROFILE).await?;
     let dynamic = Method::Dynamic { lambda: 10.0, beta: 2.0, eta: 2.0 };
     let to_ring = Motion {
         key: "move-to-ring",

@@ -44,6 +44,7 @@ use tokio::sync::watch;
 
 use super::demonstration::{ramped_duration, ramped_line, ramped_time_at};
 use super::ellipse_fit::Ellipse;
+use super::profile::put_profile;
 use super::report::{Figure, SimReport, measure, position, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
@@ -52,6 +53,8 @@ use crate::error::SimError;
 
 /// Control period (and integration step): 1 kHz.
 pub const DT: f64 = 1e-3;
+/// The limit profile of the youBot base, in each robot's record.
+pub const PROFILE: dmp::Limits = dmp::Limits::YOUBOT_BASE;
 /// Cruise speed of the drive, m/s (the youBot's top speed is 0.8 m/s).
 pub const CRUISE_SPEED: f64 = 0.4;
 /// Duration of each ramp of the demonstration, seconds.
@@ -247,6 +250,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     let robots = ROBOT_IDS.map(server_robot);
     for robot in &robots {
         within("learn", client.learn(robot, "corridor", &t, &rows, parameters.clone())).await??;
+        put_profile(client, robot, &PROFILE).await?;
     }
     let as_robot = [options.robot_client(client, &robots[0])?, options.robot_client(client, &robots[1])?];
     let mut publisher = within("zenoh open", open_publisher(options)).await??;
@@ -315,7 +319,7 @@ async fn record(
     );
     let body = robot_body("youbot", Solid::rectangle(ROBOT_HALF[0], ROBOT_HALF[1]));
     let key = format!("youbot/{}-{name}", event.key);
-    report.add(&key, measure(exec, DT, &GOAL, None, &body, &world, &[]));
+    report.add(&key, measure(exec, DT, &GOAL, Some(&PROFILE), &body, &world, &[]));
     // How far the path left the straight line `y = 0`: over the whole run, and once past the box's centre.
     let traj = &exec.traj;
     let ys = (0..traj.len()).map(|k| (position(traj, k)[0], position(traj, k)[1].abs()));

@@ -62,6 +62,7 @@ use dmp_proto::v1;
 
 use super::clearance::{closest_approach, distance, side_by_side};
 use super::demonstration::min_jerk;
+use super::profile::put_profile;
 use super::report::{CONTACT_M, Figure, Other, RobotReport, SimReport, measure, position, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
@@ -70,6 +71,8 @@ use crate::error::SimError;
 
 /// Control period: 1 kHz.
 pub const DT: f64 = 1e-3;
+/// The limit profile of a PSM, in each arm's record.
+pub const PROFILE: dmp::Limits = dmp::Limits::DVRK_PSM;
 /// Duration of every demonstration (and time scale of every stage), seconds.
 pub const TAU: f64 = 1.5;
 /// Radius of the jaws' cylinder.
@@ -306,7 +309,7 @@ fn measure_leg(stage: &Stage, i: usize, runs: &[Executed; 2]) -> RobotReport {
     } else {
         jaws(leg.robot)
     };
-    let mut r = measure(&runs[i], DT, &leg.goal, None, &body, &world(), &[]);
+    let mut r = measure(&runs[i], DT, &leg.goal, Some(&PROFILE), &body, &world(), &[]);
     let other_jaws = jaws(other.robot);
     let with_arm = Other { id: other.robot, traj: &runs[1 - i].traj, body: &other_jaws };
     let arms = measure(&runs[i], DT, &leg.goal, None, &jaws(leg.robot), &[], &[with_arm]);
@@ -331,6 +334,14 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
             )
             .await??;
         }
+    }
+    for robot in stages
+        .iter()
+        .flat_map(|s| &s.legs)
+        .map(|l| server_robot(l.robot))
+        .collect::<std::collections::BTreeSet<_>>()
+    {
+        put_profile(client, &robot, &PROFILE).await?;
     }
     let mut report = SimReport::new("psm", options.realtime);
     report.notes.push(

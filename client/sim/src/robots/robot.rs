@@ -10,9 +10,11 @@
 //!
 //! # Continuity
 //! Between two executed rows `k` and `k + 1` (times `dt` apart), per coordinate, with `a` the largest acceleration
-//! magnitude of rows `k - 1 ..= k + 2`:
-//! `|x_{k+1} - x_k - v_k dt| <= CONT_FACTOR a dt^2 + CONT_ABS` and `|v_{k+1} - v_k| <= CONT_FACTOR a dt + CONT_ABS`.
-//! A jump of a superseding segment that does not continue from the current state breaks one of the two.
+//! magnitude of rows `k - 1 ..= k + 2` and `Δa = |a_{k+1} - a_k|` (what the jerk changes in a step):
+//! `|x_{k+1} - x_k - v_k dt| <= (CONT_FACTOR a + Δa) dt^2 + CONT_ABS` and
+//! `|v_{k+1} - v_k| <= (CONT_FACTOR a + Δa) dt + CONT_ABS`. A jump of a superseding segment that does not continue
+//! from the current state breaks one of the two; a motion whose acceleration crosses zero at a high jerk (a
+//! jerk-limited one) does not, while the jerk itself is checked against the robot's profile.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -217,8 +219,10 @@ pub fn check(traj: &Trajectory, dt: f64) -> Checks {
             let amax = (lo..=hi).map(|j| traj.xdd[j * d + i].abs()).fold(0.0, f64::max);
             let (x0, x1) = (traj.x[k * d + i], traj.x[(k + 1) * d + i]);
             let (v0, v1) = (traj.xd[k * d + i], traj.xd[(k + 1) * d + i]);
-            bad |= exceeds((x1 - x0 - v0 * h).abs(), CONT_FACTOR * amax * h * h + CONT_ABS);
-            bad |= exceeds((v1 - v0).abs(), CONT_FACTOR * amax * h + CONT_ABS);
+            let da = (traj.xdd[(k + 1) * d + i] - traj.xdd[k * d + i]).abs();
+            let slack = CONT_FACTOR * amax + da;
+            bad |= exceeds((x1 - x0 - v0 * h).abs(), slack * h * h + CONT_ABS);
+            bad |= exceeds((v1 - v0).abs(), slack * h + CONT_ABS);
         }
         if bad && c.first_discontinuity_s.is_none() {
             c.first_discontinuity_s = Some(traj.t[k]);

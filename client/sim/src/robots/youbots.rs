@@ -59,6 +59,7 @@ use dmp_proto::v1;
 
 use super::clearance::{closest_approach, measure_fast, side_by_side};
 use super::demonstration::{ramped_duration, ramped_line};
+use super::profile::put_profile;
 use super::report::{Figure, Other, SimReport, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
@@ -99,6 +100,9 @@ struct Bot {
     start: [f64; 2],
     goal: [f64; 2],
 }
+
+/// The limit profile of every youBot base, in its robot record.
+pub const PROFILE: dmp::Limits = dmp::Limits::YOUBOT_BASE;
 
 /// The robots of this simulation (the server knows them as [`server_robot`] of these).
 pub const ROBOT_IDS: &[&str] = &["youbot1", "youbot2", "youbot3"];
@@ -219,6 +223,7 @@ async fn store_primitives(client: &DmpClient) -> Result<(f64, f64), SimError> {
             v1::LearnParameters { n_basis: N_BASIS as u32, k: vec![K], d: Vec::new(), alpha: ALPHA };
         within("learn", client.learn(&server_robot(b.id), Kind::ConstantSpeed.name(), &t, &rows, parameters))
             .await??;
+        put_profile(client, &server_robot(b.id), &PROFILE).await?;
     }
     Ok((tau_line, duration))
 }
@@ -270,7 +275,7 @@ async fn run_one(
             .collect();
         report.add(
             &format!("{}/{key}", b.id),
-            measure_fast(exec, DT, &b.goal, None, &bodies[i], &world, &others),
+            measure_fast(exec, DT, &b.goal, Some(&PROFILE), &bodies[i], &world, &others),
         );
     }
     let executed: Vec<&Trajectory> = runs.iter().map(|r| &r.traj).collect();
