@@ -199,6 +199,22 @@ impl PrimitiveServiceImpl {
         Ok(record)
     }
 
+    /// A listing's page: where it starts (after the `token`, a name, checked; empty: from the start) and how many
+    /// entries it holds (`size`, 0 for the default, within the server's limit).
+    fn page(&self, token: String, size: u32) -> Result<(Option<String>, usize), ServerError> {
+        let after = (!token.is_empty()).then_some(token);
+        if let Some(token) = &after {
+            check_name("page_token", token)?;
+        }
+        let limits = &self.state.config.limits;
+        let page_size = match size as usize {
+            0 => limits.list_page_size,
+            n => n,
+        }
+        .clamp(1, limits.max_list_page_size.max(1));
+        Ok((after, page_size))
+    }
+
     async fn handle_list(
         &self,
         caller: &Caller,
@@ -207,16 +223,7 @@ impl PrimitiveServiceImpl {
         check_name("robot_id", &req.robot_id)?;
         caller.check(&Action::ReadPrimitive { robot: &req.robot_id })?;
         // The token is the last name of the previous page.
-        let after = (!req.page_token.is_empty()).then_some(req.page_token);
-        if let Some(token) = &after {
-            check_name("page_token", token)?;
-        }
-        let limits = &self.state.config.limits;
-        let page_size = match req.page_size as usize {
-            0 => limits.list_page_size,
-            n => n,
-        }
-        .clamp(1, limits.max_list_page_size.max(1));
+        let (after, page_size) = self.page(req.page_token, req.page_size)?;
         let store = self.state.store.clone();
         let robot_id = req.robot_id.clone();
         let (records, next) =
@@ -231,16 +238,7 @@ impl PrimitiveServiceImpl {
         req: v1::ListRobotsRequest,
     ) -> Result<v1::ListRobotsResponse, ServerError> {
         // The token is the last robot of the previous page.
-        let after = (!req.page_token.is_empty()).then_some(req.page_token);
-        if let Some(token) = &after {
-            check_name("page_token", token)?;
-        }
-        let limits = &self.state.config.limits;
-        let page_size = match req.page_size as usize {
-            0 => limits.list_page_size,
-            n => n,
-        }
-        .clamp(1, limits.max_list_page_size.max(1));
+        let (after, page_size) = self.page(req.page_token, req.page_size)?;
         let store = self.state.store.clone();
         // Only the robots whose primitives the caller may read: the others are not even named.
         let reader = caller.clone();
