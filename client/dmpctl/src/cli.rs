@@ -16,6 +16,7 @@ use crate::outputs::to_json;
 use crate::place::resolve_place;
 use crate::progress::Progress;
 use crate::robot_commands;
+pub use crate::robot_commands::RobotCommand;
 use crate::scenario_file::load_scenario;
 use crate::scenario_through_server::{self, robot_ids, run_scenario_through_server};
 use crate::server_commands::{self, ZenohArgs};
@@ -200,37 +201,6 @@ pub enum Via {
     Grpc,
     /// A put or delete on `dmp/<cell>/obstacles/<id>`.
     Zenoh,
-}
-
-/// `dmpctl robot ...`
-#[derive(Debug, Subcommand)]
-pub enum RobotCommand {
-    /// Store the record of robot ID (replacing the one before), and print it as stored.
-    Put {
-        /// The robot.
-        id: String,
-        /// Its limits: a profile (`panda`, `psm`, `youbot`) or a JSON file of the six fields of `Limits`
-        /// (`max_speed`, `max_acceleration`, `max_jerk`, `max_angular_speed`, ...; a field left out is no limit).
-        #[arg(long)]
-        limits: Option<String>,
-        /// Its footprint: the semi-axes of an ellipsoid, metres, e.g. `0.4,0.3`.
-        #[arg(long, allow_hyphen_values = true)]
-        footprint: Option<Vector>,
-        /// The tool it holds in its pose runs: a JSON file `{"semi_axes": [...], "exponents": [...], "offset":
-        /// [...], "axis": true, "control_points": 25}`.
-        #[arg(long)]
-        tool: Option<PathBuf>,
-    },
-    /// The record of robot ID, as JSON.
-    Show {
-        /// The robot.
-        id: String,
-    },
-    /// Delete the record of robot ID (its primitives stay).
-    Delete {
-        /// The robot.
-        id: String,
-    },
 }
 
 /// `dmpctl scene ...`

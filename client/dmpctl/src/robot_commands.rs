@@ -1,7 +1,7 @@
 //! `dmpctl robot put | show | delete`: a robot's record on the server (its limits, footprint and tool), the
 //! defaults of its motion requests.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use dmp::Limits;
 use dmp_client::grpc::DmpClient;
@@ -10,8 +10,42 @@ use dmp_proto::v1;
 use serde::Deserialize;
 use serde_json::{Value, json};
 
+use clap::Subcommand;
+
+use crate::cli::Vector;
 use crate::error::DmpctlError;
 use crate::outputs::to_json;
+
+/// `dmpctl robot ...`
+#[derive(Debug, Subcommand)]
+pub enum RobotCommand {
+    /// Store the record of robot ID (replacing the one before), and print it as stored.
+    Put {
+        /// The robot.
+        id: String,
+        /// Its limits: a profile (`panda`, `psm`, `youbot`) or a JSON file of the six fields of `Limits`
+        /// (`max_speed`, `max_acceleration`, `max_jerk`, `max_angular_speed`, ...; a field left out is no limit).
+        #[arg(long)]
+        limits: Option<String>,
+        /// Its footprint: the semi-axes of an ellipsoid, metres, e.g. `0.4,0.3`.
+        #[arg(long, allow_hyphen_values = true)]
+        footprint: Option<Vector>,
+        /// The tool it holds in its pose runs: a JSON file `{"semi_axes": [...], "exponents": [...], "offset":
+        /// [...], "axis": true, "control_points": 25}`.
+        #[arg(long)]
+        tool: Option<PathBuf>,
+    },
+    /// The record of robot ID, as JSON.
+    Show {
+        /// The robot.
+        id: String,
+    },
+    /// Delete the record of robot ID (its primitives stay).
+    Delete {
+        /// The robot.
+        id: String,
+    },
+}
 
 /// `--limits`: a profile name (`panda`, `psm`, `youbot`, or `dvrk_psm`, `youbot_base`) or a JSON file of the six
 /// fields of `Limits` (`{"max_speed": 0.5, "max_jerk": 10}`; a field left out is 0, no limit).

@@ -335,13 +335,8 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
             .await??;
         }
     }
-    for robot in stages
-        .iter()
-        .flat_map(|s| &s.legs)
-        .map(|l| server_robot(l.robot))
-        .collect::<std::collections::BTreeSet<_>>()
-    {
-        put_profile(client, &robot, &PROFILE).await?;
+    for robot in ROBOT_IDS {
+        put_profile(client, &server_robot(robot), &PROFILE).await?;
     }
     let mut report = SimReport::new("psm", options.realtime);
     report.notes.push(
