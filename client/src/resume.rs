@@ -3,6 +3,9 @@
 //! server again through Zenoh ([`crate::discovery::resolve_cell`]), opens a new session there with the same
 //! motion, and goes on from the robot's last commanded state.
 //!
+//! A server that freezes or is cut off without closing its connection is noticed when no segment came for
+//! [`ResumeOptions::stall_timeout`], and its cells fail over once Zenoh's lease expires (`deploy/zenoh-lease.json5`).
+//!
 //! **Continuity.** The new session starts where the last setpoint received was and as fast
 //! (`MotionSpec.start`, `MotionSpec.start_velocity`), and its first `state` message reports that state, so that
 //! the cell sees the robot at once. Its segments are shifted onto the first session's timeline: their run times
@@ -12,7 +15,7 @@
 //! `tau` set through this session). A pose run's orientation resumes from rest; groups are not resumed.
 //!
 //! **Bounds.** At most [`ResumeOptions::max_attempts`] attempts within [`ResumeOptions::max_total`] for one
-//! resumption, waiting [`ResumeOptions::retry_delay`] (doubling, up to 8 times as long) between attempts; then the
+//! resumption, waiting [`ResumeOptions::retry_delay`] (doubling, up to 16 times as long) between attempts; then the
 //! stream ends with [`ClientError::Resume`], naming the attempts, the time spent and the last failure. Bad input,
 //! a denied permission or a robot taken over by another stream end it at once, as they would a plain session.
 
@@ -34,22 +37,26 @@ pub struct ResumeOptions {
     pub max_attempts: u32,
     /// The longest one resumption may take, all attempts together.
     pub max_total: Duration,
-    /// The wait after a failed attempt, doubled after each up to 8 times as long.
+    /// The wait after a failed attempt, doubled after each up to 16 times as long.
     pub retry_delay: Duration,
     /// How long each resolution waits for the servers' answers.
     pub resolve_timeout: Duration,
     /// How to connect to a server (TLS, token); its timeout bounds each connection.
     pub connect: ConnectOptions,
+    /// No segment for this long: the server is taken as gone (frozen, or cut off without its connection
+    /// closing) and the session resumes. None: wait as long as the connection lasts (HTTP/2 keep-alive).
+    pub stall_timeout: Option<Duration>,
 }
 
 impl Default for ResumeOptions {
     fn default() -> Self {
         Self {
-            max_attempts: 20,
+            max_attempts: 50,
             max_total: Duration::from_secs(10),
-            retry_delay: Duration::from_millis(20),
+            retry_delay: Duration::from_millis(10),
             resolve_timeout: Duration::from_millis(500),
             connect: ConnectOptions { timeout: Duration::from_secs(2), ..Default::default() },
+            stall_timeout: Some(Duration::from_millis(500)),
         }
     }
 }
@@ -152,7 +159,18 @@ impl ResumableSession {
     /// cannot mend ends the stream with its error.
     pub async fn next_segment(&mut self) -> Option<Result<v1::Segment, ClientError>> {
         loop {
-            match self.session.next_segment().await {
+            let next = match self.options.stall_timeout {
+                Some(stall) => {
+                    tokio::time::timeout(stall, self.session.next_segment()).await.unwrap_or_else(|_| {
+                        Some(Err(ClientError::Closed(format!(
+                            "the session on server `{}` (no segment for {stall:?})",
+                            self.server.server_id
+                        ))))
+                    })
+                }
+                None => self.session.next_segment().await,
+            };
+            match next {
                 Some(Ok(seg)) => return Some(Ok(self.on_timeline(seg))),
                 Some(Err(e)) if retryable(&e) => {
                     if let Err(e) = self.resume().await {
@@ -185,6 +203,8 @@ impl ResumableSession {
     async fn resume(&mut self) -> Result<(), ClientError> {
         let from = self.last.clone();
         let mut request = self.request.clone();
+        // The robot may still be held by the stream given up on (a server that only seemed gone).
+        request.take_over = true;
         if let (Some(m), Some(p)) = (request.motion.as_mut(), &from) {
             m.start = p.position.clone();
             m.start_velocity = p.velocity.clone();
@@ -264,7 +284,7 @@ async fn attempts(
             });
         }
         tokio::time::sleep(delay).await;
-        delay = (delay * 2).min(options.retry_delay * 8);
+        delay = (delay * 2).min(options.retry_delay * 16);
     }
 }
 

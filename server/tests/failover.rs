@@ -81,6 +81,13 @@ impl Server {
         self.child = Some(child);
     }
 
+    /// SIGSTOP: the process freezes, its connections stay open (a host that hangs, or is cut off).
+    fn freeze(&self) {
+        let pid = self.child.as_ref().expect("running").id().to_string();
+        let stopped = Command::new("kill").args(["-STOP", &pid]).status().unwrap();
+        assert!(stopped.success());
+    }
+
     /// SIGKILL, and reaped.
     fn kill(&mut self) {
         if let Some(mut c) = self.child.take() {
@@ -242,6 +249,12 @@ fn request() -> v1::ExecuteRequest {
 struct Robot {
     session: ResumableSession,
     setpoints: Setpoints,
+    /// The wall time (Unix seconds) of the last setpoint received.
+    last_due: f64,
+}
+
+fn unix_now() -> f64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs_f64()
 }
 
 impl Robot {
@@ -249,6 +262,8 @@ impl Robot {
     async fn read(&mut self) -> v1::Segment {
         let seg = within("a segment", self.session.next_segment()).await.expect("the run goes on").unwrap();
         self.setpoints.push(&seg).unwrap();
+        let n = seg.positions.len() / seg.dim.max(1) as usize;
+        self.last_due = seg.start_unix_s + n.saturating_sub(1) as f64 * seg.dt;
         seg
     }
 
@@ -258,12 +273,14 @@ impl Robot {
         while self.read().await.start_time < until {}
     }
 
-    /// Reads until the session has resumed `n` times in all; the time until its first segment after that.
-    async fn until_resumed(&mut self, n: u32) -> Instant {
+    /// Reads until the session has resumed `n` times in all; when its first segment after that came, and how long
+    /// the robot still had setpoints of the stream before then (negative: it waited that long).
+    async fn until_resumed(&mut self, n: u32) -> (Instant, f64) {
         loop {
+            let due = self.last_due;
             self.read().await;
             if self.session.resumes() >= n {
-                return Instant::now();
+                return (Instant::now(), due - unix_now());
             }
         }
     }
@@ -294,17 +311,31 @@ fn assert_continuous(setpoints: &Setpoints) {
 
 /// Kills the server of cell a (s1) while the robot streams, and returns the time from the kill to the first segment
 /// from the survivor, checking that the one survivor rendezvous hashing picks, and only it, serves the cell.
-async fn kill_a(plant: &mut Plant, robot: &mut Robot) -> (Duration, String) {
+async fn kill_a(plant: &mut Plant, robot: &mut Robot) -> (Duration, f64, String) {
     let resumes = robot.session.resumes();
     robot.read_for(0.2).await;
     assert_eq!(robot.session.server().server_id, "s1");
     let killed = Instant::now();
     plant.servers[0].kill();
-    let first = robot.until_resumed(resumes + 1).await;
+    let (first, margin) = robot.until_resumed(resumes + 1).await;
     let taker = rendezvous("a", ["s2", "s3"]).unwrap().to_owned();
     assert_eq!(robot.session.server().server_id, taker, "the survivor of highest weight took cell a");
     assert_eq!(plant.announcing("a").await, BTreeSet::from([taker.clone()]), "one server serves cell a");
-    (first - killed, taker)
+    (first - killed, margin, taker)
+}
+
+/// Freezes the server of cell a (s1) while the robot streams, and returns the time from the freeze to the first
+/// segment from the survivor; then kills it.
+async fn freeze_a(plant: &mut Plant, robot: &mut Robot) -> Duration {
+    let resumes = robot.session.resumes();
+    robot.read_for(0.2).await;
+    assert_eq!(robot.session.server().server_id, "s1");
+    let frozen = Instant::now();
+    plant.servers[0].freeze();
+    let (first, _) = robot.until_resumed(resumes + 1).await;
+    assert_eq!(robot.session.server().server_id, rendezvous("a", ["s2", "s3"]).unwrap());
+    plant.servers[0].kill();
+    first - frozen
 }
 
 /// Restarts s1 and waits until the robot is back on it; the time from the restart to the first segment from s1.
@@ -312,7 +343,7 @@ async fn restart_a(plant: &mut Plant, robot: &mut Robot) -> Duration {
     let resumes = robot.session.resumes();
     let restarted = Instant::now();
     plant.servers[0].spawn();
-    let first = robot.until_resumed(resumes + 1).await;
+    let (first, _) = robot.until_resumed(resumes + 1).await;
     assert_eq!(robot.session.server().server_id, "s1", "cell a went back to its server");
     first - restarted
 }
@@ -333,14 +364,14 @@ async fn setup() -> (Plant, Robot) {
         .await
         .unwrap();
     assert_eq!(session.server().server_id, "s1");
-    (plant, Robot { session, setpoints: Setpoints::new() })
+    (plant, Robot { session, setpoints: Setpoints::new(), last_due: 0.0 })
 }
 
 #[tokio::test(flavor = "multi_thread")]
 async fn a_killed_servers_robot_resumes_on_a_survivor_and_comes_back_with_its_cell() {
     let (mut plant, mut robot) = setup().await;
-    let (gap, taker) = kill_a(&mut plant, &mut robot).await;
-    eprintln!("kill -9 to the first segment from the survivor: {gap:?}");
+    let (gap, margin, taker) = kill_a(&mut plant, &mut robot).await;
+    eprintln!("kill -9 to the first segment from the survivor: {gap:?}; setpoints left then: {margin:.4} s");
     robot.read_for(0.3).await;
 
     // Learned while s1 is down: s1 catches up when it comes back.
@@ -362,16 +393,41 @@ async fn a_killed_servers_robot_resumes_on_a_survivor_and_comes_back_with_its_ce
     plant.close().await;
 }
 
+#[tokio::test(flavor = "multi_thread")]
+async fn a_frozen_servers_robot_resumes_on_a_survivor_once_the_lease_expires() {
+    let (mut plant, mut robot) = setup().await;
+    let gap = freeze_a(&mut plant, &mut robot).await;
+    eprintln!("SIGSTOP to the first segment from the survivor: {gap:?}");
+    // The lease (1 s) bounds it from below: the router declares the frozen server gone only then.
+    assert!(gap > Duration::from_millis(500) && gap < Duration::from_secs(5), "{gap:?}");
+    robot.read_for(0.3).await;
+    restart_a(&mut plant, &mut robot).await;
+    robot.read_for(0.3).await;
+    assert_continuous(&robot.setpoints);
+    within("stop", robot.session.stop()).await.unwrap();
+    plant.close().await;
+}
+
 /// The figure of BENCHMARKS.md: `cargo test -p dmp-server --test failover -- --ignored --nocapture`.
 #[tokio::test(flavor = "multi_thread")]
 #[ignore = "a measurement: run it with --ignored --nocapture"]
 async fn measure_the_fail_over_gap() {
     let (mut plant, mut robot) = setup().await;
-    let (mut gaps, mut backs) = (Vec::new(), Vec::new());
+    let (mut gaps, mut backs, mut frozen, mut margins) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for _ in 0..9 {
-        gaps.push(kill_a(&mut plant, &mut robot).await.0);
+        let (gap, margin, _) = kill_a(&mut plant, &mut robot).await;
+        gaps.push(gap);
+        margins.push(Duration::from_secs_f64(margin.max(0.0)));
+        if margin < 0.0 {
+            println!("the robot ran out of setpoints for {:.1} ms", -margin * 1e3);
+        }
         robot.read_for(0.2).await;
         backs.push(restart_a(&mut plant, &mut robot).await);
+    }
+    for _ in 0..5 {
+        frozen.push(freeze_a(&mut plant, &mut robot).await);
+        robot.read_for(0.2).await;
+        restart_a(&mut plant, &mut robot).await;
     }
     assert_continuous(&robot.setpoints);
     let summary = |v: &mut Vec<Duration>| {
@@ -380,6 +436,11 @@ async fn measure_the_fail_over_gap() {
     };
     println!("kill -9 to the first segment from the survivor: {}", summary(&mut gaps));
     println!("restart to the first segment from the server back: {}", summary(&mut backs));
+    println!("SIGSTOP to the first segment from the survivor: {}", summary(&mut frozen));
+    println!(
+        "kill -9: setpoints the robot had left when the survivor's first segment came: {}",
+        summary(&mut margins)
+    );
     within("stop", robot.session.stop()).await.unwrap();
     plant.close().await;
 }
