@@ -62,11 +62,51 @@ impl Default for ResumeOptions {
 }
 
 /// The last setpoint received, on the session's timeline.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 struct Setpoint {
     t: f64,
     position: Vec<f64>,
     velocity: Vec<f64>,
+}
+
+/// The session's timeline across resumptions: each new session's run times start at the setpoint it resumed from,
+/// and its sequence numbers after the last one received.
+#[derive(Debug, Clone, Default)]
+struct Timeline {
+    last: Option<Setpoint>,
+    last_sequence: Option<u64>,
+    /// Added to the current session's run times and sequence numbers.
+    time_offset: f64,
+    sequence_offset: u64,
+}
+
+impl Timeline {
+    /// Shifts `seg` of the current session onto the timeline and remembers its last point.
+    fn shift(&mut self, mut seg: v1::Segment) -> v1::Segment {
+        seg.start_time += self.time_offset;
+        seg.sequence += self.sequence_offset;
+        let d = seg.dim as usize;
+        let n = seg.positions.len().checked_div(d).unwrap_or(0);
+        if n > 0 && seg.velocities.len() == seg.positions.len() {
+            self.last = Some(Setpoint {
+                t: seg.start_time + (n - 1) as f64 * seg.dt,
+                position: seg.positions[(n - 1) * d..].to_vec(),
+                velocity: seg.velocities[(n - 1) * d..].to_vec(),
+            });
+        }
+        self.last_sequence = Some(seg.sequence);
+        seg
+    }
+
+    /// A new session started from [`Timeline::last`] (or from the primitive's start when none came).
+    fn resumed(&mut self) {
+        if let Some(p) = &self.last {
+            self.time_offset = p.t;
+        }
+        if let Some(s) = self.last_sequence {
+            self.sequence_offset = s + 1;
+        }
+    }
 }
 
 /// A session (`MotionService.Session`) of one robot in a cell of a plant, resumed on another server when its
@@ -79,11 +119,7 @@ pub struct ResumableSession {
     cell: String,
     server: v1::PlantServer,
     session: Session,
-    last: Option<Setpoint>,
-    last_sequence: Option<u64>,
-    /// Added to the current session's run times and sequence numbers.
-    time_offset: f64,
-    sequence_offset: u64,
+    timeline: Timeline,
     resumes: u32,
 }
 
@@ -137,10 +173,7 @@ impl ResumableSession {
             cell,
             server,
             session,
-            last: None,
-            last_sequence: None,
-            time_offset: 0.0,
-            sequence_offset: 0,
+            timeline: Timeline::default(),
             resumes: 0,
         })
     }
@@ -171,7 +204,7 @@ impl ResumableSession {
                 None => self.session.next_segment().await,
             };
             match next {
-                Some(Ok(seg)) => return Some(Ok(self.on_timeline(seg))),
+                Some(Ok(seg)) => return Some(Ok(self.timeline.shift(seg))),
                 Some(Err(e)) if retryable(&e) => {
                     if let Err(e) = self.resume().await {
                         return Some(Err(e));
@@ -182,26 +215,9 @@ impl ResumableSession {
         }
     }
 
-    /// Shifts `seg` onto the session's timeline and remembers its last point.
-    fn on_timeline(&mut self, mut seg: v1::Segment) -> v1::Segment {
-        seg.start_time += self.time_offset;
-        seg.sequence += self.sequence_offset;
-        let d = seg.dim as usize;
-        let n = seg.positions.len().checked_div(d).unwrap_or(0);
-        if n > 0 && seg.velocities.len() == seg.positions.len() {
-            self.last = Some(Setpoint {
-                t: seg.start_time + (n - 1) as f64 * seg.dt,
-                position: seg.positions[(n - 1) * d..].to_vec(),
-                velocity: seg.velocities[(n - 1) * d..].to_vec(),
-            });
-        }
-        self.last_sequence = Some(seg.sequence);
-        seg
-    }
-
     /// Opens the session again on the cell's server, from the last setpoint.
     async fn resume(&mut self) -> Result<(), ClientError> {
-        let from = self.last.clone();
+        let from = self.timeline.last.clone();
         let mut request = self.request.clone();
         // The robot may still be held by the stream given up on (a server that only seemed gone).
         request.take_over = true;
@@ -220,8 +236,7 @@ impl ResumableSession {
         let (server, session) = attempts(&self.zenoh, &self.cell, &request, state, &self.options).await?;
         self.server = server;
         self.session = session;
-        self.time_offset = from.map_or(self.time_offset, |p| p.t);
-        self.sequence_offset = self.last_sequence.map_or(self.sequence_offset, |s| s + 1);
+        self.timeline.resumed();
         self.resumes += 1;
         Ok(())
     }
@@ -317,4 +332,68 @@ async fn once(
 
 fn now_unix_s() -> f64 {
     std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Setpoints;
+
+    /// A 1-D segment of `n` points from `t0` (run time), `dt` 1 ms, moving at 1 m/s from `x0`.
+    fn segment(sequence: u64, t0: f64, x0: f64, n: usize) -> v1::Segment {
+        let dt = 1e-3;
+        v1::Segment {
+            sequence,
+            start_time: t0,
+            dt,
+            dim: 1,
+            positions: (0..n).map(|i| x0 + i as f64 * dt).collect(),
+            velocities: vec![1.0; n],
+            accelerations: vec![0.0; n],
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn a_resumed_session_goes_on_from_the_last_setpoint_on_one_timeline() {
+        let mut timeline = Timeline::default();
+        let mut setpoints = Setpoints::new();
+        for (k, t0) in [0.0, 0.01].into_iter().enumerate() {
+            setpoints.push(&timeline.shift(segment(k as u64, t0, t0, 10))).unwrap();
+        }
+        let last = timeline.last.clone().unwrap();
+        assert!((last.t - 0.019).abs() < 1e-12 && (last.position[0] - 0.019).abs() < 1e-12);
+        assert_eq!(last.velocity, [1.0]);
+        // The new server's run starts at 0 from that setpoint (its first point is the same state).
+        timeline.resumed();
+        let first = timeline.shift(segment(0, 0.0, last.position[0], 10));
+        assert_eq!(first.sequence, 2, "sequence numbers go on");
+        assert!((first.start_time - last.t).abs() < 1e-12, "run times go on from the setpoint resumed from");
+        setpoints.push(&first).unwrap();
+        // One timeline, one point per millisecond, no jump: the first new point superseded the last old one.
+        let t = setpoints.trajectory().unwrap();
+        assert_eq!(t.t.len(), 29);
+        for k in 1..t.t.len() {
+            assert!((t.t[k] - t.t[k - 1] - 1e-3).abs() < 1e-9 && (t.x[k] - t.x[k - 1] - 1e-3).abs() < 1e-9);
+        }
+        // A second resumption before any new point keeps the same origin.
+        let mut early = Timeline::default();
+        early.resumed();
+        assert_eq!(early.shift(segment(0, 0.0, 0.0, 1)).start_time, 0.0);
+    }
+
+    #[test]
+    fn only_failures_of_the_server_or_the_route_are_retried() {
+        let status = |code| ClientError::Status { code, message: String::new() };
+        assert!(retryable(&status(tonic::Code::Unavailable)));
+        assert!(retryable(&status(tonic::Code::Unknown)));
+        assert!(retryable(&ClientError::argument("cell", "no server answered")));
+        assert!(!retryable(&status(tonic::Code::InvalidArgument)));
+        assert!(!retryable(&status(tonic::Code::PermissionDenied)));
+        assert!(
+            !retryable(&status(tonic::Code::Aborted)),
+            "taken over by another stream: the caller's to see"
+        );
+        assert!(!retryable(&ClientError::argument("motion.goal", "bad")));
+    }
 }

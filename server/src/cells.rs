@@ -307,6 +307,7 @@ mod tests {
             server_id: "s2".into(),
             grpc_address: "http://s2:1".into(),
             cells: vec!["c".into()],
+            taken: Vec::new(),
         });
         let e = cells.resolve("c").unwrap_err();
         assert!(

@@ -76,6 +76,7 @@ mod tests {
             server_id: id.into(),
             grpc_address: format!("http://{id}:1"),
             cells: cells.iter().map(|c| c.to_string()).collect(),
+            taken: Vec::new(),
         }
     }
 

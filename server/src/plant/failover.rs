@@ -11,8 +11,8 @@
 //! **Taking.** The taker serves the cell as one of its own (requests for it, its obstacles and robot states on
 //! `dmp/<cell>/...`, which the bridge already receives for every cell), queries `dmp/<cell>/obstacles/**` for its
 //! scene (every queryable: the router's obstacle storage of `deploy/zenohd-obstacles.json5`, perception nodes
-//! serving their latest obstacles), and then answers on `dmp/@cells/<cell>` (`dmp.v1.PlantServer`, its own cells
-//! and the taken one), so that clients resolve the cell to it. No passive copy of the scene is kept: without a
+//! serving their latest obstacles), and then answers on `dmp/@cells/<cell>` (`dmp.v1.PlantServer`, the cell in
+//! its `taken`), so that clients resolve the cell to it (and to the cell's own server while both answer). No passive copy of the scene is kept: without a
 //! storage or a perception node that answers, the taken cell's scene starts empty and fills as perception
 //! publishes again (a tracker's next put). Run the router with the obstacle storage for a plant that fails over.
 //!
@@ -180,7 +180,7 @@ impl State {
         }
         // Then clients find it here.
         let mut answer = self.me.clone();
-        answer.cells.push(cell.to_owned());
+        answer.taken = vec![cell.to_owned()];
         let payload = codec::encode(&answer);
         let key = cell_server_key(cell);
         let reply_key = key.clone();
