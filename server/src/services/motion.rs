@@ -190,8 +190,8 @@ impl MotionServiceImpl {
                 _ = run_stream(app, run, cell, cfg, tx.clone(), control, Admitted { budget, grant: Some(grant) }) => None,
                 _ = taken_over => Some(ServerError::Aborted("taken over by another stream".into())),
                 to = moved => Some(ServerError::Moved(format!(
-                    "cell `{cell_name}` went back to server {to} (this server served it during a fail-over): resume \
-                     there"
+                    "cell `{cell_name}` moved to server {to} (this server served it while its own server was gone): \
+                     resume there"
                 ))),
             };
             // Let go first: the stream taking over waits for it.
