@@ -1,6 +1,7 @@
 //! Finding the server of a cell in a plant of servers, through Zenoh (feature `zenoh`): each server answers on
-//! `dmp/@cells/<cell>` for the cells it serves with its `dmp.v1.PlantServer` (id, gRPC address, cells). When
-//! several answer (during a hand-over), the smallest server id is taken, as the servers themselves do.
+//! `dmp/@cells/<cell>` for the cells it serves with its `dmp.v1.PlantServer` (id, gRPC address, cells, and the cells
+//! it serves for a server gone, `taken`). When several answer (while a cell goes back to its server after a
+//! fail-over), the cell's own server is taken, then the smallest server id.
 
 use std::path::Path;
 use std::time::Duration;
@@ -30,17 +31,26 @@ pub async fn resolve_cell(
         .timeout(timeout)
         .await
         .map_err(|e| ClientError::Zenoh(format!("asking for the server of cell `{cell}`: {e}")))?;
-    let mut best: Option<v1::PlantServer> = None;
+    // The best answer so far, and whether the cell is its own (not taken over).
+    let mut best: Option<(bool, v1::PlantServer)> = None;
     while let Ok(reply) = replies.recv_async().await {
         let Ok(sample) = reply.result() else { continue };
         let Ok(server) = codec::decode::<v1::PlantServer>(&sample.payload().to_bytes()) else { continue };
-        if !server.cells.iter().any(|c| c == cell) || server.grpc_address.is_empty() {
+        let own = server.cells.iter().any(|c| c == cell);
+        if !(own || server.taken.iter().any(|c| c == cell)) || server.grpc_address.is_empty() {
             continue;
         }
-        if best.as_ref().is_none_or(|b| server.server_id < b.server_id) {
-            best = Some(server);
+        let better = match &best {
+            None => true,
+            Some((best_own, b)) => {
+                (own, std::cmp::Reverse(&server.server_id)) > (*best_own, std::cmp::Reverse(&b.server_id))
+            }
+        };
+        if better {
+            best = Some((own, server));
         }
     }
+    let best = best.map(|(_, s)| s);
     best.ok_or_else(|| {
         ClientError::argument("cell", format!("no server of the plant answered that it serves cell `{cell}`"))
     })

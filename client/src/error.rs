@@ -36,6 +36,20 @@ pub enum ClientError {
     /// A stream or session already ended (`0` names it).
     #[error("{0} has ended")]
     Closed(String),
+    /// A resumable session could not be resumed on a server of its cell within its bounds.
+    #[error(
+        "cannot resume the session in cell `{cell}`: {attempts} attempts in {elapsed:?}, the last: {last}"
+    )]
+    Resume {
+        /// The cell.
+        cell: String,
+        /// The attempts made.
+        attempts: u32,
+        /// The time they took.
+        elapsed: std::time::Duration,
+        /// Why the last one failed.
+        last: String,
+    },
     /// Zenoh failed (opening the session, publishing), or nobody subscribes.
     #[cfg(feature = "zenoh")]
     #[error("zenoh: {0}")]

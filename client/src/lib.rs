@@ -8,6 +8,7 @@
 //! | the JSON of a stored record (the wire's conversions are `dmp_proto`'s) | [`convert`] |
 //! | publishing obstacles over Zenoh (perception nodes; feature `zenoh`) | `zenoh_pub` |
 //! | finding a cell's server in a plant of servers, over Zenoh (feature `zenoh`) | `discovery` |
+//! | a session that resumes on the cell's new server when its server goes (fail-over; feature `zenoh`) | `resume` |
 //! | errors | [`error`] |
 //!
 //! The `dmpctl` command line is the `dmpctl` crate; simulated robots and the load generator are `dmp-sim`; figures
@@ -19,6 +20,8 @@ pub mod convert;
 pub mod discovery;
 pub mod error;
 pub mod grpc;
+#[cfg(feature = "zenoh")]
+pub mod resume;
 pub mod session;
 pub mod setpoints;
 #[cfg(feature = "zenoh")]

@@ -14,6 +14,7 @@ use crate::config::Limits;
 use crate::error::ServerError;
 use crate::memory::MemoryBudget;
 use crate::plant::directory::Directory;
+use crate::plant::taken::TakenCells;
 use crate::staleness::SceneConfig;
 
 /// Every cell's scene, by name. Cheap to clone.
@@ -36,6 +37,8 @@ pub struct Cells {
     avoiders: Arc<HashMap<String, Vec<String>>>,
     /// The plant's servers, to name the one serving a cell this server does not.
     directory: Directory,
+    /// The cells served for a dead server of the plant (fail-over), on top of `served`.
+    taken: TakenCells,
 }
 
 impl Cells {
@@ -68,6 +71,7 @@ impl Cells {
             served: None,
             avoiders: Arc::default(),
             directory: Directory::default(),
+            taken: TakenCells::default(),
         };
         cells.get("")?;
         Ok(cells)
@@ -112,14 +116,27 @@ impl Cells {
         &self.directory
     }
 
-    /// The cells served; None: any.
+    /// The cells served (its own: not those taken over); None: any.
     pub fn served(&self) -> Option<Vec<String>> {
         self.served.as_ref().map(|s| s.iter().cloned().collect())
     }
 
-    /// Whether this server serves `cell` (a checked name).
+    /// The cells served for a dead server of the plant ([`crate::plant::failover`]).
+    pub fn taken(&self) -> &TakenCells {
+        &self.taken
+    }
+
+    /// Whether this server serves `cell` (a checked name): one of its own, or one taken over.
     pub fn serves(&self, cell: &str) -> bool {
-        self.served.as_ref().is_none_or(|s| s.contains(cell))
+        self.served.as_ref().is_none_or(|s| s.contains(cell)) || self.taken.contains(cell)
+    }
+
+    /// Drops the scene of `cell` (a cell given back after a fail-over: its server keeps it now); streams still
+    /// holding it end on their own. Never the default cell.
+    pub fn forget(&self, cell: &str) {
+        if cell != &*self.default {
+            self.map.lock().unwrap_or_else(|p| p.into_inner()).remove(cell);
+        }
     }
 
     /// The cells of this server whose robots avoid the robots of `cell` (its neighbours that list it).
@@ -290,6 +307,7 @@ mod tests {
             server_id: "s2".into(),
             grpc_address: "http://s2:1".into(),
             cells: vec!["c".into()],
+            taken: Vec::new(),
         });
         let e = cells.resolve("c").unwrap_err();
         assert!(

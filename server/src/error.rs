@@ -41,6 +41,9 @@ pub enum ServerError {
     /// The server is shutting down.
     #[error("the server is shutting down")]
     ShuttingDown,
+    /// The cell went to another server of the plant (given back after a fail-over): the message names it.
+    #[error("{0}")]
+    Moved(String),
     /// The client cancelled, left or passed its deadline: the work stopped.
     #[error("cancelled: {0}")]
     Cancelled(String),
@@ -101,7 +104,7 @@ impl From<ServerError> for Status {
             ServerError::AlreadyExists(_) => Status::already_exists(msg),
             ServerError::Aborted(_) => Status::aborted(msg),
             ServerError::FailedPrecondition(_) => Status::failed_precondition(msg),
-            ServerError::ShuttingDown => Status::unavailable(msg),
+            ServerError::ShuttingDown | ServerError::Moved(_) => Status::unavailable(msg),
             ServerError::Cancelled(_) => Status::cancelled(msg),
             ServerError::Storage(_) | ServerError::Internal(_) => Status::internal(msg),
         }

@@ -282,6 +282,8 @@ impl SceneUpdater {
 /// The subscribers that feed the scene from Zenoh, the catch-up querier, and the time-to-live reaper.
 #[derive(Debug)]
 pub struct ZenohBridge {
+    /// Applies obstacle samples from elsewhere (a fail-over's query for a taken cell's scene).
+    updater: SceneUpdater,
     obstacles: Subscriber<()>,
     robots: Subscriber<()>,
     /// The robots' liveliness tokens.
@@ -327,17 +329,24 @@ impl ZenohBridge {
             .await
             .map_err(zenoh_err)?;
         let alive_key = keys::robots_alive_of(EVERY_CELL);
+        let on_alive = updater.clone();
         let alive = session
             .liveliness()
             .declare_subscriber(&alive_key)
             .history(true)
-            .callback(move |sample| updater.liveliness(&sample))
+            .callback(move |sample| on_alive.liveliness(&sample))
             .await
             .map_err(zenoh_err)?;
 
         let reaper = spawn_reaper(cells, clock, stop.clone());
         info!(obstacles = %obstacles_key, robots = %robots_key, alive = %alive_key, "zenoh bridge subscribed");
-        Ok(Self { obstacles, robots, alive, reaper, catch_up, stop: stop.drop_guard(), malformed })
+        Ok(Self { updater, obstacles, robots, alive, reaper, catch_up, stop: stop.drop_guard(), malformed })
+    }
+
+    /// What applies an obstacle sample as if it had been published (the same checks, counted alike).
+    pub fn obstacle_sink(&self) -> crate::plant::failover::ObstacleSink {
+        let updater = self.updater.clone();
+        Arc::new(move |sample| updater.obstacle(sample))
     }
 
     /// How many payloads were refused so far (malformed, invalid, or over a limit).
@@ -353,7 +362,7 @@ impl ZenohBridge {
     /// Undeclares the subscribers (waiting for running callbacks, so the scene changes no more) and stops the
     /// reaper. The session can be closed afterwards.
     pub async fn close(self) {
-        let Self { obstacles, robots, alive, reaper, catch_up, stop, malformed: _ } = self;
+        let Self { obstacles, robots, alive, reaper, catch_up, stop, malformed: _, updater: _ } = self;
         drop(stop);
         let undeclared = tokio::task::spawn_blocking(move || {
             for s in [obstacles, robots, alive] {

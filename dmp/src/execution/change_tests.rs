@@ -213,3 +213,36 @@ fn a_pose_run_keeps_the_angular_limits_on_its_rotation_vector() {
     let bad = Limits { max_speed: -1.0, ..Limits::PANDA };
     assert_eq!(e3.set_limits(bad, false).unwrap_err().field, "limits.max_speed");
 }
+
+#[test]
+fn a_run_started_at_a_velocity_moves_on_at_it_and_only_before_its_first_point() {
+    let dt = 1e-3;
+    let v = vec![0.4, -0.3];
+    let mut e = reach(Stepping::rk4(dt), Scene::empty());
+    e.set_start_velocity(v.clone()).unwrap();
+    let s = e.advance(3).unwrap();
+    assert_eq!(s.x[..2], [0.0, 0.0], "it starts where it is told");
+    assert_eq!(s.xd[..2], v[..], "and as fast");
+    // The next point is one step at that velocity away (up to the acceleration's share).
+    for i in 0..2 {
+        let moved = s.x[2 + i] - s.x[i];
+        assert!((moved - v[i] * dt).abs() < 50.0 * dt * dt, "dim {i}: moved {moved}");
+        assert!((s.xd[2 + i] - v[i]).abs() < 50.0 * dt, "dim {i}: velocity {}", s.xd[2 + i]);
+    }
+    let e2 = e.set_start_velocity(vec![0.0, 0.0]).unwrap_err();
+    assert_eq!(e2.field, "start_velocity");
+    assert!(reach(Stepping::rk4(dt), Scene::empty()).set_start_velocity(vec![f64::NAN, 0.0]).is_err());
+    assert!(reach(Stepping::rk4(dt), Scene::empty()).set_start_velocity(vec![0.0]).is_err());
+    // With limits, the limiter takes the robot as moving at the start velocity: no braking from a standstill.
+    let mut limited = reach(Stepping::rk4(dt), Scene::empty());
+    limited.set_start_velocity(v.clone()).unwrap();
+    limited.set_limits(Limits { max_acceleration: 50.0, ..Limits::NONE }, false).unwrap();
+    let s = limited.advance(3).unwrap();
+    // Each step changes the velocity by about what the acceleration limit allows in one step (50 mm/s here),
+    // starting from the robot's: it neither starts from rest nor jumps.
+    let mut before = v[0];
+    for (i, xd) in s.xd.iter().step_by(2).enumerate() {
+        assert!((xd - before).abs() <= 2.0 * 50.0 * dt, "point {i}: {:?}", &s.xd[..6]);
+        before = *xd;
+    }
+}

@@ -30,6 +30,23 @@ impl Execution {
         Ok(())
     }
 
+    /// Starts the run at velocity `v` (`dx/dt`, every dimension) instead of at rest, from its start: a run that
+    /// takes over a robot already moving (a session resumed on another server after a fail-over) keeps the robot's
+    /// velocity continuous. Only before the run's first output point; the limiter takes the robot as having moved
+    /// at `v` until then.
+    pub fn set_start_velocity(&mut self, v: Vec<f64>) -> Result<(), InvalidInput> {
+        check_vector("start_velocity", &v, self.primitive.dim)?;
+        if self.has_last || self.out_t > 0.0 {
+            return Err(InvalidInput::new("start_velocity", "can only be set before the run's first point"));
+        }
+        self.knot0.xd.copy_from_slice(&v);
+        self.scratch.xd.copy_from_slice(&v);
+        self.knot1 = None;
+        self.acc0_current = false;
+        self.restore_limiter();
+        Ok(())
+    }
+
     /// Changes `tau` from the next output point on (the state keeps `dx/dt`, so the velocity is continuous).
     pub fn set_tau(&mut self, tau: f64) -> Result<(), InvalidInput> {
         if !(tau.is_finite() && tau > 0.0) {

@@ -102,8 +102,15 @@ impl Execution {
         self.recent.resize(3 * d, 0.0);
         let mut n = self.history.recent_positions(&mut self.recent[..3 * d]);
         if n == 0 {
-            self.recent[..d].copy_from_slice(&self.knot0.x);
-            n = 1;
+            // Before the first point: the run's start, and the two points before it at its start velocity (at
+            // rest, as most runs start, all three are the start).
+            let h = self.stepping.dt;
+            for k in 0..3 {
+                for i in 0..d {
+                    self.recent[k * d + i] = self.knot0.x[i] - k as f64 * h * self.knot0.xd[i];
+                }
+            }
+            n = 3;
         }
         self.limiter.set_recent(&self.recent, n);
     }

@@ -1,28 +1,55 @@
 //! The plant's servers as this server knows them: filled from their liveliness tokens (`dmp/@servers/<id>`, with
 //! history, so those declared before this server started count) and the answer of each one's queryable on the same
 //! key (`dmp.v1.PlantServer`); a server whose token goes is forgotten. It names the server of a cell that this one
-//! does not serve.
+//! does not serve, and each change wakes the fail-over ([`super::failover`]).
 
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 
 use dmp_proto::v1;
+use tokio::sync::watch;
 
 /// The live servers of the plant, by id. Cheap to clone; the lock is never held across an await.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct Directory {
     servers: Arc<Mutex<BTreeMap<String, v1::PlantServer>>>,
+    /// Bumped at every change.
+    changes: Arc<watch::Sender<u64>>,
+}
+
+impl Default for Directory {
+    fn default() -> Self {
+        Self { servers: Arc::default(), changes: Arc::new(watch::Sender::new(0)) }
+    }
 }
 
 impl Directory {
     /// Records (or replaces) a live server.
     pub fn insert(&self, server: v1::PlantServer) {
         self.lock().insert(server.server_id.clone(), server);
+        self.changes.send_modify(|n| *n += 1);
     }
 
     /// Forgets a server (its token went).
     pub fn remove(&self, server_id: &str) {
-        self.lock().remove(server_id);
+        if self.lock().remove(server_id).is_some() {
+            self.changes.send_modify(|n| *n += 1);
+        }
+    }
+
+    /// A receiver that sees every change from now on.
+    pub fn changes(&self) -> watch::Receiver<u64> {
+        self.changes.subscribe()
+    }
+
+    /// The live servers known, by id.
+    pub fn servers(&self) -> Vec<v1::PlantServer> {
+        self.lock().values().cloned().collect()
+    }
+
+    /// The live server `server_id`, if known.
+    pub fn get(&self, server_id: &str) -> Option<v1::PlantServer> {
+        self.lock().get(server_id).cloned()
     }
 
     /// The live server serving `cell` (the smallest id when several say they do); None when none is known.
@@ -49,6 +76,7 @@ mod tests {
             server_id: id.into(),
             grpc_address: format!("http://{id}:1"),
             cells: cells.iter().map(|c| c.to_string()).collect(),
+            taken: Vec::new(),
         }
     }
 

@@ -7,6 +7,7 @@
 //! | which server serves a cell: a queryable per cell served, answering `dmp.v1.PlantServer` | `dmp/@cells/<cell>` | [`discovery`] |
 //! | the live servers this one knows, to name the server of a cell it does not serve | `dmp/@servers/*` (liveliness, with history) | [`directory`] |
 //! | replicated primitives: every version stored is put, the others store it; a queryable over the store answers a server that (re)starts | `dmp/@primitives/<robot>/<name>/<version>` | [`replication`] |
+//! | fail-over: a dead server's cells served by one survivor each (rendezvous hashing over the live set), given back when it returns | `dmp/@cells/<cell>` (the taker's), `dmp/<cell>/obstacles/**` (queried) | [`failover`], [`taken`] |
 //!
 //! The order of versions: a version stored on a server of a plant is numbered with that server's HLC time (NTP64,
 //! `Session::new_timestamp`), or the last version plus one if that is later, and keeps its number on every server.
@@ -17,7 +18,9 @@
 
 pub mod directory;
 pub mod discovery;
+pub mod failover;
 pub mod replication;
+pub mod taken;
 
 use std::sync::Arc;
 
@@ -33,6 +36,7 @@ use crate::store::{Store, VersionClock};
 
 use self::directory::Directory;
 use self::discovery::Discovery;
+use self::failover::{Failover, ObstacleSink};
 use self::replication::Replication;
 
 /// This server's part in the plant: its announcement and the replication of its store. Closed with
@@ -42,6 +46,7 @@ pub struct Plant {
     server: v1::PlantServer,
     discovery: Discovery,
     replication: Replication,
+    failover: Failover,
 }
 
 /// The version clock of a plant's store: the session's HLC time, NTP64.
@@ -53,19 +58,21 @@ pub fn version_clock(session: &Session) -> VersionClock {
 impl Plant {
     /// Announces `server` (its token and queryables), fills `directory` with the plant's live servers, and
     /// replicates `store` (stamped by [`version_clock`]) with the other servers, catching up with them now and
-    /// whenever one (re)appears. Incoming primitives are checked against `limits`.
+    /// whenever one (re)appears. Incoming primitives are checked against `limits`. Takes the cells of dead servers
+    /// into `cells` as [`failover`] says, their scenes applied through `scene`.
     pub async fn start(
         session: &Session,
         server: v1::PlantServer,
-        directory: Directory,
+        (directory, cells, scene): (Directory, Cells, ObstacleSink),
         store: Store,
         limits: Limits,
         shutdown: CancellationToken,
     ) -> Result<Self, ServerError> {
-        let discovery = Discovery::start(session, &server, directory, shutdown.clone()).await?;
-        let replication = Replication::start(session, store, limits, shutdown).await?;
+        let discovery = Discovery::start(session, &server, directory.clone(), shutdown.clone()).await?;
+        let replication = Replication::start(session, store, limits, shutdown.clone()).await?;
+        let failover = Failover::start(session, server.clone(), directory, cells, scene, shutdown);
         info!(server = %server.server_id, grpc = %server.grpc_address, cells = ?server.cells, "plant: joined");
-        Ok(Self { server, discovery, replication })
+        Ok(Self { server, discovery, replication, failover })
     }
 
     /// This server as the plant knows it.
@@ -85,6 +92,7 @@ impl Plant {
 
     /// Leaves the plant: the token and queryables go (the others forget this server), the tasks stop.
     pub async fn close(self) {
+        self.failover.close().await;
         self.replication.close().await;
         self.discovery.close().await;
     }

@@ -86,6 +86,11 @@ impl MotionServiceImpl {
             history,
         )?;
         run.execution.set_goal_tolerance(r.goal_tolerance)?;
+        if r.start_velocity.iter().any(|v| *v != 0.0) {
+            run.execution
+                .set_start_velocity(r.start_velocity)
+                .map_err(|e| ServerError::from(e).within("motion"))?;
+        }
         if let Some(chart) = r.chart {
             run.execution.set_orientation_chart(chart)?;
         }
@@ -169,18 +174,31 @@ impl MotionServiceImpl {
         let budget = self.admit_stream(&run, &cell, &cfg)?;
         let (tx, rx) = mpsc::channel(buffer);
         let app = self.state.clone();
+        // A cell served for a dead server (fail-over): its streams end when it goes back.
+        let given_back = self.state.cells.taken().until_given_back(cell.name());
+        let cell_name = cell.name().to_owned();
         tokio::spawn(async move {
             let taken_over = claim.taken_over();
+            let moved = async move {
+                match given_back {
+                    Some(g) => g.wait().await,
+                    None => std::future::pending().await,
+                }
+            };
             let shutdown = app.shutdown.clone();
             let ended = tokio::select! {
-                _ = run_stream(app, run, cell, cfg, tx.clone(), control, Admitted { budget, grant: Some(grant) }) => true,
-                _ = taken_over => false,
+                _ = run_stream(app, run, cell, cfg, tx.clone(), control, Admitted { budget, grant: Some(grant) }) => None,
+                _ = taken_over => Some(ServerError::Aborted("taken over by another stream".into())),
+                to = moved => Some(ServerError::Moved(format!(
+                    "cell `{cell_name}` moved to server {to} (this server served it while its own server was gone): \
+                     resume there"
+                ))),
             };
             // Let go first: the stream taking over waits for it.
             drop(claim);
-            if !ended {
-                info!("stream taken over by another stream");
-                let aborted = ServerError::Aborted("taken over by another stream".into()).into();
+            if let Some(why) = ended {
+                info!(reason = %why, "stream ended by another stream or a fail-over");
+                let aborted = why.into();
                 // A reader that stopped reading is not waited for long.
                 tokio::select! {
                     _ = tx.send(Err(aborted)) => {}

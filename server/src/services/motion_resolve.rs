@@ -57,6 +57,8 @@ pub(super) struct ResolvedMotion {
     pub(super) limits: dmp::Limits,
     /// The goal filter's `alpha_g` (0: off).
     pub(super) goal_filter_alpha: f64,
+    /// The velocity at the start, every dimension of the primitive (zeros: at rest).
+    pub(super) start_velocity: Vec<f64>,
 }
 
 impl MotionServiceImpl {
@@ -101,6 +103,18 @@ impl MotionServiceImpl {
             }
         };
         let start = given_or_default("start", &spec.start, &primitive.start[..d])?;
+        // The start velocity of the position's dimensions; a pose run's orientation starts at rest.
+        let mut start_velocity = given_or_default("start_velocity", &spec.start_velocity, &vec![0.0; d])?;
+        let max = limits.max_state_speed_m_s;
+        if let Some(i) = start_velocity.iter().position(|v| v.abs() > max) {
+            return Err(ServerError::invalid(
+                format!("{prefix}.start_velocity[{i}]"),
+                format!(
+                    "must be between -{max} and {max} m/s (limits.max_state_speed_m_s), as a robot's state"
+                ),
+            ));
+        }
+        start_velocity.resize(primitive.dim, 0.0);
         let goal = given_or_default("goal", &spec.goal, &primitive.goal[..d])?;
         check_in_workspace(&format!("{prefix}.start"), &start, limits.workspace_m)?;
         check_in_workspace(&format!("{prefix}.goal"), &goal, limits.workspace_m)?;
@@ -161,6 +175,7 @@ impl MotionServiceImpl {
             chart,
             limits: overridden(&stored, &requested),
             goal_filter_alpha: goal_filter_alpha(spec.goal_filter_alpha).map_err(|e| e.within(prefix))?,
+            start_velocity,
         })
     }
 }

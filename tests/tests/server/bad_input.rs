@@ -31,6 +31,31 @@ async fn bad_input_gets_a_clear_status_and_the_server_keeps_serving() {
             .await
             .unwrap_err();
     assert!(e.to_string().contains("motion.goal"), "{e}");
+    // A start velocity (a resumed session's) of the wrong length, not finite, or faster than a robot state may be.
+    for (v, field) in [
+        (vec![0.1], "motion.start_velocity"),
+        (vec![0.1, f64::NAN], "motion.start_velocity[1]"),
+        (vec![0.0, 11.0], "motion.start_velocity[1]"),
+    ] {
+        let mut motion = spec("r", "line");
+        motion.start_velocity = v.clone();
+        let e = within(
+            "plan bad start velocity",
+            client.plan(v1::PlanRequest { motion: Some(motion), ..Default::default() }),
+        )
+        .await
+        .unwrap_err();
+        assert_eq!(e.code(), Some(tonic::Code::InvalidArgument), "{v:?}: {e}");
+        assert!(e.to_string().contains(field), "{v:?}: {e}");
+    }
+    // A good one starts the run moving: its first point has it.
+    let mut motion = spec("r", "line");
+    motion.start_velocity = vec![0.2, -0.1];
+    let plan =
+        within("plan moving", client.plan(v1::PlanRequest { motion: Some(motion), ..Default::default() }))
+            .await
+            .unwrap();
+    assert_eq!(plan.trajectory.unwrap().velocities[..2], [0.2, -0.1]);
     let request = v1::ExecuteRequest { motion: Some(spec("r", "line")), dt: -1.0, ..Default::default() };
     let e = within("execute bad dt", client.execute(request)).await.err().expect("refused");
     assert!(e.to_string().contains("dt"), "{e}");

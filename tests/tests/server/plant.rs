@@ -1,12 +1,14 @@
 //! A plant: three servers, each serving its own cell, clients of one Zenoh router in the test process (router
 //! mode, loopback, scouting off). Primitives replicate, a cell resolves to its server, robots of neighbouring cells
-//! on two servers avoid each other, and a server that starts late or comes back catches up.
+//! on two servers avoid each other, a server that starts late or comes back catches up, and a server's cell is
+//! taken by one survivor while it is away (with its scene) and given back when it returns.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
 use dmp_client::grpc::DmpClient;
+use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
 use dmp_proto::zenoh_session::locators;
 use dmp_server::run::{ServerHandle, start};
@@ -235,6 +237,85 @@ async fn robots_of_neighbouring_cells_on_two_servers_avoid_each_other() {
     assert!(!sees_r1(&s3, "c"), "cell c does not take cell a's robots");
 
     reader.abort();
+    for h in [s1, s2, s3] {
+        within("shutdown", h.shutdown()).await.unwrap();
+    }
+    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+}
+
+/// Whether `h` holds obstacle `id` in `cell` (never creating the cell).
+fn sees_obstacle(h: &ServerHandle, cell: &str, id: &str) -> bool {
+    h.state().cells.find(cell).ok().flatten().is_some_and(|c| c.snapshot().obstacles.contains_key(id))
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn a_cell_is_taken_while_its_server_is_away_and_given_back_when_it_returns() {
+    use dmp_server::plant::failover::rendezvous;
+    let zenohd = router("tcp/127.0.0.1:0").await;
+    let endpoint = locators(&zenohd).await;
+    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
+    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
+    let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
+    until_all_known(&[&s1, &s2, &s3]).await;
+    // A perception node keeping cell a's latest obstacle: what a taker asks for the cell's scene.
+    let mut perception =
+        within("perception open", ObstaclePublisher::open("a", &endpoint, &[])).await.unwrap();
+    within("queryable", perception.serve_latest()).await.unwrap();
+    within("subscriber", perception.wait_for_subscriber(dmp_tests::T)).await.unwrap();
+    within("put", perception.put_proto(&crate::ellipse("box", vec![3.0, 3.0], vec![0.1, 0.1])))
+        .await
+        .unwrap();
+    until("s1 has cell a's obstacle", || sees_obstacle(&s1, "a", "box")).await;
+
+    // s1 leaves: one survivor, rendezvous' pick, takes cell a with its scene; the other does not.
+    within("s1 down", s1.shutdown()).await.unwrap();
+    let (taker, other) = match rendezvous("a", ["s2", "s3"]).unwrap() {
+        "s2" => (&s2, &s3),
+        _ => (&s3, &s2),
+    };
+    until("the taker serves cell a", || taker.state().cells.serves("a")).await;
+    until("with cell a's scene", || sees_obstacle(taker, "a", "box")).await;
+    assert!(!other.state().cells.serves("a"), "one server takes the cell");
+    let found = within(
+        "resolve a",
+        dmp_client::discovery::resolve_cell_via(&endpoint, None, "a", Duration::from_secs(5)),
+    )
+    .await
+    .unwrap();
+    assert_eq!(found.grpc_address, format!("http://{}", taker.grpc_addr));
+
+    // A robot of cell a streams on the taker.
+    let c = client_of(taker).await.with_cell("a");
+    within("put r1", c.put_primitive("r1", "creep", &line(vec![0.0, 0.0], vec![0.1, 0.0], 60.0)))
+        .await
+        .unwrap();
+    let request = v1::ExecuteRequest {
+        motion: Some(spec("r1", "creep")),
+        pacing: v1::Pacing::Realtime as i32,
+        ..Default::default()
+    };
+    let mut stream = within("execute", c.execute(request)).await.unwrap();
+    within("a segment", stream.next()).await.unwrap().unwrap();
+
+    // s1 comes back: the taker gives cell a back, and its stream ends naming s1.
+    let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
+    let ended = within("the stream ends", async {
+        loop {
+            match stream.next().await {
+                Some(Ok(_)) => continue,
+                Some(Err(e)) => return e,
+                None => panic!("the stream ended without a status"),
+            }
+        }
+    })
+    .await;
+    assert_eq!(ended.code(), Some(tonic::Code::Unavailable), "{ended}");
+    let said = ended.to_string();
+    assert!(said.contains("`s1`") && said.contains(&s1.grpc_addr.to_string()), "{said}");
+    assert!(!taker.state().cells.serves("a") && !sees_obstacle(taker, "a", "box"), "the taker let it go");
+
+    within("perception close", perception.close()).await.unwrap();
     for h in [s1, s2, s3] {
         within("shutdown", h.shutdown()).await.unwrap();
     }

@@ -1,0 +1,399 @@
+//! A session that survives its server (feature `zenoh`): when the stream fails with UNAVAILABLE (the server shut
+//! down, or gave the cell back after a fail-over) or a transport error (the server died), it finds the cell's
+//! server again through Zenoh ([`crate::discovery::resolve_cell`]), opens a new session there with the same
+//! motion, and goes on from the robot's last commanded state.
+//!
+//! A server that freezes or is cut off without closing its connection is noticed when no segment came for
+//! [`ResumeOptions::stall_timeout`], and its cells fail over once Zenoh's lease expires (`deploy/zenoh-lease.json5`).
+//!
+//! **Continuity.** The new session starts where the last setpoint received was and as fast
+//! (`MotionSpec.start`, `MotionSpec.start_velocity`), and its first `state` message reports that state, so that
+//! the cell sees the robot at once. Its segments are shifted onto the first session's timeline: their run times
+//! start at the last setpoint's (the first point of the new session, the same state, supersedes it, as
+//! [`crate::Setpoints`] expects), and their sequence numbers go on from the last. The phase of the primitive starts
+//! over: the rest of the motion is the primitive replayed from where the robot is to the goal (the last goal and
+//! `tau` set through this session). A pose run's orientation resumes from rest; groups are not resumed.
+//!
+//! **Bounds.** At most [`ResumeOptions::max_attempts`] attempts within [`ResumeOptions::max_total`] for one
+//! resumption, waiting [`ResumeOptions::retry_delay`] (doubling, up to 16 times as long) between attempts; then the
+//! stream ends with [`ClientError::Resume`], naming the attempts, the time spent and the last failure. Bad input,
+//! a denied permission or a robot taken over by another stream end it at once, as they would a plain session.
+
+use std::time::{Duration, Instant};
+
+use dmp_proto::v1;
+use dmp_proto::v1::session_request::Message;
+use tokio_stream::StreamExt;
+
+use crate::connect::ConnectOptions;
+use crate::discovery::resolve_cell;
+use crate::error::ClientError;
+use crate::grpc::{DmpClient, SegmentStream, Session};
+
+/// How hard a [`ResumableSession`] tries.
+#[derive(Debug, Clone)]
+pub struct ResumeOptions {
+    /// Attempts per resumption (resolve, connect, open), at least 1.
+    pub max_attempts: u32,
+    /// The longest one resumption may take, all attempts together.
+    pub max_total: Duration,
+    /// The wait after a failed attempt, doubled after each up to 16 times as long.
+    pub retry_delay: Duration,
+    /// How long each resolution waits for the servers' answers.
+    pub resolve_timeout: Duration,
+    /// How to connect to a server (TLS, token); its timeout bounds each connection.
+    pub connect: ConnectOptions,
+    /// No segment for this long: the server is taken as gone (frozen, or cut off without its connection
+    /// closing) and the session resumes. None: wait as long as the connection lasts (HTTP/2 keep-alive).
+    pub stall_timeout: Option<Duration>,
+}
+
+impl Default for ResumeOptions {
+    fn default() -> Self {
+        Self {
+            max_attempts: 50,
+            max_total: Duration::from_secs(10),
+            retry_delay: Duration::from_millis(10),
+            resolve_timeout: Duration::from_millis(500),
+            connect: ConnectOptions { timeout: Duration::from_secs(2), ..Default::default() },
+            stall_timeout: Some(Duration::from_millis(500)),
+        }
+    }
+}
+
+/// The last setpoint received, on the session's timeline.
+#[derive(Debug, Clone, PartialEq)]
+struct Setpoint {
+    t: f64,
+    position: Vec<f64>,
+    velocity: Vec<f64>,
+}
+
+/// The session's timeline across resumptions: each new session's run times start at the setpoint it resumed from,
+/// and its sequence numbers after the last one received.
+#[derive(Debug, Clone, Default)]
+struct Timeline {
+    last: Option<Setpoint>,
+    last_sequence: Option<u64>,
+    /// Added to the current session's run times and sequence numbers.
+    time_offset: f64,
+    sequence_offset: u64,
+}
+
+impl Timeline {
+    /// Shifts `seg` of the current session onto the timeline and remembers its last point.
+    fn shift(&mut self, mut seg: v1::Segment) -> v1::Segment {
+        seg.start_time += self.time_offset;
+        seg.sequence += self.sequence_offset;
+        let d = seg.dim as usize;
+        let n = seg.positions.len().checked_div(d).unwrap_or(0);
+        if n > 0 && seg.velocities.len() == seg.positions.len() {
+            self.last = Some(Setpoint {
+                t: seg.start_time + (n - 1) as f64 * seg.dt,
+                position: seg.positions[(n - 1) * d..].to_vec(),
+                velocity: seg.velocities[(n - 1) * d..].to_vec(),
+            });
+        }
+        self.last_sequence = Some(seg.sequence);
+        seg
+    }
+
+    /// A new session started from [`Timeline::last`] (or from the primitive's start when none came).
+    fn resumed(&mut self) {
+        if let Some(p) = &self.last {
+            self.time_offset = p.t;
+        }
+        if let Some(s) = self.last_sequence {
+            self.sequence_offset = s + 1;
+        }
+    }
+}
+
+/// A session (`MotionService.Session`) of one robot in a cell of a plant, resumed on another server when its
+/// server goes. Open it with [`ResumableSession::open`], read it with [`ResumableSession::next_segment`].
+pub struct ResumableSession {
+    zenoh: zenoh::Session,
+    options: ResumeOptions,
+    /// The start request, with the last goal and tau set.
+    request: v1::ExecuteRequest,
+    cell: String,
+    server: v1::PlantServer,
+    session: Session,
+    timeline: Timeline,
+    resumes: u32,
+}
+
+impl std::fmt::Debug for ResumableSession {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ResumableSession")
+            .field("cell", &self.cell)
+            .field("server", &self.server.server_id)
+            .field("resumes", &self.resumes)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Whether a failure of the stream or of an attempt is worth another attempt (the server or the route to it is
+/// gone, or the cell is moving), rather than the caller's to see.
+fn retryable(e: &ClientError) -> bool {
+    match e {
+        ClientError::Status { code, .. } => matches!(
+            code,
+            tonic::Code::Unavailable
+                | tonic::Code::Unknown
+                | tonic::Code::Internal
+                | tonic::Code::FailedPrecondition
+                | tonic::Code::DeadlineExceeded
+        ),
+        ClientError::Connect { .. } | ClientError::Closed(_) | ClientError::Zenoh(_) => true,
+        // No server answered for the cell (yet): its fail-over may not have happened.
+        ClientError::Argument { field, .. } => field == "cell",
+        ClientError::Protocol(_) | ClientError::Resume { .. } => false,
+    }
+}
+
+impl ResumableSession {
+    /// Finds the server of the robot's cell (`request.motion.cell`, which must be named) through `zenoh` and opens
+    /// the session there, retrying as `options` say.
+    pub async fn open(
+        zenoh: &zenoh::Session,
+        request: v1::ExecuteRequest,
+        options: ResumeOptions,
+    ) -> Result<Self, ClientError> {
+        let motion = request.motion.as_ref().ok_or_else(|| ClientError::argument("motion", "is required"))?;
+        if motion.cell.is_empty() {
+            return Err(ClientError::argument("motion.cell", "must name the cell to find its server"));
+        }
+        let cell = motion.cell.clone();
+        let (server, session) = attempts(zenoh, &cell, &request, None, &options).await?;
+        Ok(Self {
+            zenoh: zenoh.clone(),
+            options,
+            request,
+            cell,
+            server,
+            session,
+            timeline: Timeline::default(),
+            resumes: 0,
+        })
+    }
+
+    /// The server serving the session now.
+    pub fn server(&self) -> &v1::PlantServer {
+        &self.server
+    }
+
+    /// How many times the session was resumed on a server.
+    pub fn resumes(&self) -> u32 {
+        self.resumes
+    }
+
+    /// The next segment, on the session's timeline; `None` once the run ended. A failure that a resumption
+    /// cannot mend ends the stream with its error.
+    pub async fn next_segment(&mut self) -> Option<Result<v1::Segment, ClientError>> {
+        loop {
+            let next = match self.options.stall_timeout {
+                Some(stall) => {
+                    tokio::time::timeout(stall, self.session.next_segment()).await.unwrap_or_else(|_| {
+                        Some(Err(ClientError::Closed(format!(
+                            "the session on server `{}` (no segment for {stall:?})",
+                            self.server.server_id
+                        ))))
+                    })
+                }
+                None => self.session.next_segment().await,
+            };
+            match next {
+                Some(Ok(seg)) => return Some(Ok(self.timeline.shift(seg))),
+                Some(Err(e)) if retryable(&e) => {
+                    if let Err(e) = self.resume().await {
+                        return Some(Err(e));
+                    }
+                }
+                other => return other,
+            }
+        }
+    }
+
+    /// Opens the session again on the cell's server, from the last setpoint.
+    async fn resume(&mut self) -> Result<(), ClientError> {
+        let from = self.timeline.last.clone();
+        let mut request = self.request.clone();
+        // The robot may still be held by the stream given up on (a server that only seemed gone).
+        request.take_over = true;
+        if let (Some(m), Some(p)) = (request.motion.as_mut(), &from) {
+            m.start = p.position.clone();
+            m.start_velocity = p.velocity.clone();
+        }
+        let robot = request.motion.as_ref().map(|m| m.robot_id.clone()).unwrap_or_default();
+        let state = from.as_ref().map(|p| v1::RobotState {
+            robot_id: robot,
+            stamp_unix_s: now_unix_s(),
+            position: p.position.clone(),
+            velocity: p.velocity.clone(),
+            ..Default::default()
+        });
+        let (server, session) = attempts(&self.zenoh, &self.cell, &request, state, &self.options).await?;
+        self.server = server;
+        self.session = session;
+        self.timeline.resumed();
+        self.resumes += 1;
+        Ok(())
+    }
+
+    /// Sends a command or a measured state to the current server.
+    pub async fn send(&self, message: Message) -> Result<(), ClientError> {
+        self.session.sender().send(message).await
+    }
+
+    /// Changes the goal (kept if the session resumes).
+    pub async fn set_goal(&mut self, goal: Vec<f64>) -> Result<(), ClientError> {
+        if let Some(m) = self.request.motion.as_mut() {
+            m.goal = goal.clone();
+        }
+        self.session.set_goal(goal).await
+    }
+
+    /// Changes tau (kept if the session resumes).
+    pub async fn set_tau(&mut self, tau: f64) -> Result<(), ClientError> {
+        if let Some(m) = self.request.motion.as_mut() {
+            m.tau = tau;
+        }
+        self.session.set_tau(tau).await
+    }
+
+    /// Ends the run: the robot decelerates to rest and the stream closes.
+    pub async fn stop(&self) -> Result<(), ClientError> {
+        self.session.stop().await
+    }
+}
+
+/// Resolves the cell and opens the session, retrying within the bounds; sends `state` first when given.
+async fn attempts(
+    zenoh: &zenoh::Session,
+    cell: &str,
+    request: &v1::ExecuteRequest,
+    state: Option<v1::RobotState>,
+    options: &ResumeOptions,
+) -> Result<(v1::PlantServer, Session), ClientError> {
+    let began = Instant::now();
+    let mut delay = options.retry_delay;
+    let mut attempt = 0;
+    loop {
+        attempt += 1;
+        let left = options.max_total.saturating_sub(began.elapsed());
+        let tried = tokio::time::timeout(left, once(zenoh, cell, request, state.clone(), options)).await;
+        let failure = match tried {
+            Ok(Ok(opened)) => return Ok(opened),
+            Ok(Err(e)) if !retryable(&e) => return Err(e),
+            Ok(Err(e)) => e.to_string(),
+            Err(_) => format!("no answer within {:?}", options.max_total),
+        };
+        let elapsed = began.elapsed();
+        if attempt >= options.max_attempts.max(1) || elapsed + delay >= options.max_total {
+            return Err(ClientError::Resume {
+                cell: cell.to_owned(),
+                attempts: attempt,
+                elapsed,
+                last: failure,
+            });
+        }
+        tokio::time::sleep(delay).await;
+        delay = (delay * 2).min(options.retry_delay * 16);
+    }
+}
+
+async fn once(
+    zenoh: &zenoh::Session,
+    cell: &str,
+    request: &v1::ExecuteRequest,
+    state: Option<v1::RobotState>,
+    options: &ResumeOptions,
+) -> Result<(v1::PlantServer, Session), ClientError> {
+    let server = resolve_cell(zenoh, cell, options.resolve_timeout).await?;
+    let client = DmpClient::connect_with(&server.grpc_address, &options.connect).await?.with_cell(cell);
+    let mut session = client.session(request.clone()).await?;
+    if let Some(s) = state {
+        session.state(s).await?;
+    }
+    // The server refuses a bad start with the first item of the stream: peek it, so that a refusal counts as a
+    // failed attempt and a good segment is kept.
+    let first = session.next_segment().await;
+    match first {
+        Some(Ok(seg)) => {
+            let (sender, rest) = session.into_parts();
+            let segments: SegmentStream = Box::pin(tokio_stream::once(Ok(seg)).chain(rest));
+            Ok((server, Session { sender, segments }))
+        }
+        Some(Err(e)) => Err(e),
+        None => Err(ClientError::Closed(format!("the session on server `{}`", server.server_id))),
+    }
+}
+
+fn now_unix_s() -> f64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Setpoints;
+
+    /// A 1-D segment of `n` points from `t0` (run time), `dt` 1 ms, moving at 1 m/s from `x0`.
+    fn segment(sequence: u64, t0: f64, x0: f64, n: usize) -> v1::Segment {
+        let dt = 1e-3;
+        v1::Segment {
+            sequence,
+            start_time: t0,
+            dt,
+            dim: 1,
+            positions: (0..n).map(|i| x0 + i as f64 * dt).collect(),
+            velocities: vec![1.0; n],
+            accelerations: vec![0.0; n],
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn a_resumed_session_goes_on_from_the_last_setpoint_on_one_timeline() {
+        let mut timeline = Timeline::default();
+        let mut setpoints = Setpoints::new();
+        for (k, t0) in [0.0, 0.01].into_iter().enumerate() {
+            setpoints.push(&timeline.shift(segment(k as u64, t0, t0, 10))).unwrap();
+        }
+        let last = timeline.last.clone().unwrap();
+        assert!((last.t - 0.019).abs() < 1e-12 && (last.position[0] - 0.019).abs() < 1e-12);
+        assert_eq!(last.velocity, [1.0]);
+        // The new server's run starts at 0 from that setpoint (its first point is the same state).
+        timeline.resumed();
+        let first = timeline.shift(segment(0, 0.0, last.position[0], 10));
+        assert_eq!(first.sequence, 2, "sequence numbers go on");
+        assert!((first.start_time - last.t).abs() < 1e-12, "run times go on from the setpoint resumed from");
+        setpoints.push(&first).unwrap();
+        // One timeline, one point per millisecond, no jump: the first new point superseded the last old one.
+        let t = setpoints.trajectory().unwrap();
+        assert_eq!(t.t.len(), 29);
+        for k in 1..t.t.len() {
+            assert!((t.t[k] - t.t[k - 1] - 1e-3).abs() < 1e-9 && (t.x[k] - t.x[k - 1] - 1e-3).abs() < 1e-9);
+        }
+        // A second resumption before any new point keeps the same origin.
+        let mut early = Timeline::default();
+        early.resumed();
+        assert_eq!(early.shift(segment(0, 0.0, 0.0, 1)).start_time, 0.0);
+    }
+
+    #[test]
+    fn only_failures_of_the_server_or_the_route_are_retried() {
+        let status = |code| ClientError::Status { code, message: String::new() };
+        assert!(retryable(&status(tonic::Code::Unavailable)));
+        assert!(retryable(&status(tonic::Code::Unknown)));
+        assert!(retryable(&ClientError::argument("cell", "no server answered")));
+        assert!(!retryable(&status(tonic::Code::InvalidArgument)));
+        assert!(!retryable(&status(tonic::Code::PermissionDenied)));
+        assert!(
+            !retryable(&status(tonic::Code::Aborted)),
+            "taken over by another stream: the caller's to see"
+        );
+        assert!(!retryable(&ClientError::argument("motion.goal", "bad")));
+    }
+}
