@@ -459,6 +459,7 @@ fn record(
         // The pegs and the board with the static potential, the other arm's jaws with the dynamic one.
         method: "static_volumetric",
         events: &[],
+        pose: None,
     };
     write_figure(&options.out, &name, &fig)?;
     report.plots.push(name);

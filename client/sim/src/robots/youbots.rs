@@ -295,6 +295,7 @@ async fn run_one(
         let as_run = |traj: &Trajectory| Executed {
             id: b.id.into(),
             traj: traj.clone(),
+            orientations: None,
             late_setpoints: 0,
             segments: 0,
             final_status: v1::SegmentStatus::Unspecified,
@@ -350,6 +351,7 @@ async fn run_one(
         body: None,
         method: method.name(),
         events: &[],
+        pose: None,
     };
     write_figure(&options.out, &file, &fig)?;
     report.plots.push(file);
