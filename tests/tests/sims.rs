@@ -190,14 +190,16 @@ async fn youbot_avoids_a_box_published_by_a_perception_node() {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn psm_arms_hand_the_ring_over_and_place_it_on_the_peg() {
-    use dmp_sim::robots::psm;
+    use dmp_sim::robots::pose::angle_deg;
+    use dmp_sim::robots::{psm, psm_stage};
     let wall = std::time::Instant::now();
     let report = simulate(SimName::Psm).await;
     println!("psm: {:.2} s of wall clock", wall.elapsed().as_secs_f64());
     let m = |k: &str| *report.metrics.get(k).unwrap_or_else(|| panic!("no metric {k}"));
     assert_clean(&report);
     assert_eq!(report.robots.len(), 6);
-    assert_eq!(report.plots.len(), 3);
+    // A figure per stage, and one per arm of each stage where the jaws turn.
+    assert_eq!(report.plots.len(), 7);
     for (id, r) in &report.robots {
         assert_eq!(r.late_setpoints, 0, "{id}");
         assert!(r.setpoints >= 1000, "{id}: {} setpoints at 1 kHz", r.setpoints);
@@ -235,6 +237,37 @@ async fn psm_arms_hand_the_ring_over_and_place_it_on_the_peg() {
     }
     // The simulated task takes a few seconds.
     assert!(m("ring/released_at_s") < 10.0);
+    // The jaws turn towards the handover: pose runs (the server runs a pose primitive alone, so these stages are
+    // two runs each) that end at their goal orientations within the PSM's angular limits; the crossing after the
+    // handover stays on one phase, the jaws held.
+    let limits = dmp::Limits::DVRK_PSM;
+    let turns = [
+        ("psm1/move-to-ring", psm_stage::Q_HOME, psm_stage::q_grasp()),
+        ("psm2/move-to-ring", psm_stage::Q_HOME, psm_stage::q_standby()),
+        ("psm1/transfer", psm_stage::q_grasp(), psm_stage::q_handover(0)),
+        ("psm2/transfer", psm_stage::q_standby(), psm_stage::q_handover(1)),
+    ];
+    for (key, from, to) in turns {
+        let p = report.robots[key].pose.as_ref().unwrap_or_else(|| panic!("{key}: not a pose run"));
+        assert!(p.final_orientation_error_deg <= 0.1, "{key}: {p:?}");
+        assert_eq!(p.goal_orientation, to, "{key}");
+        let turn = angle_deg(&from, &to);
+        assert!(
+            turn > 40.0 && (p.max_turn_from_start_deg - turn).abs() < 1.0,
+            "{key}: {turn}° planned, {p:?}"
+        );
+        assert_eq!(p.angular_limit_violations, 0, "{key}: {p:?}");
+        assert!(p.peak_angular_speed <= limits.max_angular_speed * (1.0 + 1e-6), "{key}: {p:?}");
+        assert!(
+            p.peak_angular_acceleration <= limits.max_angular_acceleration * (1.0 + 1e-6),
+            "{key}: {p:?}"
+        );
+        assert!(p.peak_angular_jerk <= limits.max_angular_jerk * (1.0 + 1e-6), "{key}: {p:?}");
+        assert!(p.min_body_clearance_m > 0.0, "{key}: {p:?}");
+    }
+    assert!(
+        report.robots["psm1/move-to-peg"].pose.is_none() && report.robots["psm2/move-to-peg"].pose.is_none()
+    );
 }
 
 #[tokio::test(flavor = "multi_thread")]

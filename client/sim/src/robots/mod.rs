@@ -15,7 +15,8 @@
 //! | the Panda pick and place, carrying the ring with its orientation | `panda.rs` |
 //! | the Panda carrying a 0.6 m bar through a 0.3 m gap, turning it (a held tool) | `panda_bar.rs` |
 //! | a pose robot's orientation in its report: goal angle, angular finite differences | `pose.rs` |
-//! | two da Vinci PSMs: ring transfer with a handover, one 6-D phase | `psm.rs` |
+//! | two da Vinci PSMs: ring transfer with a handover, the jaws turning | `psm.rs` |
+//! | a PSM stage: on one 6-D phase, or as two pose runs | `psm_stage.rs` |
 //! | the youBot with a perception node over Zenoh | `perception.rs` |
 //! | three youBots on one phase, walls and cubes | `youbots.rs` |
 //! | fitting an ellipse to a point cloud | `ellipse_fit.rs` |
@@ -31,6 +32,7 @@ pub mod perception;
 pub mod pose;
 pub mod profile;
 pub mod psm;
+pub mod psm_stage;
 pub mod report;
 pub mod robot;
 pub mod world;

@@ -33,7 +33,7 @@ use dmp_proto::obstacle_json::JsonObstacle;
 use dmp_proto::v1;
 
 use super::demonstration::{min_jerk, min_jerk_turn};
-use super::pose::{add_pose, rows};
+use super::pose::{add_pose, outline_samples, rows};
 use super::profile::put_profile;
 use super::report::{Figure, SimReport, measure, write_figure};
 use super::robot::Executed;
@@ -227,15 +227,6 @@ impl Motion {
         report.plots.push(name);
         Ok(())
     }
-}
-
-/// Samples of the surface of the superquadric `(semi, exponents)` (tool frame), for its outline in a figure.
-fn outline_samples(semi: &[f64], exponents: &[f64]) -> Result<Vec<[f64; 3]>, SimError> {
-    let plot = |e: dmp::DmpError| SimError::Plot(e.to_string());
-    let shape =
-        dmp::Shape::Superquadric(dmp::Superquadric::new(semi.to_vec(), exponents.to_vec()).map_err(plot)?);
-    let tool = dmp::tool::Tool::new(shape, [0.0; 3], dmp::tool::ControlPoints::default()).map_err(plot)?;
-    Ok(dmp::tool::surface_samples(&tool, 400).iter().map(|v| [v.x, v.y, v.z]).collect())
 }
 
 /// Runs the pick and place: the move to the ring, then both carries (at once: they are alternatives), then the bar

@@ -15,6 +15,7 @@ use serde::Serialize;
 use super::profile::{ROUNDING, over_rows};
 use super::report::RobotReport;
 use super::robot::Executed;
+use crate::error::SimError;
 
 /// A pose robot reaches its goal orientation when its last orientation is within this angle of it, degrees (the
 /// server's own goal tolerance is 0.057° by default).
@@ -163,6 +164,15 @@ pub fn slerp(from: &[f64; 4], to: &[f64; 4], s: f64) -> [f64; 4] {
 /// The orientations of `o` as `[x, y, z, w]` rows (for the figures).
 pub fn rows(q: &[f64]) -> Vec<[f64; 4]> {
     q.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect()
+}
+
+/// Samples of the surface of the superquadric `(semi, exponents)` (tool frame), for its outline in a figure.
+pub fn outline_samples(semi: &[f64], exponents: &[f64]) -> Result<Vec<[f64; 3]>, SimError> {
+    let plot = |e: dmp::DmpError| SimError::Plot(e.to_string());
+    let shape =
+        dmp::Shape::Superquadric(dmp::Superquadric::new(semi.to_vec(), exponents.to_vec()).map_err(plot)?);
+    let tool = dmp::tool::Tool::new(shape, [0.0; 3], dmp::tool::ControlPoints::default()).map_err(plot)?;
+    Ok(dmp::tool::surface_samples(&tool, 400).iter().map(|v| [v.x, v.y, v.z]).collect())
 }
 
 #[cfg(test)]

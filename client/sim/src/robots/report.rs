@@ -207,6 +207,8 @@ pub struct Other<'a> {
     pub traj: &'a Trajectory,
     /// Its body around its controlled point.
     pub body: &'a Body,
+    /// Its orientations, 4 per row of `traj` (a pose robot, or one holding its orientation); none: not turned.
+    pub orientations: Option<&'a [f64]>,
 }
 
 /// The distance of `body` at `p` to `o`: turned by row `k` of the orientations `q` of a pose run.
@@ -252,7 +254,9 @@ pub fn measure(
         }
         for o in others {
             if let Some(j) = row_at(o.traj, t) {
-                let d = body.distance(p, o.body, point3(position(o.traj, j)));
+                let mine = q.and_then(|q| q.get(4 * k..4 * k + 4));
+                let theirs = o.orientations.and_then(|q| q.get(4 * j..4 * j + 4));
+                let d = body.distance_carried((p, mine), o.body, (point3(position(o.traj, j)), theirs));
                 let m = min.get_mut(o.id).expect("inserted above");
                 *m = m.min(d);
             }

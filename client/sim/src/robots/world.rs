@@ -153,10 +153,26 @@ impl Body {
     /// w]` (the body keeps its own placement in the carrying frame: a held tool's shape in the tool frame), and
     /// `other` where it stands (0 when they touch or overlap).
     pub fn distance_posed(&self, position: Vector, q: &[f64], other: &Body) -> f64 {
-        let rotation = Rotation::from_xyzw(q[0], q[1], q[2], q[3]).normalize();
-        let carried = Pose::from_parts(position, rotation) * self.pose(Vector::ZERO);
-        match query::distance(&carried, self.shape.as_ref(), &other.pose(Vector::ZERO), other.shape.as_ref())
-        {
+        self.distance_carried((position, Some(q)), other, (Vector::ZERO, None))
+    }
+
+    /// Distance between this body and `other`, each carried at a position and, for a pose robot, turned by a
+    /// unit quaternion `[x, y, z, w]` (none: not turned).
+    pub fn distance_carried(
+        &self,
+        (position, q): (Vector, Option<&[f64]>),
+        other: &Body,
+        (other_position, other_q): (Vector, Option<&[f64]>),
+    ) -> f64 {
+        let place = |b: &Body, p: Vector, q: Option<&[f64]>| match q {
+            Some(q) => {
+                let rotation = Rotation::from_xyzw(q[0], q[1], q[2], q[3]).normalize();
+                Pose::from_parts(p, rotation) * b.pose(Vector::ZERO)
+            }
+            None => b.pose(p),
+        };
+        let (p1, p2) = (place(self, position, q), place(other, other_position, other_q));
+        match query::distance(&p1, self.shape.as_ref(), &p2, other.shape.as_ref()) {
             Ok(d) => d.distance,
             Err(_) => 0.0,
         }
