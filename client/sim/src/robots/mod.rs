@@ -95,13 +95,13 @@ pub const STEP_TIMEOUT: Duration = Duration::from_secs(30);
 /// The simulations.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum SimName {
-    /// Franka Emika Panda: pick and place past a peg, 3-D at 1 kHz.
+    /// Franka Emika Panda: pick and place past a peg, then a bar carried through a gap, poses at 1 kHz.
     Panda,
     /// One youBot; a perception node publishes an unknown box over Zenoh (always paced in real time: about 20 s).
     YoubotPerception,
     /// Three youBots on one 2-D phase in a walled room with cubes, each a moving obstacle for the others.
     Youbots,
-    /// Two da Vinci PSMs on one 6-D phase: pick, hand over and place a ring among pegs, 3-D each at 1 kHz.
+    /// Two da Vinci PSMs: pick, hand over and place a ring among pegs, the jaws turning, 3-D each at 1 kHz.
     Psm,
 }
 

@@ -1,5 +1,6 @@
 //! The Panda pick and place (the paper's section on the Panda): move the gripper to the ring, then carry the ring to
-//! the green peg past the red peg, 3-D at 1 kHz.
+//! the green peg past the red peg, 3-D at 1 kHz, as pose runs: the gripper's orientation turns with it. Then the
+//! Panda carries a bar through a gap, turning it (`super::panda_bar`).
 //!
 //! # Geometry (metres, the robot's base frame, `z` up)
 //! - Board: a box of centre `(0.5, 0, 0.01)` and half-extents `(0.15, 0.25, 0.01)` (top at `z = 0.02`).
@@ -7,6 +8,18 @@
 //! - Green peg: the same at `(0.55, 0.17)`.
 //! - Ring: outer radius [`RING_RADIUS`], on a stand, grasped at its centre `(0.45, -0.17, 0.06)`.
 //! - Home: `(0.30, -0.40, 0.35)`; place: `(0.55, 0.17, 0.20)`, above the green peg.
+//!
+//! # Orientation (the gripper's frame in the base's, `[x, y, z, w]`)
+//! - Home: [`Q_HOME`], the base's frame.
+//! - The ring stands upright on its stand, its axis (the tool's `z`) along `-y`: the gripper grasps it turned a
+//!   quarter about `x` ([`Q_GRASP`]).
+//! - To go onto the green peg the ring lies flat, its axis along the peg's (`z`), here turned 30° about `z`
+//!   ([`Q_PLACE`]): the carry turns it by 93.8°.
+//!
+//! Each primitive is a pose primitive, learned from a demonstration whose orientation turns from the start's to the
+//! goal's on the same minimum-jerk profile as the position (`super::demonstration::min_jerk_turn`); each run gives
+//! its start and goal orientation (`MotionSpec.start_orientation`, `goal_orientation`), the carry from where the
+//! move to the ring actually stopped.
 //!
 //! The straight line from the ring to the place crosses `y = 0` at `(0.50, 0, 0.13)`: through the red peg.
 //!
@@ -22,10 +35,13 @@
 //! the static (`A = 10, eta = 2`) and the dynamic potential.
 //!
 //! # The true world
-//! The gripper's centre is a point while moving to the ring; while carrying, the ring is the ball of radius
-//! [`RING_RADIUS`] around it. Clearance is measured with parry against the true box and cylinders. The setpoints
-//! must also stay within the Panda's Cartesian limits ([`MAX_SPEED`], [`MAX_ACCELERATION`], [`MAX_JERK`]), which
-//! the report's peaks are checked against.
+//! The gripper's centre is a point while moving to the ring; while carrying, the ring is its disc, a cylinder of
+//! radius [`RING_RADIUS`] and half-thickness [`RING_HALF_THICKNESS`] along the tool's `z`, turned with the
+//! orientation at every setpoint. The planner inflates the obstacles by the ring's radius, which holds the disc in
+//! any orientation, so the orientation follows the DMP (no tool). Clearance is measured with parry against the true
+//! box and cylinders. The setpoints must also stay within the Panda's Cartesian limits ([`MAX_SPEED`],
+//! [`MAX_ACCELERATION`], [`MAX_JERK`]) and angular ones ([`PROFILE`]), which the report's peaks are checked against
+//! (`super::pose`).
 
 use dmp_client::grpc::DmpClient;
 use dmp_plot::PoseTrace;

@@ -1,7 +1,8 @@
 //! The da Vinci peg transfer (the paper's section on the da Vinci): two patient-side manipulators, PSM1 on the right
-//! and PSM2 on the left, on one shared phase (one 6-D DMP, 3-D per arm, 1 kHz like the real arms' controllers).
-//! PSM1 picks the ring and brings it to the centre of the board, hands it over, and PSM2 places it on the target
-//! peg. The pegs are obstacles, and each arm is a moving obstacle for the other.
+//! and PSM2 on the left, 3-D per arm at 1 kHz like the real arms' controllers. PSM1 picks the ring and brings it to
+//! the centre of the board, hands it over, and PSM2 places it on the target peg. The pegs are obstacles; the jaws
+//! turn towards the handover (`super::psm_stage`), and where the arms cross they run on one shared phase (one 6-D
+//! DMP), each a moving obstacle for the other.
 //!
 //! # Geometry (metres, a frame common to both arms, `x` right, `y` away from the camera, `z` up)
 //! - Board: a box of centre `(0, 0, -0.003)` and half-extents `(0.08, 0.06, 0.003)` (top at `z = 0`).
@@ -11,12 +12,15 @@
 //!   `peg-1` and `peg-2` sit 3 mm beside the straight lines, so that the way around is not a tie.
 //! - Ring: outer radius [`RING_RADIUS`], inner radius [`RING_INNER_RADIUS`], on a stand, grasped at its centre
 //!   `(0.05, -0.03, 0.015)`.
-//! - Each arm's controlled point is the centre of its jaws; the jaws are a vertical cylinder of radius
-//!   [`JAW_RADIUS`] and length `2` [`JAW_HALF_LENGTH`] (the instruments keep their orientation, as in the paper).
+//! - Each arm's controlled point is the centre of its jaws; the jaws are a cylinder of radius [`JAW_RADIUS`] and
+//!   length `2` [`JAW_HALF_LENGTH`] along the jaws' `z`, upright at home, turned with the jaws' orientation
+//!   (`super::psm_stage`: PSM1 tilts them 20° about `y` and rolls them 45° to grasp the ring, both arms roll them a
+//!   quarter turn to open towards each other at the handover, PSM2 half of it at its standby point).
 //! - Handover: the centre [`CENTRE`]; PSM1 holds the ring [`HANDOVER_OFFSET`] in front of it, PSM2 grasps it the
 //!   same distance behind (the jaws then have 4 mm between them).
 //!
-//! # Stages (one `ExecuteGroup` each, PSM1 first; each starts where the previous one ended)
+//! # Stages (each starts where the previous one ended; the first two as two pose runs, one per arm, the jaws
+//! turning; the third as one `ExecuteGroup`, PSM1 first, the jaws held: `super::psm_stage`)
 //! 1. `move-to-ring`: PSM1 from its home `(0.07, 0.02, 0.05)` to the ring; PSM2 from its home
 //!    `(-0.06, 0.04, 0.05)` to a standby point `(-0.02, 0.025, 0.03)` behind the centre, on its side.
 //! 2. `transfer`: PSM1 carries the ring to the handover point in front of the centre, past `peg-1`; PSM2 approaches
@@ -30,7 +34,9 @@
 //! # Primitives
 //! Every arm's motion of every stage is learned with `learn` from a human-like demonstration between the
 //! nominal start and goal: a minimum-jerk curve (Flash and Hogan) with a lift of [`LIFT`] (`16 u^2 (1 - u)^2`) in
-//! `z`, [`TAU`] long, sampled at 100 Hz; `N = 50`, `K = 3050`, `D = 2 sqrt(K)`, `alpha = 4`.
+//! `z`, [`TAU`] long, sampled at 100 Hz; `N = 50`, `K = 3050`, `D = 2 sqrt(K)`, `alpha = 4`. The first two
+//! stages' are pose primitives: their demonstrations turn the jaws from the stage's start orientation to its goal's
+//! on the same minimum-jerk profile (`super::demonstration::min_jerk_turn`).
 //!
 //! # The planner's view
 //! Pegs are superquadrics of exponents `(1, 1, 2)` through the cylinders' rims, the board a rounded box of
@@ -48,9 +54,9 @@
 //! stability limit at 1 kHz for `lambda` of a few units: the setpoints then break the continuity bounds.
 //!
 //! # The true world
-//! Clearance is measured with parry against the true board and cylinders: of the jaws, or while carrying of the
-//! ring (a ball of [`RING_RADIUS`] around the controlled point, which also holds the jaws); between the arms, of
-//! the two jaws (at the handover the ring touches both on purpose). Each stage is also run without any avoidance
+//! Clearance is measured with parry against the true board and cylinders: of the jaws (turned), or while carrying
+//! of the ring (a ball of [`RING_RADIUS`] around the controlled point, which also holds the jaws); between the arms,
+//! of the two jaws, both turned (at the handover the ring touches both on purpose). Each stage is also run without any avoidance
 //! (the free plan of the figures) and without the robot term only; their true clearances are reported as
 //! metrics (`<arm>/<stage>/free_min_clearance_m/<id>`, and `<arm>/<stage>/no_robot_term_min_clearance_m/<other
 //! arm>`): they show what avoidance prevented.
