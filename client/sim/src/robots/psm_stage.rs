@@ -4,8 +4,7 @@
 //! The server runs a pose primitive alone: a group joins position primitives only (`dmp::execution::join_group`:
 //! "a pose primitive (with orientation) runs alone, not in a group"). So a stage runs either
 //! - on one phase (`ExecuteGroup`, one 6-D DMP), the arms avoiding each other's jaws, each holding its orientation;
-//! - or as two pose runs (`Execute`, one per arm, each from the stage's start on the simulated clock), the jaws
-//!   turning on each arm's own phase. The arms then do not avoid each other: only stages where they stay apart
+//! - or as two pose runs (`Execute`, one per arm, streamed at once), the jaws turning on each arm's own phase. The arms then do not avoid each other: only stages where they stay apart
 //!   without the robot term run so (the report still measures the jaws' clearance to each other at equal times).
 
 use dmp_client::grpc::DmpClient;
@@ -193,22 +192,22 @@ impl Stage {
             return <[Executed; 2]>::try_from(runs)
                 .map_err(|_| SimError::protocol("a group of two answered for another count".into()));
         }
-        let mut runs = Vec::with_capacity(2);
-        for i in 0..2 {
-            let leg = &self.legs[i];
-            let request = v1::ExecuteRequest {
-                motion: Some(self.motion(leg, &starts[i], orientations[i], avoid)),
-                dt: DT,
-                segment_s: 0.01,
-                pacing: pacing(realtime),
-                max_duration_s: 4.0 * TAU,
-                ..Default::default()
-            };
-            let robot = options.robot_client(client, &server_robot(leg.robot))?;
-            runs.push(execute(&robot, request, realtime, |_| {}).await?);
-        }
-        <[Executed; 2]>::try_from(runs)
-            .map_err(|_| SimError::protocol("two runs answered for another count".into()))
+        // Both arms at once, as a cell runs them (on the simulated clock each from the stage's start anyway).
+        let request = |i: usize| v1::ExecuteRequest {
+            motion: Some(self.motion(&self.legs[i], &starts[i], orientations[i], avoid)),
+            dt: DT,
+            segment_s: 0.01,
+            pacing: pacing(realtime),
+            max_duration_s: 4.0 * TAU,
+            ..Default::default()
+        };
+        let robot = |i: usize| options.robot_client(client, &server_robot(self.legs[i].robot));
+        let (c0, c1) = (robot(0)?, robot(1)?);
+        let (a, b) = tokio::try_join!(
+            execute(&c0, request(0), realtime, |_| {}),
+            execute(&c1, request(1), realtime, |_| {})
+        )?;
+        Ok([a, b])
     }
 }
 
