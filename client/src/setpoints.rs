@@ -4,8 +4,12 @@
 //! `start_time` on, so the current setpoint at time `t` is the one of the latest segment whose `start_time <= t`.
 //! [`Setpoints`] applies the rule as segments arrive: each one cuts the rows at and after its start time, then
 //! appends its own points. A segment without points (a final status) supersedes nothing.
+//!
+//! A pose run's segments also carry orientations (4 per point), angular velocities and accelerations (3 each): they
+//! are kept row for row with the positions ([`Setpoints::orientations`]).
 
 use dmp::Trajectory;
+use dmp::execution::OrientationPoints;
 use dmp_proto::v1;
 
 use crate::error::ClientError;
@@ -17,6 +21,8 @@ const SAME_TIME: f64 = 1e-6;
 #[derive(Debug, Clone, Default)]
 pub struct Setpoints {
     traj: Option<Trajectory>,
+    /// A pose run's orientations, row for row with `traj` (none: a position run).
+    orientations: Option<OrientationPoints>,
     segments: usize,
     last_status: Option<v1::SegmentStatus>,
 }
@@ -62,6 +68,25 @@ impl Setpoints {
             self.note(seg);
             return Ok(());
         }
+        let pose = !seg.orientations.is_empty();
+        if pose {
+            for (name, v, n) in [
+                ("orientations", &seg.orientations, 4),
+                ("angular_velocities", &seg.angular_velocities, 3),
+                ("angular_accelerations", &seg.angular_accelerations, 3),
+            ] {
+                if v.len() != rows * n {
+                    return Err(bad(format!(
+                        "{name} has {} values, expected points x {n} = {}",
+                        v.len(),
+                        rows * n
+                    )));
+                }
+            }
+        }
+        if self.traj.as_ref().is_some_and(|t| !t.is_empty()) && pose != self.orientations.is_some() {
+            return Err(bad("a pose run's segments all carry orientations, a position run's none".into()));
+        }
         if !(seg.dt.is_finite() && seg.dt > 0.0 && seg.start_time.is_finite()) {
             return Err(bad(format!(
                 "start_time {} and dt {} must be finite, dt > 0",
@@ -75,6 +100,15 @@ impl Setpoints {
         traj.x.truncate(keep * d);
         traj.xd.truncate(keep * d);
         traj.xdd.truncate(keep * d);
+        if pose {
+            let o = self.orientations.get_or_insert_with(OrientationPoints::default);
+            o.q.truncate(keep * 4);
+            o.omega.truncate(keep * 3);
+            o.omega_dot.truncate(keep * 3);
+            o.q.extend_from_slice(&seg.orientations);
+            o.omega.extend_from_slice(&seg.angular_velocities);
+            o.omega_dot.extend_from_slice(&seg.angular_accelerations);
+        }
         for k in 0..rows {
             let r = k * d..(k + 1) * d;
             traj.push(
@@ -106,6 +140,11 @@ impl Setpoints {
     /// The current setpoints, one row per point in force (none before the first segment with points).
     pub fn trajectory(&self) -> Option<&Trajectory> {
         self.traj.as_ref()
+    }
+
+    /// A pose run's current orientations, row for row with [`Setpoints::trajectory`] (none: a position run).
+    pub fn orientations(&self) -> Option<&OrientationPoints> {
+        self.orientations.as_ref()
     }
 
     /// The current setpoints; a stream without points gives an empty trajectory of dimension 0.
@@ -199,5 +238,40 @@ mod tests {
         bad.dt = 0.0;
         assert!(s.push(&bad).is_err());
         assert_eq!(s.trajectory().unwrap().len(), 4, "a refused segment changes nothing");
+    }
+
+    /// [`seg`] of a pose run: orientation `(0, 0, sin(v/2), cos(v/2))`, angular velocity and acceleration `v`.
+    fn pose_seg(sequence: u64, t0: f64, n: usize, base: f64) -> v1::Segment {
+        let mut s = seg(sequence, t0, n, base);
+        for k in 0..n {
+            let v = base + k as f64;
+            s.orientations.extend([0.0, 0.0, (v / 2.0).sin(), (v / 2.0).cos()]);
+            s.angular_velocities.extend([v; 3]);
+            s.angular_accelerations.extend([v; 3]);
+        }
+        s
+    }
+
+    #[test]
+    fn a_pose_runs_orientations_are_superseded_with_its_positions() {
+        let mut s = Setpoints::new();
+        s.push(&pose_seg(0, 0.0, 10, 0.0)).unwrap();
+        s.push(&pose_seg(1, 0.4, 3, 100.0)).unwrap();
+        let o = s.orientations().unwrap();
+        assert_eq!((o.q.len(), o.omega.len(), o.omega_dot.len()), (28, 21, 21));
+        assert_eq!(o.omega[3 * 3], 3.0);
+        assert_eq!(o.omega[3 * 4], 100.0);
+        assert!((o.q[4 * 4 + 2] - 50f64.sin()).abs() < 1e-15);
+        // A position segment in a pose run, or orientations of the wrong length, are refused.
+        assert!(s.push(&seg(2, 0.5, 2, 0.0)).unwrap_err().to_string().contains("orientations"));
+        let mut bad = pose_seg(2, 0.5, 2, 0.0);
+        bad.angular_velocities.pop();
+        assert!(s.push(&bad).unwrap_err().to_string().contains("angular_velocities"));
+        // A position run has none.
+        let t = segments_to_trajectory(&[seg(0, 0.0, 3, 0.0)]).unwrap();
+        assert_eq!(t.len(), 3);
+        let mut p = Setpoints::new();
+        p.push(&seg(0, 0.0, 3, 0.0)).unwrap();
+        assert!(p.orientations().is_none());
     }
 }

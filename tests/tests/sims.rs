@@ -83,7 +83,8 @@ fn assert_clean(report: &SimReport) {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn panda_picks_and_places_past_the_red_peg() {
-    use dmp_sim::robots::panda;
+    use dmp_sim::robots::pose::angle_deg;
+    use dmp_sim::robots::{panda, panda_bar};
     let report = simulate_then(SimName::Panda, |out| {
         // The page opens from the disk in a browser: not blank, no console message.
         let shot = dmp_tests::browser::open(&out.join("report.html"), (1400, 4000));
@@ -93,10 +94,11 @@ async fn panda_picks_and_places_past_the_red_peg() {
     })
     .await;
     assert_clean(&report);
-    assert_eq!(report.robots.len(), 3);
-    assert_eq!(report.plots.len(), 3);
+    assert_eq!(report.robots.len(), 4);
+    assert_eq!(report.plots.len(), 4);
     for (id, r) in &report.robots {
         assert_eq!(r.late_setpoints, 0, "{id}");
+        assert_pose_within_panda(id, r);
         assert!(r.setpoints >= 1000, "{id}: {} setpoints at 1 kHz", r.setpoints);
         // What a real Panda would accept: it runs with the PANDA profile in its robot record.
         assert_eq!(r.profile, Some((&dmp::Limits::PANDA).into()), "{id}");
@@ -104,11 +106,56 @@ async fn panda_picks_and_places_past_the_red_peg() {
         assert!(r.peak_acceleration <= panda::MAX_ACCELERATION, "{id}: {} m/s^2", r.peak_acceleration);
         assert!(r.peak_jerk <= panda::MAX_JERK, "{id}: peak jerk {} m/s^3", r.peak_jerk);
     }
-    // Both carries go past the red peg without touching it with the ring.
+    // Both carries go past the red peg without touching it with the ring's true disc, turned as it is carried.
     for key in ["panda/carry-static", "panda/carry-dynamic"] {
         let d = report.robots[key].min_clearance_m["red-peg"];
         assert!(d > 0.0 && d < 0.1, "{key}: clearance to the red peg {d}");
+        let pose = report.robots[key].pose.as_ref().unwrap();
+        assert!(pose.body.contains("ring"), "{key}: {}", pose.body);
+        // From upright on its stand to flat over the green peg, turned 30° about z: 93.8° between them.
+        let turn = angle_deg(&panda::Q_GRASP, &panda::Q_PLACE);
+        assert!((pose.max_turn_from_start_deg - turn).abs() < 1.0, "{key}: turned {pose:?}");
     }
+    let reach = report.robots["panda/move-to-ring"].pose.as_ref().unwrap();
+    assert!((reach.max_turn_from_start_deg - 90.0).abs() < 1.0, "{reach:?}");
+    // The bar passes the gap only turned: its true box stays clear of both true rails, and it turns past the angle
+    // where its axis clears the rails' nearest edges (`a sin(phi) - b cos(phi) = t`, a = the gap's half-width, b
+    // a rail's half-height, t the bar's half-thickness: 17.5°; held as it starts, 10° off across, it would cut
+    // them).
+    let bar = &report.robots["panda/carry-bar"];
+    let pose = bar.pose.as_ref().unwrap();
+    assert!(pose.body.contains("bar"), "{}", pose.body);
+    for rail in ["rail-left", "rail-right"] {
+        let d = bar.min_clearance_m[rail];
+        assert!(d > 0.0 && d < 0.2, "the bar's clearance to {rail} is {d}");
+    }
+    let (a, b, t) = (panda_bar::GAP / 2.0, panda_bar::RAIL_HALF[2], panda_bar::BAR_HALF_THICKNESS);
+    let clears = (b.atan2(a) + (t / a.hypot(b)).asin()).to_degrees();
+    assert!((17.0..18.0).contains(&clears), "{clears}");
+    assert!(
+        pose.max_turn_from_start_deg > clears - 10.0,
+        "the bar turned {pose:?}, needs {}°",
+        clears - 10.0
+    );
+}
+
+/// A pose run of the Panda: it ends at its goal orientation and its angular setpoints stay within the Panda's
+/// angular limits (finite differences at 1 kHz, as the linear ones), counted in its limit violations.
+fn assert_pose_within_panda(id: &str, r: &dmp_sim::robots::RobotReport) {
+    let limits = dmp::Limits::PANDA;
+    let pose = r.pose.as_ref().unwrap_or_else(|| panic!("{id}: not a pose run"));
+    assert!(pose.final_orientation_error_deg <= 0.1, "{id}: {pose:?}");
+    assert_eq!(pose.angular_limit_violations, 0, "{id}: {pose:?}");
+    assert!(pose.peak_angular_speed > 0.0, "{id}: it turns");
+    assert!(pose.peak_angular_speed <= limits.max_angular_speed * (1.0 + 1e-6), "{id}: {pose:?}");
+    assert!(
+        pose.peak_angular_acceleration <= limits.max_angular_acceleration * (1.0 + 1e-6),
+        "{id}: {pose:?}"
+    );
+    assert!(pose.peak_angular_jerk <= limits.max_angular_jerk * (1.0 + 1e-6), "{id}: {pose:?}");
+    // The streamed angular velocities agree with the orientations' finite differences.
+    assert!((pose.streamed_peak_angular_speed - pose.peak_angular_speed).abs() < 0.01, "{id}: {pose:?}");
+    assert!(pose.min_body_clearance_m > 0.0 && pose.min_body_clearance_m.is_finite(), "{id}: {pose:?}");
 }
 
 #[tokio::test(flavor = "multi_thread")]
@@ -143,14 +190,16 @@ async fn youbot_avoids_a_box_published_by_a_perception_node() {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn psm_arms_hand_the_ring_over_and_place_it_on_the_peg() {
-    use dmp_sim::robots::psm;
+    use dmp_sim::robots::pose::angle_deg;
+    use dmp_sim::robots::{psm, psm_stage};
     let wall = std::time::Instant::now();
     let report = simulate(SimName::Psm).await;
     println!("psm: {:.2} s of wall clock", wall.elapsed().as_secs_f64());
     let m = |k: &str| *report.metrics.get(k).unwrap_or_else(|| panic!("no metric {k}"));
     assert_clean(&report);
     assert_eq!(report.robots.len(), 6);
-    assert_eq!(report.plots.len(), 3);
+    // A figure per stage, and one per arm of each stage where the jaws turn.
+    assert_eq!(report.plots.len(), 7);
     for (id, r) in &report.robots {
         assert_eq!(r.late_setpoints, 0, "{id}");
         assert!(r.setpoints >= 1000, "{id}: {} setpoints at 1 kHz", r.setpoints);
@@ -188,6 +237,37 @@ async fn psm_arms_hand_the_ring_over_and_place_it_on_the_peg() {
     }
     // The simulated task takes a few seconds.
     assert!(m("ring/released_at_s") < 10.0);
+    // The jaws turn towards the handover: pose runs (the server runs a pose primitive alone, so these stages are
+    // two runs each) that end at their goal orientations within the PSM's angular limits; the crossing after the
+    // handover stays on one phase, the jaws held.
+    let limits = dmp::Limits::DVRK_PSM;
+    let turns = [
+        ("psm1/move-to-ring", psm_stage::Q_HOME, psm_stage::q_grasp()),
+        ("psm2/move-to-ring", psm_stage::Q_HOME, psm_stage::q_standby()),
+        ("psm1/transfer", psm_stage::q_grasp(), psm_stage::q_handover(0)),
+        ("psm2/transfer", psm_stage::q_standby(), psm_stage::q_handover(1)),
+    ];
+    for (key, from, to) in turns {
+        let p = report.robots[key].pose.as_ref().unwrap_or_else(|| panic!("{key}: not a pose run"));
+        assert!(p.final_orientation_error_deg <= 0.1, "{key}: {p:?}");
+        assert_eq!(p.goal_orientation, to, "{key}");
+        let turn = angle_deg(&from, &to);
+        assert!(
+            turn > 40.0 && (p.max_turn_from_start_deg - turn).abs() < 1.0,
+            "{key}: {turn}° planned, {p:?}"
+        );
+        assert_eq!(p.angular_limit_violations, 0, "{key}: {p:?}");
+        assert!(p.peak_angular_speed <= limits.max_angular_speed * (1.0 + 1e-6), "{key}: {p:?}");
+        assert!(
+            p.peak_angular_acceleration <= limits.max_angular_acceleration * (1.0 + 1e-6),
+            "{key}: {p:?}"
+        );
+        assert!(p.peak_angular_jerk <= limits.max_angular_jerk * (1.0 + 1e-6), "{key}: {p:?}");
+        assert!(p.min_body_clearance_m > 0.0, "{key}: {p:?}");
+    }
+    assert!(
+        report.robots["psm1/move-to-peg"].pose.is_none() && report.robots["psm2/move-to-peg"].pose.is_none()
+    );
 }
 
 #[tokio::test(flavor = "multi_thread")]

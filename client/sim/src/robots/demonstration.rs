@@ -89,6 +89,18 @@ pub fn min_jerk(start: &[f64], goal: &[f64], duration: f64, lift: f64, dt: f64) 
     (t, rows)
 }
 
+/// The orientations of a minimum-jerk turn from `start` to `goal` (`[x, y, z, w]`) at the times of [`min_jerk`]
+/// of the same `duration` and `dt`: the angle covered follows `10u^3 - 15u^4 + 6u^5` about one fixed axis.
+pub fn min_jerk_turn(start: &[f64; 4], goal: &[f64; 4], duration: f64, dt: f64) -> Vec<[f64; 4]> {
+    let n = (duration / dt).round().max(2.0) as usize;
+    (0..=n)
+        .map(|k| {
+            let u = k as f64 / n as f64;
+            super::pose::slerp(start, goal, u * u * u * (10.0 - 15.0 * u + 6.0 * u * u))
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

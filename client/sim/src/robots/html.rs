@@ -67,6 +67,29 @@ fn checks(r: &RobotReport, realtime: bool, limits: Option<&Limits>) -> Vec<Check
         ));
         c.push(("jerk limit", r.peak_jerk <= l.jerk, format!("{:.1} ≤ {} m/s³", r.peak_jerk, l.jerk)));
     }
+    if let Some(p) = &r.pose {
+        c.push((
+            "goal orientation",
+            p.final_orientation_error_deg <= super::pose::ORIENTATION_TOLERANCE_DEG,
+            format!("{:.4}° from it", p.final_orientation_error_deg),
+        ));
+        c.push((
+            "angular limits",
+            p.angular_limit_violations == 0,
+            format!(
+                "peaks {:.3} rad/s, {:.2} rad/s², {:.0} rad/s³; {} setpoints over",
+                p.peak_angular_speed,
+                p.peak_angular_acceleration,
+                p.peak_angular_jerk,
+                p.angular_limit_violations
+            ),
+        ));
+        c.push((
+            "clearance of the true shape",
+            p.min_body_clearance_m > 0.0,
+            format!("{:.4} m ({})", p.min_body_clearance_m, p.body),
+        ));
+    }
     c
 }
 
@@ -107,6 +130,7 @@ pub fn render_html(report: &SimReport, dir: &Path) -> Result<String, SimError> {
     h.push_str("</table>\n");
     clearance_table(&mut h, report);
     limits_table(&mut h, report);
+    pose_table(&mut h, report);
     h.push_str("<h2>Figures</h2>\n");
     for plot in &report.plots {
         let path = dir.join(plot);
@@ -162,6 +186,42 @@ fn limits_table(h: &mut String, report: &SimReport) {
             r.peak_acceleration,
             r.peak_jerk,
             r.duration_s
+        );
+    }
+    h.push_str("</table>\n");
+}
+
+/// The orientation of each pose robot: its goal angle, angular peaks (finite differences) against its profile,
+/// and the clearance of its true shape.
+fn pose_table(h: &mut String, report: &SimReport) {
+    let poses: Vec<_> =
+        report.robots.iter().filter_map(|(id, r)| r.pose.as_ref().map(|p| (id, r, p))).collect();
+    if poses.is_empty() {
+        return;
+    }
+    h.push_str(
+        "<h2>Orientation</h2>\n<table id=\"orientation\">\n<tr><th class=\"name\">robot</th><th>goal error (°)</th>\
+         <th>largest turn (°)</th><th>angular speed (rad/s)</th><th>angular acceleration (rad/s²)</th>\
+         <th>angular jerk (rad/s³)</th><th>over the limits</th><th>clearance (m)</th><th class=\"name\">shape</th></tr>\n",
+    );
+    for (id, r, p) in poses {
+        let limit = |v: Option<f64>| v.filter(|v| *v > 0.0).map_or(String::new(), |v| format!(" ≤ {v}"));
+        let _ = writeln!(
+            h,
+            "<tr><td class=\"name\">{}</td><td>{:.4}</td><td>{:.1}</td><td>{:.3}{}</td><td>{:.2}{}</td><td>{:.0}{}</td>\
+             <td>{}</td><td>{:.4}</td><td class=\"name\">{}</td></tr>",
+            esc(id),
+            p.final_orientation_error_deg,
+            p.max_turn_from_start_deg,
+            p.peak_angular_speed,
+            limit(r.profile.map(|l| l.max_angular_speed)),
+            p.peak_angular_acceleration,
+            limit(r.profile.map(|l| l.max_angular_acceleration)),
+            p.peak_angular_jerk,
+            limit(r.profile.map(|l| l.max_angular_jerk)),
+            p.angular_limit_violations,
+            p.min_body_clearance_m,
+            esc(&p.body)
         );
     }
     h.push_str("</table>\n");

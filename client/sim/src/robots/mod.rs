@@ -12,8 +12,11 @@
 //! | each robot's limit profile: its robot record, finite differences against it | `profile.rs` |
 //! | `report.html`: the figures, clearances, limits, pass or fail per check | `html.rs` |
 //! | clearance along a whole run, robots side by side, closest approach | `clearance.rs` |
-//! | the Panda pick and place | `panda.rs` |
-//! | two da Vinci PSMs: ring transfer with a handover, one 6-D phase | `psm.rs` |
+//! | the Panda pick and place, carrying the ring with its orientation | `panda.rs` |
+//! | the Panda carrying a 0.6 m bar through a 0.3 m gap, turning it (a held tool) | `panda_bar.rs` |
+//! | a pose robot's orientation in its report: goal angle, angular finite differences | `pose.rs` |
+//! | two da Vinci PSMs: ring transfer with a handover, the jaws turning | `psm.rs` |
+//! | a PSM stage: on one 6-D phase, or as two pose runs | `psm_stage.rs` |
 //! | the youBot with a perception node over Zenoh | `perception.rs` |
 //! | three youBots on one phase, walls and cubes | `youbots.rs` |
 //! | fitting an ellipse to a point cloud | `ellipse_fit.rs` |
@@ -24,9 +27,12 @@ pub mod demonstration;
 pub mod ellipse_fit;
 pub mod html;
 pub mod panda;
+pub mod panda_bar;
 pub mod perception;
+pub mod pose;
 pub mod profile;
 pub mod psm;
+pub mod psm_stage;
 pub mod report;
 pub mod robot;
 pub mod world;
@@ -89,13 +95,13 @@ pub const STEP_TIMEOUT: Duration = Duration::from_secs(30);
 /// The simulations.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum SimName {
-    /// Franka Emika Panda: pick and place past a peg, 3-D at 1 kHz.
+    /// Franka Emika Panda: pick and place past a peg, then a bar carried through a gap, poses at 1 kHz.
     Panda,
     /// One youBot; a perception node publishes an unknown box over Zenoh (always paced in real time: about 20 s).
     YoubotPerception,
     /// Three youBots on one 2-D phase in a walled room with cubes, each a moving obstacle for the others.
     Youbots,
-    /// Two da Vinci PSMs on one 6-D phase: pick, hand over and place a ring among pegs, 3-D each at 1 kHz.
+    /// Two da Vinci PSMs: pick, hand over and place a ring among pegs, the jaws turning, 3-D each at 1 kHz.
     Psm,
 }
 
@@ -299,13 +305,25 @@ pub async fn execute(
 
 /// The obstacle-free trajectory of a motion (the server's plan, no avoidance, no scene).
 pub async fn free_plan(client: &DmpClient, motion: &v1::MotionSpec, dt: f64) -> Result<Trajectory, SimError> {
+    Ok(free_pose_plan(client, motion, dt).await?.0)
+}
+
+/// [`free_plan`] with a pose run's orientations, `[x, y, z, w]` per row (empty for a position run).
+pub async fn free_pose_plan(
+    client: &DmpClient,
+    motion: &v1::MotionSpec,
+    dt: f64,
+) -> Result<(Trajectory, Vec<[f64; 4]>), SimError> {
     let mut m = motion.clone();
     m.avoidance = Some(avoidance(Method::None));
     m.ignore_scene = true;
     m.extra_obstacles.clear();
     let plan = within("plan", client.plan(v1::PlanRequest { motion: Some(m), dt, duration: 0.0 })).await??;
     let seg = plan.trajectory.ok_or_else(|| SimError::protocol("the plan has no trajectory".into()))?;
-    Ok(dmp_client::setpoints::segments_to_trajectory(std::iter::once(&seg))?)
+    let mut s = dmp_client::setpoints::Setpoints::new();
+    s.push(&seg)?;
+    let q = s.orientations().map(|o| pose::rows(&o.q)).unwrap_or_default();
+    Ok((s.into_trajectory(), q))
 }
 
 /// The avoidance methods the simulations use.

@@ -1,5 +1,6 @@
 //! The Panda pick and place (the paper's section on the Panda): move the gripper to the ring, then carry the ring to
-//! the green peg past the red peg, 3-D at 1 kHz.
+//! the green peg past the red peg, 3-D at 1 kHz, as pose runs: the gripper's orientation turns with it. Then the
+//! Panda carries a bar through a gap, turning it (`super::panda_bar`).
 //!
 //! # Geometry (metres, the robot's base frame, `z` up)
 //! - Board: a box of centre `(0.5, 0, 0.01)` and half-extents `(0.15, 0.25, 0.01)` (top at `z = 0.02`).
@@ -7,6 +8,18 @@
 //! - Green peg: the same at `(0.55, 0.17)`.
 //! - Ring: outer radius [`RING_RADIUS`], on a stand, grasped at its centre `(0.45, -0.17, 0.06)`.
 //! - Home: `(0.30, -0.40, 0.35)`; place: `(0.55, 0.17, 0.20)`, above the green peg.
+//!
+//! # Orientation (the gripper's frame in the base's, `[x, y, z, w]`)
+//! - Home: [`Q_HOME`], the base's frame.
+//! - The ring stands upright on its stand, its axis (the tool's `z`) along `-y`: the gripper grasps it turned a
+//!   quarter about `x` ([`Q_GRASP`]).
+//! - To go onto the green peg the ring lies flat, its axis along the peg's (`z`), here turned 30° about `z`
+//!   ([`Q_PLACE`]): the carry turns it by 93.8°.
+//!
+//! Each primitive is a pose primitive, learned from a demonstration whose orientation turns from the start's to the
+//! goal's on the same minimum-jerk profile as the position (`super::demonstration::min_jerk_turn`); each run gives
+//! its start and goal orientation (`MotionSpec.start_orientation`, `goal_orientation`), the carry from where the
+//! move to the ring actually stopped.
 //!
 //! The straight line from the ring to the place crosses `y = 0` at `(0.50, 0, 0.13)`: through the red peg.
 //!
@@ -22,27 +35,43 @@
 //! the static (`A = 10, eta = 2`) and the dynamic potential.
 //!
 //! # The true world
-//! The gripper's centre is a point while moving to the ring; while carrying, the ring is the ball of radius
-//! [`RING_RADIUS`] around it. Clearance is measured with parry against the true box and cylinders. The setpoints
-//! must also stay within the Panda's Cartesian limits ([`MAX_SPEED`], [`MAX_ACCELERATION`], [`MAX_JERK`]), which
-//! the report's peaks are checked against.
+//! The gripper's centre is a point while moving to the ring; while carrying, the ring is its disc, a cylinder of
+//! radius [`RING_RADIUS`] and half-thickness [`RING_HALF_THICKNESS`] along the tool's `z`, turned with the
+//! orientation at every setpoint. The planner inflates the obstacles by the ring's radius, which holds the disc in
+//! any orientation, so the orientation follows the DMP (no tool). Clearance is measured with parry against the true
+//! box and cylinders. The setpoints must also stay within the Panda's Cartesian limits ([`MAX_SPEED`],
+//! [`MAX_ACCELERATION`], [`MAX_JERK`]) and angular ones ([`PROFILE`]), which the report's peaks are checked against
+//! (`super::pose`).
 
-use super::profile::put_profile;
 use dmp_client::grpc::DmpClient;
+use dmp_plot::PoseTrace;
 use dmp_proto::obstacle_json::JsonObstacle;
 use dmp_proto::v1;
 
-use super::demonstration::min_jerk;
+use super::demonstration::{min_jerk, min_jerk_turn};
+use super::pose::{add_pose, outline_samples, rows};
+use super::profile::put_profile;
 use super::report::{Figure, SimReport, measure, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
-use super::{Method, SimOptions, avoidance, execute, free_plan, pacing, server_robot, superquadric, within};
+use super::{
+    Method, SimOptions, avoidance, execute, free_pose_plan, pacing, server_robot, superquadric, within,
+};
 use crate::error::SimError;
 
 /// Control period: 1 kHz.
 pub const DT: f64 = 1e-3;
 /// Outer radius of the ring.
 pub const RING_RADIUS: f64 = 0.025;
+/// Half the ring's thickness.
+pub const RING_HALF_THICKNESS: f64 = 0.004;
+/// The gripper's orientation at home (the frame of the base).
+pub const Q_HOME: [f64; 4] = [0.0, 0.0, 0.0, 1.0];
+/// The gripper's orientation grasping the ring upright on its stand: a quarter turn about `x` (the ring's axis,
+/// the tool's `z`, along `-y`).
+pub const Q_GRASP: [f64; 4] = [std::f64::consts::FRAC_1_SQRT_2, 0.0, 0.0, std::f64::consts::FRAC_1_SQRT_2];
+/// The orientation placing it: flat (its axis along `z`, the peg's), turned 30° about `z`.
+pub const Q_PLACE: [f64; 4] = [0.0, 0.0, 0.258_819_045_102_520_74, 0.965_925_826_289_068_3];
 /// Inflation of the obstacles while the bare gripper moves.
 pub const GRIPPER_MARGIN: f64 = 0.01;
 /// Time scale of the move to the ring (the duration of its demonstration), seconds.
@@ -70,7 +99,7 @@ const PEG_HH: f64 = 0.06;
 const RED: [f64; 3] = [0.5, 0.0, 0.08];
 const GREEN: [f64; 3] = [0.55, 0.17, 0.08];
 
-const ROBOT: &str = "panda";
+pub(super) const ROBOT: &str = "panda";
 /// The robots of this simulation (the server knows them as [`server_robot`] of these).
 pub const ROBOT_IDS: &[&str] = &[ROBOT];
 
@@ -87,7 +116,7 @@ fn board(margin: f64) -> JsonObstacle {
 }
 
 /// The true shapes.
-fn world() -> Vec<Body> {
+pub(super) fn world() -> Vec<Body> {
     vec![
         Body::new("board", Solid::Cuboid { half: BOARD_H }, &BOARD_C),
         Body::new("red-peg", Solid::CylinderZ { radius: PEG_R, half_height: PEG_HH }, &RED),
@@ -95,30 +124,48 @@ fn world() -> Vec<Body> {
     ]
 }
 
-/// Learns `name` on the server from a straight minimum-jerk demonstration from `start` to `goal`, `tau` long.
-async fn learn(
+/// Learns the pose primitive `name` on the server from a straight minimum-jerk demonstration from `start` to `goal`,
+/// `tau` long, turning from `start_q` to `goal_q` on the same minimum-jerk profile, with stiffness `k`.
+#[allow(clippy::too_many_arguments)]
+pub(super) async fn learn(
     client: &DmpClient,
     name: &str,
     start: &[f64],
     goal: &[f64],
+    (start_q, goal_q): ([f64; 4], [f64; 4]),
     tau: f64,
+    k: f64,
 ) -> Result<(), SimError> {
     let (t, rows) = min_jerk(start, goal, tau, 0.0, 0.01);
-    let parameters = super::learn_parameters(3050.0);
-    within("learn", client.learn(&server_robot(ROBOT), name, &t, &rows, parameters)).await??;
+    let q = min_jerk_turn(&start_q, &goal_q, tau, 0.01);
+    let parameters = super::learn_parameters(k);
+    within("learn", client.learn_pose(&server_robot(ROBOT), name, &t, &rows, &q, parameters)).await??;
     Ok(())
 }
 
-struct Motion {
-    key: &'static str,
-    title: &'static str,
-    primitive: &'static str,
-    tau: f64,
-    start: Vec<f64>,
-    goal: Vec<f64>,
-    method: Method,
-    obstacles: Vec<JsonObstacle>,
-    body: Solid,
+/// One motion of the Panda: a pose run from `start` to `goal`, turning from `start_q` to `goal_q`.
+pub(super) struct Motion {
+    pub key: &'static str,
+    pub title: &'static str,
+    pub primitive: &'static str,
+    pub tau: f64,
+    pub start: Vec<f64>,
+    pub goal: Vec<f64>,
+    pub start_q: [f64; 4],
+    pub goal_q: [f64; 4],
+    pub method: Method,
+    pub obstacles: Vec<JsonObstacle>,
+    /// The true shape around the controlled point (turned with the orientation).
+    pub body: Solid,
+    /// What the body is, for the report.
+    pub body_name: &'static str,
+    /// The held tool the server turns around the obstacles (none: the orientation only follows the DMP).
+    pub tool: Option<v1::Tool>,
+    /// The shape outlined along the path in the figure (tool frame): none, or a superquadric's semi-axes and
+    /// exponents.
+    pub outline: Option<(Vec<f64>, Vec<f64>)>,
+    /// The true world.
+    pub world: fn() -> Vec<Body>,
 }
 
 impl Motion {
@@ -128,15 +175,18 @@ impl Motion {
             primitive: self.primitive.into(),
             start: self.start.clone(),
             goal: self.goal.clone(),
+            start_orientation: self.start_q.to_vec(),
+            goal_orientation: self.goal_q.to_vec(),
             avoidance: Some(avoidance(self.method)),
             extra_obstacles: self.obstacles.iter().map(JsonObstacle::to_proto).collect(),
             // The scene is known in advance: it travels with the request.
             ignore_scene: true,
+            tool: self.tool.clone(),
             ..Default::default()
         }
     }
 
-    async fn run(&self, client: &DmpClient, options: &SimOptions) -> Result<Executed, SimError> {
+    pub(super) async fn run(&self, client: &DmpClient, options: &SimOptions) -> Result<Executed, SimError> {
         let request = v1::ExecuteRequest {
             motion: Some(self.spec()),
             dt: DT,
@@ -148,7 +198,7 @@ impl Motion {
         execute(&options.robot_client(client, &server_robot(ROBOT))?, request, options.realtime, |_| {}).await
     }
 
-    async fn record(
+    pub(super) async fn record(
         &self,
         client: &DmpClient,
         options: &SimOptions,
@@ -156,16 +206,23 @@ impl Motion {
         report: &mut SimReport,
     ) -> Result<(), SimError> {
         let body = robot_body(ROBOT, self.body);
-        let world = world();
-        let r = measure(exec, DT, &self.goal, Some(&PROFILE), &body, &world, &[]);
+        let world = (self.world)();
+        let mut r = measure(exec, DT, &self.goal, Some(&PROFILE), &body, &world, &[]);
+        add_pose(&mut r, exec, self.goal_q, Some(&PROFILE), self.body_name);
         report.add(&format!("{ROBOT}/{}", self.key), r);
-        let free = free_plan(client, &self.spec(), DT).await?;
+        let (free, free_q) = free_pose_plan(client, &self.spec(), DT).await?;
         let engine: Vec<dmp::Obstacle> = self
             .obstacles
             .iter()
             .map(JsonObstacle::to_engine)
             .collect::<Result<_, _>>()
             .map_err(|e| SimError::Plot(e.to_string()))?;
+        let adapted_q = exec.orientations.as_ref().map(|o| rows(&o.q)).unwrap_or_default();
+        let surface = match &self.outline {
+            Some((semi, exponents)) => outline_samples(semi, exponents)?,
+            None => Vec::new(),
+        };
+        let pose = PoseTrace { orientations: &adapted_q, free_orientations: &free_q, tool_surface: &surface };
         let name = format!("{}.svg", self.key);
         let fig = Figure {
             title: self.title,
@@ -180,6 +237,7 @@ impl Motion {
             body: Some(&body),
             method: self.method.name(),
             events: &[],
+            pose: (adapted_q.len() == exec.traj.len() && free_q.len() == free.len()).then_some(pose),
         };
         write_figure(&options.out, &name, &fig)?;
         report.plots.push(name);
@@ -187,19 +245,22 @@ impl Motion {
     }
 }
 
-/// Runs the pick and place: the move to the ring, then both carries (at once: they are alternatives).
+/// Runs the pick and place: the move to the ring, then both carries (at once: they are alternatives), then the bar
+/// through the gap ([`super::panda_bar`]).
 pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
-    learn(client, "move-to-ring", &HOME, &RING, TAU_REACH).await?;
-    learn(client, "carry", &RING, &PLACE, TAU_CARRY).await?;
+    learn(client, "move-to-ring", &HOME, &RING, (Q_HOME, Q_GRASP), TAU_REACH, 3050.0).await?;
+    learn(client, "carry", &RING, &PLACE, (Q_GRASP, Q_PLACE), TAU_CARRY, 3050.0).await?;
     put_profile(client, &server_robot(ROBOT), &PROFILE).await?;
     let dynamic = Method::Dynamic { lambda: 10.0, beta: 2.0, eta: 2.0 };
     let to_ring = Motion {
         key: "move-to-ring",
-        title: "Panda: move to ring (dynamic potential)",
+        title: "Panda: move to ring, turning the gripper (dynamic potential)",
         primitive: "move-to-ring",
         tau: TAU_REACH,
         start: HOME.to_vec(),
         goal: RING.to_vec(),
+        start_q: Q_HOME,
+        goal_q: Q_GRASP,
         method: dynamic,
         obstacles: vec![
             board(GRIPPER_MARGIN),
@@ -207,26 +268,42 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
             peg("green-peg", &GREEN, GRIPPER_MARGIN),
         ],
         body: Solid::Point,
+        body_name: "the gripper's centre (a point)",
+        tool: None,
+        outline: None,
+        world,
     };
     let mut report = SimReport::new("panda", options.realtime);
     report.limits =
         Some(super::html::Limits { speed: MAX_SPEED, acceleration: MAX_ACCELERATION, jerk: MAX_JERK });
     report.notes.push(
         "geometry and gains: see client/sim/src/robots/panda.rs (board box, red and green pegs as cylinders; \
-         pegs planned as superquadrics (1, 1, 2), board as a rounded box of exponent 2)"
+         pegs planned as superquadrics (1, 1, 2), board as a rounded box of exponent 2) and panda_bar.rs"
             .into(),
     );
     report.notes.push(format!(
-        "the Panda's Cartesian limits: {MAX_SPEED} m/s, {MAX_ACCELERATION} m/s^2, {MAX_JERK} m/s^3 \
-         (peak_speed, peak_acceleration and peak_jerk must stay within them)"
+        "the Panda's Cartesian limits: {MAX_SPEED} m/s, {MAX_ACCELERATION} m/s^2, {MAX_JERK} m/s^3, and {} rad/s, \
+         {} rad/s^2, {} rad/s^3 (peaks and finite differences must stay within them)",
+        PROFILE.max_angular_speed, PROFILE.max_angular_acceleration, PROFILE.max_angular_jerk
     ));
+    report.notes.push(
+        "orientation: every Panda run is a pose run; the gripper turns a quarter about x to grasp the ring standing \
+         on its stand, and the carry lays it flat to go onto the green peg; the ring's clearance is its true disc's \
+         (a cylinder of its outer radius and thickness) turned with the orientation"
+            .into(),
+    );
     let moved = to_ring.run(client, options).await?;
     to_ring.record(client, options, &moved, &mut report).await?;
-    // Carry from where the gripper actually stopped.
+    // Carry from where the gripper actually stopped, as it is turned.
     if moved.traj.is_empty() {
         return Err(SimError::protocol("the move to the ring streamed no setpoint".into()));
     }
     let grasp = super::report::position(&moved.traj, moved.traj.len() - 1).to_vec();
+    let grasp_q = moved
+        .orientations
+        .as_ref()
+        .and_then(|o| o.q.rchunks_exact(4).next())
+        .map_or(Q_GRASP, |q| [q[0], q[1], q[2], q[3]]);
     let carry = |key, title, method| Motion {
         key,
         title,
@@ -234,21 +311,31 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
         tau: TAU_CARRY,
         start: grasp.clone(),
         goal: PLACE.to_vec(),
+        start_q: grasp_q,
+        goal_q: Q_PLACE,
         method,
         obstacles: vec![board(RING_RADIUS), peg("red-peg", &RED, RING_RADIUS)],
-        body: Solid::Ball { radius: RING_RADIUS },
+        body: Solid::CylinderZ { radius: RING_RADIUS, half_height: RING_HALF_THICKNESS },
+        body_name: "the ring's disc (a cylinder of its outer radius and thickness)",
+        tool: None,
+        outline: Some((vec![RING_RADIUS, RING_RADIUS, RING_HALF_THICKNESS], vec![1.0, 1.0, 4.0])),
+        world,
     };
     let carry_static = carry(
         "carry-static",
-        "Panda: carry the ring past the red peg (static potential)",
+        "Panda: carry the ring past the red peg, laying it flat (static potential)",
         Method::Static { a: 10.0, eta: 2.0 },
     );
-    let carry_dynamic =
-        carry("carry-dynamic", "Panda: carry the ring past the red peg (dynamic potential)", dynamic);
+    let carry_dynamic = carry(
+        "carry-dynamic",
+        "Panda: carry the ring past the red peg, laying it flat (dynamic potential)",
+        dynamic,
+    );
     // One after the other: a robot executes one stream at a time.
     let a = carry_static.run(client, options).await?;
     let b = carry_dynamic.run(client, options).await?;
     carry_static.record(client, options, &a, &mut report).await?;
     carry_dynamic.record(client, options, &b, &mut report).await?;
+    super::panda_bar::run(client, options, &mut report).await?;
     Ok(report)
 }

@@ -363,6 +363,7 @@ async fn record(
         body: Some(&body),
         method: method.name(),
         events: &events,
+        pose: None,
     };
     write_figure(&options.out, &file, &fig)?;
     report.plots.push(file);

@@ -35,8 +35,14 @@ pub struct Peaks {
 /// step: their peaks, and how many setpoints have a speed, acceleration or jerk over `limits` (by more than
 /// [`ROUNDING`]; a field 0 is no limit).
 pub fn finite_differences(traj: &Trajectory, limits: &Limits) -> (Peaks, u64) {
+    let (peaks, over) = over_rows(traj, limits);
+    (peaks, over.iter().filter(|o| **o).count() as u64)
+}
+
+/// [`finite_differences`] with, per setpoint, whether it is over the linear limits.
+pub fn over_rows(traj: &Trajectory, limits: &Limits) -> (Peaks, Vec<bool>) {
     let d = traj.dim();
-    let (mut k, mut violations) = (Peaks::default(), 0);
+    let (mut k, mut violations) = (Peaks::default(), vec![false; traj.len()]);
     let (mut v_prev, mut a_prev) = (vec![0.0; d], vec![0.0; d]);
     let over = |value: f64, limit: f64| limit > 0.0 && value > limit * (1.0 + ROUNDING);
     for i in 1..traj.len() {
@@ -52,9 +58,8 @@ pub fn finite_differences(traj: &Trajectory, limits: &Limits) -> (Peaks, u64) {
         k.peak_speed = k.peak_speed.max(sv);
         k.peak_acceleration = k.peak_acceleration.max(sa);
         k.peak_jerk = k.peak_jerk.max(sj);
-        if over(sv, limits.max_speed) || over(sa, limits.max_acceleration) || over(sj, limits.max_jerk) {
-            violations += 1;
-        }
+        violations[i] =
+            over(sv, limits.max_speed) || over(sa, limits.max_acceleration) || over(sj, limits.max_jerk);
         (v_prev, a_prev) = (v, a);
     }
     (k, violations)

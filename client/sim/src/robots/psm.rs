@@ -1,7 +1,8 @@
 //! The da Vinci peg transfer (the paper's section on the da Vinci): two patient-side manipulators, PSM1 on the right
-//! and PSM2 on the left, on one shared phase (one 6-D DMP, 3-D per arm, 1 kHz like the real arms' controllers).
-//! PSM1 picks the ring and brings it to the centre of the board, hands it over, and PSM2 places it on the target
-//! peg. The pegs are obstacles, and each arm is a moving obstacle for the other.
+//! and PSM2 on the left, 3-D per arm at 1 kHz like the real arms' controllers. PSM1 picks the ring and brings it to
+//! the centre of the board, hands it over, and PSM2 places it on the target peg. The pegs are obstacles; the jaws
+//! turn towards the handover (`super::psm_stage`), and where the arms cross they run on one shared phase (one 6-D
+//! DMP), each a moving obstacle for the other.
 //!
 //! # Geometry (metres, a frame common to both arms, `x` right, `y` away from the camera, `z` up)
 //! - Board: a box of centre `(0, 0, -0.003)` and half-extents `(0.08, 0.06, 0.003)` (top at `z = 0`).
@@ -11,12 +12,15 @@
 //!   `peg-1` and `peg-2` sit 3 mm beside the straight lines, so that the way around is not a tie.
 //! - Ring: outer radius [`RING_RADIUS`], inner radius [`RING_INNER_RADIUS`], on a stand, grasped at its centre
 //!   `(0.05, -0.03, 0.015)`.
-//! - Each arm's controlled point is the centre of its jaws; the jaws are a vertical cylinder of radius
-//!   [`JAW_RADIUS`] and length `2` [`JAW_HALF_LENGTH`] (the instruments keep their orientation, as in the paper).
+//! - Each arm's controlled point is the centre of its jaws; the jaws are a cylinder of radius [`JAW_RADIUS`] and
+//!   length `2` [`JAW_HALF_LENGTH`] along the jaws' `z`, upright at home, turned with the jaws' orientation
+//!   (`super::psm_stage`: PSM1 tilts them 20° about `y` and rolls them 45° to grasp the ring, both arms roll them a
+//!   quarter turn to open towards each other at the handover, PSM2 half of it at its standby point).
 //! - Handover: the centre [`CENTRE`]; PSM1 holds the ring [`HANDOVER_OFFSET`] in front of it, PSM2 grasps it the
 //!   same distance behind (the jaws then have 4 mm between them).
 //!
-//! # Stages (one `ExecuteGroup` each, PSM1 first; each starts where the previous one ended)
+//! # Stages (each starts where the previous one ended; the first two as two pose runs, one per arm, the jaws
+//! turning; the third as one `ExecuteGroup`, PSM1 first, the jaws held: `super::psm_stage`)
 //! 1. `move-to-ring`: PSM1 from its home `(0.07, 0.02, 0.05)` to the ring; PSM2 from its home
 //!    `(-0.06, 0.04, 0.05)` to a standby point `(-0.02, 0.025, 0.03)` behind the centre, on its side.
 //! 2. `transfer`: PSM1 carries the ring to the handover point in front of the centre, past `peg-1`; PSM2 approaches
@@ -30,7 +34,9 @@
 //! # Primitives
 //! Every arm's motion of every stage is learned with `learn` from a human-like demonstration between the
 //! nominal start and goal: a minimum-jerk curve (Flash and Hogan) with a lift of [`LIFT`] (`16 u^2 (1 - u)^2`) in
-//! `z`, [`TAU`] long, sampled at 100 Hz; `N = 50`, `K = 3050`, `D = 2 sqrt(K)`, `alpha = 4`.
+//! `z`, [`TAU`] long, sampled at 100 Hz; `N = 50`, `K = 3050`, `D = 2 sqrt(K)`, `alpha = 4`. The first two
+//! stages' are pose primitives: their demonstrations turn the jaws from the stage's start orientation to its goal's
+//! on the same minimum-jerk profile (`super::demonstration::min_jerk_turn`).
 //!
 //! # The planner's view
 //! Pegs are superquadrics of exponents `(1, 1, 2)` through the cylinders' rims, the board a rounded box of
@@ -48,9 +54,9 @@
 //! stability limit at 1 kHz for `lambda` of a few units: the setpoints then break the continuity bounds.
 //!
 //! # The true world
-//! Clearance is measured with parry against the true board and cylinders: of the jaws, or while carrying of the
-//! ring (a ball of [`RING_RADIUS`] around the controlled point, which also holds the jaws); between the arms, of
-//! the two jaws (at the handover the ring touches both on purpose). Each stage is also run without any avoidance
+//! Clearance is measured with parry against the true board and cylinders: of the jaws (turned), or while carrying
+//! of the ring (a ball of [`RING_RADIUS`] around the controlled point, which also holds the jaws); between the arms,
+//! of the two jaws, both turned (at the handover the ring touches both on purpose). Each stage is also run without any avoidance
 //! (the free plan of the figures) and without the robot term only; their true clearances are reported as
 //! metrics (`<arm>/<stage>/free_min_clearance_m/<id>`, and `<arm>/<stage>/no_robot_term_min_clearance_m/<other
 //! arm>`): they show what avoidance prevented.
@@ -61,12 +67,14 @@ use dmp_proto::obstacle_json::JsonObstacle;
 use dmp_proto::v1;
 
 use super::clearance::{closest_approach, distance, side_by_side};
-use super::demonstration::min_jerk;
+use super::demonstration::{min_jerk, min_jerk_turn};
+use super::pose::add_pose;
 use super::profile::put_profile;
+use super::psm_stage::{Avoid, Q_HOME, Stage, arm_figure, stages};
 use super::report::{CONTACT_M, Figure, Other, RobotReport, SimReport, measure, position, write_figure};
 use super::robot::Executed;
 use super::world::{Body, Solid, robot_body};
-use super::{Method, SimOptions, avoidance, execute_group, pacing, server_robot, superquadric, within};
+use super::{Method, SimOptions, server_robot, superquadric, within};
 use crate::error::SimError;
 
 /// Control period: 1 kHz.
@@ -102,27 +110,27 @@ pub const ROBOT_LAMBDA: f64 = 0.5;
 /// Exponent `eta` of the dynamic potential between the arms.
 pub const ROBOT_ETA: f64 = 2.0;
 
-const PSM1: &str = "psm1";
-const PSM2: &str = "psm2";
+pub(super) const PSM1: &str = "psm1";
+pub(super) const PSM2: &str = "psm2";
 /// The robots of this simulation (the server knows them as [`server_robot`] of these).
 pub const ROBOT_IDS: &[&str] = &[PSM1, PSM2];
-const HOME1: [f64; 3] = [0.07, 0.02, 0.05];
-const HOME2: [f64; 3] = [-0.06, 0.04, 0.05];
-const STANDBY2: [f64; 3] = [-0.02, 0.025, 0.03];
-const RING: [f64; 3] = [0.05, -0.03, 0.015];
-const RETREAT1: [f64; 3] = [0.02, 0.045, 0.05];
+pub(super) const HOME1: [f64; 3] = [0.07, 0.02, 0.05];
+pub(super) const HOME2: [f64; 3] = [-0.06, 0.04, 0.05];
+pub(super) const STANDBY2: [f64; 3] = [-0.02, 0.025, 0.03];
+pub(super) const RING: [f64; 3] = [0.05, -0.03, 0.015];
+pub(super) const RETREAT1: [f64; 3] = [0.02, 0.045, 0.05];
 const BOARD_C: [f64; 3] = [0.0, 0.0, -0.003];
 const BOARD_H: [f64; 3] = [0.08, 0.06, 0.003];
 const PEG_1: [f64; 2] = [0.0264, -0.0141];
 const PEG_2: [f64; 2] = [-0.0073, -0.0195];
 const TARGET: [f64; 2] = [-0.02, -0.04];
 
-fn handover(arm: usize) -> Vec<f64> {
+pub(super) fn handover(arm: usize) -> Vec<f64> {
     let dy = if arm == 0 { -HANDOVER_OFFSET } else { HANDOVER_OFFSET };
     vec![CENTRE[0], CENTRE[1] + dy, CENTRE[2]]
 }
 
-fn place() -> Vec<f64> {
+pub(super) fn place() -> Vec<f64> {
     vec![TARGET[0], TARGET[1], 2.0 * PEG_HALF_HEIGHT + PLACE_HEIGHT]
 }
 
@@ -145,14 +153,14 @@ fn board(margin: f64) -> JsonObstacle {
 }
 
 /// The planner's obstacles of a stage: the board and the pegs but `skip`, inflated by `margin`.
-fn planned(margin: f64, skip: Option<&str>) -> Vec<JsonObstacle> {
+pub(super) fn planned(margin: f64, skip: Option<&str>) -> Vec<JsonObstacle> {
     let mut v = vec![board(margin)];
     v.extend(PEGS.iter().filter(|(id, _)| Some(*id) != skip).map(|(id, xy)| peg(id, *xy, margin)));
     v
 }
 
 /// The true shapes.
-fn world() -> Vec<Body> {
+pub(super) fn world() -> Vec<Body> {
     let mut v = vec![Body::new("board", Solid::Cuboid { half: BOARD_H }, &BOARD_C)];
     for (id, xy) in PEGS {
         let solid = Solid::CylinderZ { radius: PEG_RADIUS, half_height: PEG_HALF_HEIGHT };
@@ -171,7 +179,7 @@ pub fn footprint_semi_axes() -> [f64; 3] {
     [1.5f64.sqrt() * r, 1.5f64.sqrt() * r, 3f64.sqrt() * h]
 }
 
-fn footprint() -> v1::Superquadric {
+pub(super) fn footprint() -> v1::Superquadric {
     v1::Superquadric { semi_axes: footprint_semi_axes().to_vec(), exponents: vec![1.0; 3] }
 }
 
@@ -181,103 +189,9 @@ pub fn demonstration(start: &[f64], goal: &[f64]) -> (Vec<f64>, Vec<Vec<f64>>) {
     min_jerk(start, goal, TAU, LIFT, 0.01)
 }
 
-/// One arm's part of a stage.
-#[derive(Debug, Clone)]
-struct Leg {
-    robot: &'static str,
-    /// Nominal start (of the demonstration).
-    start: Vec<f64>,
-    goal: Vec<f64>,
-    carrying: bool,
-}
-
-#[derive(Debug, Clone)]
-struct Stage {
-    key: &'static str,
-    title: &'static str,
-    legs: [Leg; 2],
-    obstacles: Vec<JsonObstacle>,
-}
-
-fn stages() -> Vec<Stage> {
-    let leg =
-        |robot, start: &[f64], goal: Vec<f64>, carrying| Leg { robot, start: start.to_vec(), goal, carrying };
-    vec![
-        Stage {
-            key: "move-to-ring",
-            title: "da Vinci: move to ring (PSM1), PSM2 to standby",
-            legs: [leg(PSM1, &HOME1, RING.to_vec(), false), leg(PSM2, &HOME2, STANDBY2.to_vec(), false)],
-            obstacles: planned(JAW_HALF_LENGTH, None),
-        },
-        Stage {
-            key: "transfer",
-            title: "da Vinci: transfer between PSMs",
-            legs: [leg(PSM1, &RING, handover(0), true), leg(PSM2, &STANDBY2, handover(1), false)],
-            obstacles: planned(RING_RADIUS, None),
-        },
-        Stage {
-            key: "move-to-peg",
-            title: "da Vinci: move to peg (PSM2), PSM1 retreats",
-            legs: [leg(PSM1, &handover(0), RETREAT1.to_vec(), false), leg(PSM2, &handover(1), place(), true)],
-            obstacles: planned(RING_RADIUS, Some("target-peg")),
-        },
-    ]
-}
-
-/// What a run of a stage avoids.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Avoid {
-    /// Nothing (the free plan).
-    Nothing,
-    /// The obstacles, not the other arm.
-    Obstacles,
-    /// The obstacles and the other arm.
-    Everything,
-}
-
-impl Stage {
-    /// The group request, the arms starting at `starts`.
-    fn request(&self, starts: &[Vec<f64>; 2], avoid: Avoid, realtime: bool) -> v1::ExecuteGroupRequest {
-        let free = avoid == Avoid::Nothing;
-        let obstacles = if free { Method::None } else { Method::Static { a: STATIC_A, eta: 2.0 } };
-        let robots = if avoid == Avoid::Everything {
-            Method::Dynamic { lambda: ROBOT_LAMBDA, beta: 2.0, eta: ROBOT_ETA }
-        } else {
-            Method::None
-        };
-        let members = self
-            .legs
-            .iter()
-            .zip(starts)
-            .map(|(leg, start)| v1::GroupMember {
-                motion: Some(v1::MotionSpec {
-                    robot_id: server_robot(leg.robot),
-                    primitive: self.key.into(),
-                    start: start.clone(),
-                    goal: leg.goal.clone(),
-                    avoidance: Some(avoidance(obstacles)),
-                    robot_avoidance: Some(avoidance(robots)),
-                    footprint: Some(footprint()),
-                    extra_obstacles: if free {
-                        Vec::new()
-                    } else {
-                        self.obstacles.iter().map(JsonObstacle::to_proto).collect()
-                    },
-                    // The scene is known in advance: it travels with the request.
-                    ignore_scene: true,
-                    ..Default::default()
-                }),
-            })
-            .collect();
-        v1::ExecuteGroupRequest {
-            members,
-            dt: DT,
-            segment_s: 0.01,
-            pacing: pacing(realtime),
-            max_duration_s: 4.0 * TAU,
-            ..Default::default()
-        }
-    }
+/// How the arms avoid each other on a shared phase (module documentation).
+pub(super) fn robot_method() -> Method {
+    Method::Dynamic { lambda: ROBOT_LAMBDA, beta: 2.0, eta: ROBOT_ETA }
 }
 
 /// Row `k` of an execution (`usize::MAX`: the last row).
@@ -286,6 +200,19 @@ fn row_of(exec: &Executed, k: usize) -> Result<Vec<f64>, SimError> {
         return Err(SimError::protocol(format!("{} streamed no setpoint", exec.id)));
     }
     Ok(position(&exec.traj, k.min(exec.traj.len() - 1)).to_vec())
+}
+
+/// The last orientation of an execution (`held` if it has none).
+fn last_orientation(exec: &Executed, held: [f64; 4]) -> [f64; 4] {
+    exec.orientations
+        .as_ref()
+        .and_then(|o| o.q.rchunks_exact(4).next())
+        .map_or(held, |q| [q[0], q[1], q[2], q[3]])
+}
+
+/// How long a stage took: until both arms stopped.
+fn stage_duration(runs: &[Executed; 2]) -> f64 {
+    runs.iter().map(|r| r.traj.t.last().copied().unwrap_or(0.0)).fold(0.0, f64::max)
 }
 
 /// The last position of an execution.
@@ -310,8 +237,15 @@ fn measure_leg(stage: &Stage, i: usize, runs: &[Executed; 2]) -> RobotReport {
         jaws(leg.robot)
     };
     let mut r = measure(&runs[i], DT, &leg.goal, Some(&PROFILE), &body, &world(), &[]);
+    if !stage.shared_phase {
+        let what =
+            if leg.carrying { "the ring (a ball of its outer radius)" } else { "the jaws (a cylinder)" };
+        add_pose(&mut r, &runs[i], leg.goal_q, Some(&PROFILE), what);
+    }
     let other_jaws = jaws(other.robot);
-    let with_arm = Other { id: other.robot, traj: &runs[1 - i].traj, body: &other_jaws };
+    let theirs = runs[1 - i].orientations.as_ref().map(|o| o.q.as_slice());
+    let with_arm =
+        Other { id: other.robot, traj: &runs[1 - i].traj, body: &other_jaws, orientations: theirs };
     let arms = measure(&runs[i], DT, &leg.goal, None, &jaws(leg.robot), &[], &[with_arm]);
     for (id, d) in arms.min_clearance_m {
         if d <= CONTACT_M {
@@ -328,9 +262,16 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     for stage in &stages {
         for leg in &stage.legs {
             let (t, rows) = demonstration(&leg.start, &leg.goal);
+            // A pose stage's jaws turn on the demonstration's minimum-jerk profile; a shared phase's hold.
+            let q = if stage.shared_phase {
+                Vec::new()
+            } else {
+                min_jerk_turn(&leg.start_q, &leg.goal_q, TAU, 0.01)
+            };
+            let parameters = super::learn_parameters(3050.0);
             within(
                 "learn",
-                client.learn(&server_robot(leg.robot), stage.key, &t, &rows, super::learn_parameters(3050.0)),
+                client.learn_pose(&server_robot(leg.robot), stage.key, &t, &rows, &q, parameters),
             )
             .await??;
         }
@@ -345,21 +286,28 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
          potential)"
             .into(),
     );
+    report.notes.push(
+        "orientation: the jaws turn in move-to-ring and transfer (PSM1 tilts and rolls them to grasp the ring, both \
+         arms roll them to open towards each other at the handover), as two pose runs each: the server runs a pose \
+         primitive alone, not in a group; move-to-peg, where the arms must avoid each other, runs on one phase, \
+         the jaws holding their handover orientation (see client/sim/src/robots/psm_stage.rs)"
+            .into(),
+    );
     let mut starts = [HOME1.to_vec(), HOME2.to_vec()];
+    let mut orientations = [Q_HOME, Q_HOME];
     let mut clock = 0.0;
     for stage in &stages {
-        let from = &starts;
-        let group = move |avoid| async move {
-            let request = stage.request(from, avoid, options.realtime);
-            let runs = execute_group(client, request, options.realtime).await?;
-            <[Executed; 2]>::try_from(runs)
-                .map_err(|_| SimError::protocol("a group of two answered for another count".into()))
+        let from = (&starts, orientations);
+        // The runs are independent (each its own phase), one after the other: they move the same robots, and a
+        // robot executes one stream at a time.
+        let runs = stage.execute(client, options, from, Avoid::Everything).await?;
+        let without_robots = if stage.shared_phase {
+            stage.execute(client, options, from, Avoid::Obstacles).await?
+        } else {
+            // Two pose runs never avoid each other.
+            runs.clone()
         };
-        // The three runs are independent (each its own phase), one after the other: they move the same robots, and
-        // a robot executes one stream at a time.
-        let runs = group(Avoid::Everything).await?;
-        let without_robots = group(Avoid::Obstacles).await?;
-        let free = group(Avoid::Nothing).await?;
+        let free = stage.execute(client, options, from, Avoid::Nothing).await?;
         record(options, stage, &runs, &free, clock, &mut report)?;
         // How close the jaws came without the robot term.
         for i in 0..2 {
@@ -369,7 +317,9 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
             report.metrics.insert(k, d.unwrap_or(f64::INFINITY));
         }
         starts = [last(&runs[0])?, last(&runs[1])?];
-        clock += runs[0].traj.t.last().copied().unwrap_or(0.0);
+        orientations =
+            [last_orientation(&runs[0], orientations[0]), last_orientation(&runs[1], orientations[1])];
+        clock += stage_duration(&runs);
     }
     Ok(report)
 }
@@ -402,8 +352,7 @@ fn record(
     report.metrics.insert(format!("{key}/start_time_s"), clock);
     match key {
         "transfer" => {
-            let end = runs[0].traj.t.last().copied().unwrap_or(0.0);
-            report.metrics.insert("handover/time_s".into(), clock + end);
+            report.metrics.insert("handover/time_s".into(), clock + stage_duration(runs));
             for (i, arm) in [PSM1, PSM2].iter().enumerate() {
                 let d = distance(&last(&runs[i])?, &CENTRE);
                 report.metrics.insert(format!("handover/{arm}_to_centre_m"), d);
@@ -459,9 +408,16 @@ fn record(
         // The pegs and the board with the static potential, the other arm's jaws with the dynamic one.
         method: "static_volumetric",
         events: &[],
+        pose: None,
     };
     write_figure(&options.out, &name, &fig)?;
     report.plots.push(name);
+    // Where the jaws turn on their own phases, each arm's figure shows them turning.
+    if !stage.shared_phase {
+        for i in 0..2 {
+            report.plots.push(arm_figure(options, stage, i, (&runs[i], &free[i]), &engine)?);
+        }
+    }
     Ok(())
 }
 

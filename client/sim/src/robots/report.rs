@@ -4,7 +4,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use dmp::{Agent, Trajectory};
-use dmp_plot::{Event, PlotInput, Series, SolidShape, render_svg};
+use dmp_plot::{Event, PlotInput, PoseTrace, Series, SolidShape, render_svg};
 use dmp_proto::v1;
 use serde::Serialize;
 
@@ -19,7 +19,7 @@ pub const GOAL_TOLERANCE_M: f64 = 1e-2;
 /// Clearance at or below this (metres) is a contact.
 pub const CONTACT_M: f64 = 1e-9;
 
-/// A robot's linear limits in a report, SI units (0: no limit).
+/// A robot's limits in a report, SI units (0: no limit); the angular ones bound a pose run's orientation.
 #[derive(Debug, Clone, Copy, Serialize, PartialEq)]
 pub struct ProfileLimits {
     /// Speed, m/s.
@@ -28,11 +28,24 @@ pub struct ProfileLimits {
     pub max_acceleration: f64,
     /// Jerk, m/s³.
     pub max_jerk: f64,
+    /// Angular speed, rad/s.
+    pub max_angular_speed: f64,
+    /// Angular acceleration, rad/s².
+    pub max_angular_acceleration: f64,
+    /// Angular jerk, rad/s³.
+    pub max_angular_jerk: f64,
 }
 
 impl From<&dmp::Limits> for ProfileLimits {
     fn from(l: &dmp::Limits) -> Self {
-        Self { max_speed: l.max_speed, max_acceleration: l.max_acceleration, max_jerk: l.max_jerk }
+        Self {
+            max_speed: l.max_speed,
+            max_acceleration: l.max_acceleration,
+            max_jerk: l.max_jerk,
+            max_angular_speed: l.max_angular_speed,
+            max_angular_acceleration: l.max_angular_acceleration,
+            max_angular_jerk: l.max_angular_jerk,
+        }
     }
 }
 
@@ -77,6 +90,9 @@ pub struct RobotReport {
     pub non_finite: u64,
     /// Duration of the run, seconds.
     pub duration_s: f64,
+    /// A pose run's orientation figures (`super::pose`); none for a position run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pose: Option<super::pose::PoseReport>,
 }
 
 /// The report of a simulation.
@@ -130,7 +146,13 @@ impl SimReport {
         let mut p = Vec::new();
         for (id, r) in &self.robots {
             if !r.reached_goal {
-                p.push(format!("{id}: goal not reached ({} m away, {})", r.final_error_m, r.final_status));
+                let turn = r.pose.as_ref().map_or(String::new(), |o| {
+                    format!(", {:.3}° from the goal orientation", o.final_orientation_error_deg)
+                });
+                p.push(format!(
+                    "{id}: goal not reached ({} m away{turn}, {})",
+                    r.final_error_m, r.final_status
+                ));
             }
             if !allow_collision {
                 for c in &r.collisions {
@@ -185,11 +207,22 @@ pub struct Other<'a> {
     pub traj: &'a Trajectory,
     /// Its body around its controlled point.
     pub body: &'a Body,
+    /// Its orientations, 4 per row of `traj` (a pose robot, or one holding its orientation); none: not turned.
+    pub orientations: Option<&'a [f64]>,
+}
+
+/// The distance of `body` at `p` to `o`: turned by row `k` of the orientations `q` of a pose run.
+fn posed_distance(body: &Body, p: parry3d_f64::math::Vector, q: Option<&[f64]>, k: usize, o: &Body) -> f64 {
+    match q.and_then(|q| q.get(4 * k..4 * k + 4)) {
+        Some(q) => body.distance_posed(p, q, o),
+        None => body.distance(p, o, parry3d_f64::math::Vector::ZERO),
+    }
 }
 
 /// Measures one robot: goal, checks, its setpoints against its limit `profile` (none: [`dmp::Limits::NONE`]),
 /// and clearance of `body` (around the controlled point) against the obstacles present at each time and the other
-/// robots at the same time.
+/// robots at the same time. A pose run's body turns with its orientations (its clearance is its true shape's); its
+/// orientation figures are added by [`super::pose::add_pose`].
 pub fn measure(
     exec: &Executed,
     dt: f64,
@@ -210,17 +243,20 @@ pub fn measure(
     for o in others {
         min.insert(o.id.into(), f64::INFINITY);
     }
+    let q = exec.orientations.as_ref().map(|o| o.q.as_slice());
     for k in 0..traj.len() {
         let t = traj.t[k];
         let p = point3(position(traj, k));
         for o in obstacles.iter().filter(|o| o.present_at(t)) {
-            let d = body.distance(p, o, parry3d_f64::math::Vector::ZERO);
+            let d = posed_distance(body, p, q, k, o);
             let m = min.get_mut(&o.id).expect("inserted above");
             *m = m.min(d);
         }
         for o in others {
             if let Some(j) = row_at(o.traj, t) {
-                let d = body.distance(p, o.body, point3(position(o.traj, j)));
+                let mine = q.and_then(|q| q.get(4 * k..4 * k + 4));
+                let theirs = o.orientations.and_then(|q| q.get(4 * j..4 * j + 4));
+                let d = body.distance_carried((p, mine), o.body, (point3(position(o.traj, j)), theirs));
                 let m = min.get_mut(o.id).expect("inserted above");
                 *m = m.min(d);
             }
@@ -253,6 +289,7 @@ pub fn measure(
         first_discontinuity_s: checks.first_discontinuity_s,
         non_finite: checks.non_finite,
         duration_s: traj.t.last().copied().unwrap_or(0.0) - traj.t.first().copied().unwrap_or(0.0),
+        pose: None,
     }
 }
 
@@ -284,6 +321,9 @@ pub struct Figure<'a> {
     pub method: &'a str,
     /// What happened during the run.
     pub events: &'a [Event],
+    /// A pose run's orientations and its held shape: a panel of the rotation from the start, the shape's outline
+    /// along the path, and the clearance of the turned body.
+    pub pose: Option<PoseTrace<'a>>,
 }
 
 /// A body of the world as the figure's true shape, in the robot's `sub` dimensions.
@@ -300,8 +340,9 @@ fn plot_solid(b: &Body, sub: usize) -> dmp_plot::Solid {
     s
 }
 
-/// Clearance of `body` (around the controlled point) to the nearest body of `world` present, along `traj`.
-fn clearance_series(traj: &Trajectory, body: &Body, world: &[Body]) -> Series {
+/// Clearance of `body` (around the controlled point, turned by the orientations `q` of a pose run) to the nearest
+/// body of `world` present, along `traj`.
+fn clearance_series(traj: &Trajectory, q: Option<&[f64]>, body: &Body, world: &[Body]) -> Series {
     let mut s = Series { t: traj.t.clone(), v: Vec::with_capacity(traj.len()) };
     for k in 0..traj.len() {
         let p = point3(position(traj, k));
@@ -309,7 +350,7 @@ fn clearance_series(traj: &Trajectory, body: &Body, world: &[Body]) -> Series {
         let d = world
             .iter()
             .filter(|o| o.present_at(t))
-            .map(|o| body.distance(p, o, parry3d_f64::math::Vector::ZERO))
+            .map(|o| posed_distance(body, p, q, k, o))
             .fold(f64::INFINITY, f64::min);
         s.v.push(d);
     }
@@ -323,7 +364,10 @@ pub fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), SimE
     let mut solids: Vec<dmp_plot::Solid> = fig.world.iter().map(|b| plot_solid(b, sub)).collect();
     solids.extend(fig.seen.iter().cloned());
     let clearance = match fig.body {
-        Some(body) if fig.robots.len() <= 1 => Some(vec![clearance_series(fig.adapted, body, fig.world)]),
+        Some(body) if fig.robots.len() <= 1 => {
+            let q: Option<Vec<f64>> = fig.pose.map(|p| p.orientations.iter().flatten().copied().collect());
+            Some(vec![clearance_series(fig.adapted, q.as_deref(), body, fig.world)])
+        }
         _ => None,
     };
     let input = PlotInput {
@@ -340,7 +384,7 @@ pub fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), SimE
         method: fig.method,
         clearance: clearance.as_deref(),
         events: fig.events,
-        pose: None,
+        pose: fig.pose,
     };
     let svg = render_svg(&input).map_err(|e| SimError::Plot(e.to_string()))?;
     let path = dir.join(name);

@@ -19,6 +19,7 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use dmp::Trajectory;
+use dmp::execution::OrientationPoints;
 use dmp_client::setpoints::Setpoints;
 use dmp_proto::v1;
 
@@ -44,6 +45,8 @@ pub struct Executed {
     pub id: String,
     /// Executed rows, in time order.
     pub traj: Trajectory,
+    /// A pose run's executed orientations, row for row with `traj` (none: a position run).
+    pub orientations: Option<OrientationPoints>,
     /// Rows that arrived after their time.
     pub late_setpoints: u64,
     /// Segments read.
@@ -59,6 +62,7 @@ pub struct Controller {
     realtime: bool,
     setpoints: Setpoints,
     executed: Option<Trajectory>,
+    executed_orientations: Option<OrientationPoints>,
     /// Rows of `setpoints` already executed, all with times before `clock`.
     committed: usize,
     clock: f64,
@@ -80,6 +84,7 @@ impl Controller {
             realtime,
             setpoints: Setpoints::new(),
             executed: None,
+            executed_orientations: None,
             committed: 0,
             clock: f64::NEG_INFINITY,
             origin_unix: None,
@@ -104,10 +109,17 @@ impl Controller {
         let Some(traj) = self.setpoints.trajectory() else { return };
         let d = traj.dim();
         let exec = self.executed.get_or_insert_with(|| Trajectory::with_capacity(d, 1024));
+        let pose = self.setpoints.orientations();
         while self.committed < traj.len() && traj.t[self.committed] < t {
             let k = self.committed;
             let r = k * d..(k + 1) * d;
             exec.push(traj.t[k], &traj.x[r.clone()], &traj.xd[r.clone()], &traj.xdd[r]);
+            if let Some(o) = pose {
+                let e = self.executed_orientations.get_or_insert_with(OrientationPoints::default);
+                e.q.extend_from_slice(&o.q[4 * k..4 * k + 4]);
+                e.omega.extend_from_slice(&o.omega[3 * k..3 * k + 3]);
+                e.omega_dot.extend_from_slice(&o.omega_dot[3 * k..3 * k + 3]);
+            }
             self.committed += 1;
         }
         self.clock = self.clock.max(t);
@@ -149,6 +161,7 @@ impl Controller {
         Executed {
             id: self.id,
             traj: self.executed.unwrap_or_else(|| Trajectory::with_capacity(d, 0)),
+            orientations: self.executed_orientations,
             late_setpoints: self.late,
             segments: self.segments,
             final_status: self.status,

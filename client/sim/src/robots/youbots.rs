@@ -271,7 +271,7 @@ async fn run_one(
     for (i, (b, exec)) in BOTS.iter().zip(&runs).enumerate() {
         let others: Vec<Other<'_>> = (0..BOTS.len())
             .filter(|&j| j != i)
-            .map(|j| Other { id: BOTS[j].id, traj: &runs[j].traj, body: &bodies[j] })
+            .map(|j| Other { id: BOTS[j].id, traj: &runs[j].traj, body: &bodies[j], orientations: None })
             .collect();
         report.add(
             &format!("{}/{key}", b.id),
@@ -295,13 +295,14 @@ async fn run_one(
         let as_run = |traj: &Trajectory| Executed {
             id: b.id.into(),
             traj: traj.clone(),
+            orientations: None,
             late_setpoints: 0,
             segments: 0,
             final_status: v1::SegmentStatus::Unspecified,
         };
         let others: Vec<Other<'_>> = (0..BOTS.len())
             .filter(|&j| j != i)
-            .map(|j| Other { id: BOTS[j].id, traj: &free[j], body: &bodies[j] })
+            .map(|j| Other { id: BOTS[j].id, traj: &free[j], body: &bodies[j], orientations: None })
             .collect();
         let r = measure_fast(&as_run(&free[i]), FREE_DT, &b.goal, None, &bodies[i], &world, &others);
         let cubes = r.min_clearance_m.iter().filter(|(id, _)| id.starts_with("cube"));
@@ -350,6 +351,7 @@ async fn run_one(
         body: None,
         method: method.name(),
         events: &[],
+        pose: None,
     };
     write_figure(&options.out, &file, &fig)?;
     report.plots.push(file);
