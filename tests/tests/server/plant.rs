@@ -1,6 +1,6 @@
 //! A plant: three servers, each serving its own cell, clients of one Zenoh router in the test process (router
 //! mode, loopback, scouting off). Primitives replicate, a cell resolves to its server, robots of neighbouring cells
-//! on two servers avoid each other, and a server that starts late or comes back catches up.
+//! on two servers avoid each other, and a server that starts late or comes back catches up, deletes included.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -159,6 +159,61 @@ async fn a_server_that_starts_late_or_comes_back_catches_up() {
     assert_eq!(s2.state().store.get("r", "missed", 0).unwrap().primitive, missed.primitive);
 
     for h in [s1, s2] {
+        within("shutdown", h.shutdown()).await.unwrap();
+    }
+    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn a_delete_reaches_a_server_that_was_down_and_a_newer_relearn_wins_everywhere() {
+    let zenohd = router("tcp/127.0.0.1:0").await;
+    let endpoint = locators(&zenohd).await;
+    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
+    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
+    let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
+    until_all_known(&[&s1, &s2, &s3]).await;
+    let (c1, c3) = (client_of(&s1).await, client_of(&s3).await);
+    let gone =
+        within("put gone", c1.put_primitive("r", "gone", &line(vec![0.0], vec![1.0], 1.0))).await.unwrap();
+    let kept =
+        within("put kept", c1.put_primitive("r", "kept", &line(vec![0.0], vec![2.0], 1.0))).await.unwrap();
+    until("s2 holds both", || holds(&s2, "r", "gone", gone.version) && holds(&s2, "r", "kept", kept.version))
+        .await;
+
+    // s2 goes down; `gone` is deleted on s1 meanwhile; s2 comes back on its store and deletes it too.
+    within("s2 down", s2.shutdown()).await.unwrap();
+    within("delete on s1", c1.delete("r", "gone")).await.unwrap();
+    until("s3 applies the delete", || !holds(&s3, "r", "gone", gone.version)).await;
+    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
+    until("the restarted server applies the delete it missed", || !holds(&s2, "r", "gone", gone.version))
+        .await;
+    assert!(holds(&s2, "r", "kept", kept.version), "the other primitive stays");
+    assert!(s2.state().store.tombstone("r", "gone").unwrap().is_some_and(|n| n >= gone.version));
+    // s2 came back holding `gone` and the others asked it for its versions: the tombstone keeps it deleted.
+    for h in [&s1, &s2, &s3] {
+        assert!(h.state().store.get("r", "gone", 0).is_err(), "deleted everywhere");
+    }
+
+    // Deleted on s1, learned again on s3 after the delete: the new version is kept everywhere and is the latest.
+    within("delete kept", c1.delete("r", "kept")).await.unwrap();
+    until("s3 applies the second delete", || !holds(&s3, "r", "kept", kept.version)).await;
+    let again = within("relearn on s3", c3.put_primitive("r", "kept", &line(vec![0.0], vec![3.0], 1.0)))
+        .await
+        .unwrap();
+    assert!(again.version > kept.version);
+    let servers = [&s1, &s2, &s3];
+    until("the re-learned version everywhere", || {
+        servers.iter().all(|h| holds(h, "r", "kept", again.version))
+    })
+    .await;
+    for h in servers {
+        let latest = h.state().store.get("r", "kept", 0).unwrap();
+        assert_eq!((latest.version, &latest.primitive), (again.version, &again.primitive));
+        assert!(!holds(h, "r", "kept", kept.version));
+    }
+
+    for h in [s1, s2, s3] {
         within("shutdown", h.shutdown()).await.unwrap();
     }
     within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
