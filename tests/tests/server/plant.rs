@@ -219,6 +219,77 @@ async fn a_delete_reaches_a_server_that_was_down_and_a_newer_relearn_wins_everyw
     within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
 }
 
+#[tokio::test(flavor = "multi_thread")]
+async fn a_load_via_zenoh_discovery_spreads_its_robots_over_the_plant() {
+    let zenohd = router("tcp/127.0.0.1:0").await;
+    let endpoint = locators(&zenohd).await;
+    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a", "d"], &[]).await;
+    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
+    let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
+    until_all_known(&[&s1, &s2, &s3]).await;
+    let cells = |names: &[&str]| names.iter().map(|c| c.to_string()).collect::<Vec<_>>();
+    // 8 robots in cells of 2: cells a, b, c, d; the server given is never asked.
+    let args = dmp_sim::load::LoadArgs {
+        robots: 8,
+        cell_size: 2,
+        rate: 100.0,
+        segment_s: 0.05,
+        duration: 1.5,
+        dim: 2,
+        cell_names: cells(&["a", "b", "c", "d"]),
+        via_zenoh_discovery: true,
+        ..Default::default()
+    };
+    let report = within("the load", dmp_sim::load::run(&args, "http://127.0.0.1:1", &endpoint))
+        .await
+        .expect("the load runs through the plant");
+    assert!(report.errors.is_empty(), "{:#?}", report.errors);
+    assert_eq!((report.cells, report.streams_started, report.streams_failed), (4, 8, 0));
+    let parts: Vec<(&str, String, Vec<String>, usize)> = report
+        .servers
+        .iter()
+        .map(|p| (p.server_id.as_str(), p.grpc_address.clone(), p.cells.clone(), p.robots))
+        .collect();
+    let url = |h: &ServerHandle| format!("http://{}", h.grpc_addr);
+    assert_eq!(
+        parts,
+        [
+            ("s1", url(&s1), cells(&["a", "d"]), 4),
+            ("s2", url(&s2), cells(&["b"]), 2),
+            ("s3", url(&s3), cells(&["c"]), 2)
+        ]
+    );
+    for p in &report.servers {
+        assert!(p.setpoints_expected > 0 && p.setpoints_on_time <= p.setpoints_expected, "{p:?}");
+        assert!(p.lateness_ms.count > 0 && p.segments_sent.is_some_and(|n| n > 0), "{p:?}");
+        assert!(p.rss_mib_max.is_some_and(|m| m > 0.0), "{p:?}");
+    }
+    let sum = |f: fn(&dmp_sim::load::report::ServerPart) -> u64| report.servers.iter().map(f).sum::<u64>();
+    assert_eq!(sum(|p| p.setpoints_expected), report.setpoints_expected);
+    assert_eq!(sum(|p| p.setpoints_on_time), report.setpoints_on_time);
+    assert_eq!(sum(|p| p.lateness_ms.count), report.lateness_ms.count);
+    // Each server streamed (its part's segments are its own count), and the clean-up removed the primitives
+    // everywhere.
+    for h in [&s1, &s2, &s3] {
+        assert!(h.state().counters.segments_sent.load(std::sync::atomic::Ordering::Relaxed) > 0);
+    }
+    until("the load's primitives deleted on every server", || {
+        [&s1, &s2, &s3].iter().all(|h| h.state().store.list("load.c0.r0").unwrap().is_empty())
+    })
+    .await;
+    // A cell no server serves is refused, naming it.
+    let lost = dmp_sim::load::LoadArgs { robots: 1, cell_names: cells(&["nowhere"]), ..args };
+    let e =
+        within("no server", dmp_sim::load::run(&lost, "http://127.0.0.1:1", &endpoint)).await.unwrap_err();
+    assert!(e.to_string().contains("cell `nowhere`"), "{e}");
+
+    for h in [s1, s2, s3] {
+        within("shutdown", h.shutdown()).await.unwrap();
+    }
+    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+}
+
 /// The closest that a planned path of `seg` (2-D) comes to `point`.
 fn closest(seg: &v1::Segment, point: [f64; 2]) -> f64 {
     seg.positions.chunks(2).map(|p| (p[0] - point[0]).hypot(p[1] - point[1])).fold(f64::INFINITY, f64::min)

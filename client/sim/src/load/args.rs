@@ -115,6 +115,15 @@ pub struct LoadArgs {
     /// also after an error or Ctrl-C.
     #[arg(long)]
     pub keep: bool,
+    /// The load's cells, in order, instead of `<prefix>-<c>`: at least as many as the load has (`--robots` /
+    /// `--cell-size`), each a cell some server serves. Letters, digits, `_`, `-` and `.`.
+    #[arg(long = "cells", value_name = "A,B,...", value_delimiter = ',')]
+    pub cell_names: Vec<String>,
+    /// A plant of servers: each cell's server is found through Zenoh (its `dmp/@cells/<cell>` queryable, through
+    /// `--zenoh-connect`, default tcp/127.0.0.1:7447) instead of `--server`; robots stream to their cell's
+    /// server and the report has a part per server (`servers`).
+    #[arg(long = "via-zenoh-discovery")]
+    pub via_zenoh_discovery: bool,
 }
 
 impl Default for LoadArgs {
@@ -138,6 +147,8 @@ impl Default for LoadArgs {
             out: None,
             tokens: None,
             keep: false,
+            cell_names: Vec::new(),
+            via_zenoh_discovery: false,
         }
     }
 }
@@ -241,11 +252,41 @@ impl LoadArgs {
             return Err(bad("--prefix", format!("`{p}` is not 1 to 64 characters of [A-Za-z0-9_.-]")));
         }
         let cells = layout::cell_count(self.robots, self.cell_size);
+        if !self.cell_names.is_empty() {
+            if self.cell_names.len() < cells {
+                return Err(bad(
+                    "--cells",
+                    format!(
+                        "{} cells named, the load has {cells} (--robots {} / --cell-size {})",
+                        self.cell_names.len(),
+                        self.robots,
+                        self.cell_size
+                    ),
+                ));
+            }
+            for (i, c) in self.cell_names.iter().enumerate() {
+                dmp_proto::keys::check_name("--cells", c)
+                    .map_err(|e| bad("--cells", format!("`{c}` {}", e.rule)))?;
+                if self.cell_names[..i].contains(c) {
+                    return Err(bad("--cells", format!("`{c}` is named twice (a cell is one scene)")));
+                }
+            }
+        }
         let connections = self.connections.unwrap_or_else(|| {
             cells.min(MAX_DEFAULT_CONNECTIONS).max(self.robots.div_ceil(STREAMS_PER_CONNECTION))
         });
         let stagger_s = (self.duration / 4.0).min(MAX_STAGGER_S);
         Ok(Params { args: self, cells, connections, dt, stagger_s })
+    }
+}
+
+impl Params {
+    /// The load's cells: the first of `--cells`, else `<prefix>-<c>`.
+    pub fn cell_names(&self) -> Vec<String> {
+        match &self.args.cell_names[..] {
+            [] => (0..self.cells).map(|c| layout::cell_name(&self.args.prefix, c)).collect(),
+            named => named[..self.cells].to_vec(),
+        }
     }
 }
 
@@ -288,6 +329,16 @@ mod tests {
             assert!(e.starts_with(flag), "{flag}: {e}");
         }
         assert!(check(|a| a.connections = Some(0)).unwrap_err().starts_with("--connections"));
+        let named = |names: &[&str]| names.iter().map(|n| n.to_string()).collect::<Vec<_>>();
+        let p = check(|a| (a.robots, a.cell_names) = (25, named(&["a", "b", "c", "d"]))).unwrap();
+        assert_eq!(p.cell_names(), ["a", "b", "c"]);
+        assert_eq!(check(|a| a.robots = 15).unwrap().cell_names(), ["load-0", "load-1"]);
+        let e = check(|a| (a.robots, a.cell_names) = (25, named(&["a", "b"]))).unwrap_err();
+        assert!(e.starts_with("--cells: 2 cells named, the load has 3"), "{e}");
+        for names in [&["a", "a"][..], &["a/b"]] {
+            let e = check(|a| (a.robots, a.cell_names) = (1, named(names))).unwrap_err();
+            assert!(e.starts_with("--cells"), "{e}");
+        }
         // 2 ms segments at 500 Hz are one setpoint each.
         assert!(check(|a| (a.rate, a.segment_s) = (500.0, 0.002)).is_ok());
         assert!(check(|a| (a.rate, a.segment_ms) = (500.0, Some(2.0))).is_ok());

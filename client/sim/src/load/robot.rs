@@ -221,6 +221,9 @@ pub struct RobotTask {
     pub rate: f64,
     /// A new goal this often.
     pub retarget_every: Duration,
+    /// The lateness of its server's segments (with several servers, one per server; else `shared.lateness`'s
+    /// twin).
+    pub server_lateness: Arc<SignedHistogram>,
 }
 
 /// What one robot saw.
@@ -313,6 +316,7 @@ async fn stream(
                             shared.late_per_second.record(arrival_ns);
                         }
                         shared.lateness.record(facts.lateness_ns);
+                        task.server_lateness.record(facts.lateness_ns);
                         if facts.superseding {
                             out.superseding_segments += 1;
                             shared.superseding_lateness.record(facts.lateness_ns);
