@@ -124,6 +124,10 @@ pub struct LoadArgs {
     /// server and the report has a part per server (`servers`).
     #[arg(long = "via-zenoh-discovery")]
     pub via_zenoh_discovery: bool,
+    /// Pose robots (3-D only): a pose primitive, start and goal orientations a quarter turn apart (every goal
+    /// change turns the robot back), and the Panda's linear and angular limits (`load/pose.rs`).
+    #[arg(long)]
+    pub pose: bool,
 }
 
 impl Default for LoadArgs {
@@ -149,6 +153,7 @@ impl Default for LoadArgs {
             keep: false,
             cell_names: Vec::new(),
             via_zenoh_discovery: false,
+            pose: false,
         }
     }
 }
@@ -236,6 +241,9 @@ impl LoadArgs {
             return Err(bad("--dim", format!("{} is neither 2 nor 3", self.dim)));
         }
         in_range("--tau", self.tau, 0.1, 3_600.0, " s")?;
+        if self.pose && self.dim != 3 {
+            return Err(bad("--pose", format!("pose robots move in 3-D: use --dim 3, not {}", self.dim)));
+        }
         if let Some(c) = self.connections
             && !(1..=1_024).contains(&c)
         {
@@ -329,6 +337,8 @@ mod tests {
             assert!(e.starts_with(flag), "{flag}: {e}");
         }
         assert!(check(|a| a.connections = Some(0)).unwrap_err().starts_with("--connections"));
+        assert!(check(|a| (a.pose, a.dim) = (true, 2)).unwrap_err().starts_with("--pose"));
+        assert!(check(|a| a.pose = true).is_ok());
         let named = |names: &[&str]| names.iter().map(|n| n.to_string()).collect::<Vec<_>>();
         let p = check(|a| (a.robots, a.cell_names) = (25, named(&["a", "b", "c", "d"]))).unwrap();
         assert_eq!(p.cell_names(), ["a", "b", "c"]);

@@ -8,6 +8,7 @@
 //! | the flags and their validation | `args.rs` |
 //! | the servers: `--server`, or each cell's found through Zenoh (`--via-zenoh-discovery`) | `servers.rs` |
 //! | cells, paths that cross, fixed obstacles, the primitive | `layout.rs` |
+//! | pose robots at the Panda profile (`--pose`) | `pose.rs` |
 //! | obstacles, primitives and session starts on the server | `setup.rs` |
 //! | one robot's session and the accounting of its setpoints | `robot.rs` |
 //! | a segment as the robots read it (setpoint arrays undecoded) | `dmp_proto::segment_view` |
@@ -37,6 +38,7 @@ pub mod args;
 pub mod layout;
 pub mod monitor;
 pub mod per_second;
+pub mod pose;
 pub mod report;
 pub mod robot;
 pub mod scene;
@@ -263,6 +265,7 @@ async fn measure(
             rate: a.rate,
             retarget_every: Duration::from_secs_f64(a.tau),
             server_lateness: lateness_of[servers.of_cell[r.cell]].clone(),
+            orientations: a.pose.then(|| pose::orientations(r)),
         };
         if let Some(e) = failed {
             // Its setpoints are expected all the same, and none is on time.
@@ -391,6 +394,7 @@ async fn measure(
         duration_s: a.duration,
         scene_updates_hz: a.scene_updates,
         dim: a.dim,
+        pose: a.pose,
         tau_s: a.tau,
         connections: servers.connections(p.connections).iter().sum(),
         stagger_s: p.stagger_s,

@@ -38,8 +38,10 @@ pub struct LoadReport {
     pub duration_s: f64,
     /// Scene updates per second (over Zenoh).
     pub scene_updates_hz: f64,
-    /// Dimension of the motions.
+    /// Dimension of the motions (of the position, for pose robots).
     pub dim: usize,
+    /// Pose robots at the Panda profile (`--pose`).
+    pub pose: bool,
     /// The primitives' time scale (a new goal every tau).
     pub tau_s: f64,
     /// HTTP/2 connections to the server.
