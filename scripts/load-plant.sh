@@ -19,7 +19,10 @@ cells=$(((n + 9) / 10))
 dir=$(mktemp -d)
 pids=()
 cleanup() {
-  for p in "${pids[@]}"; do kill -INT "$p" 2>/dev/null || true; done
+  # The servers stop on SIGINT; the router (started first) on SIGTERM, after them.
+  for p in "${pids[@]:1}"; do kill -INT "$p" 2>/dev/null || true; done
+  for p in "${pids[@]:1}"; do wait "$p" 2>/dev/null || true; done
+  kill -TERM "${pids[0]}" 2>/dev/null || true
   wait 2>/dev/null || true
   rm -rf "$dir"
 }
@@ -33,8 +36,10 @@ c = zenoh.Config()
 c.insert_json5("mode", '"router"')
 c.insert_json5("listen/endpoints", json.dumps([sys.argv[1]]))
 c.insert_json5("scouting/multicast/enabled", "false")
+stop = {signal.SIGINT, signal.SIGTERM}
+signal.pthread_sigmask(signal.SIG_BLOCK, stop)
 s = zenoh.open(c)
-signal.sigwait([signal.SIGINT, signal.SIGTERM])
+signal.sigwait(stop)
 s.close()
 PY
 fi
