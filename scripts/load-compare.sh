@@ -5,7 +5,8 @@
 #
 # Usage: scripts/load-compare.sh ROBOTS ROUNDS SERVER_BINARY...
 #   e.g. scripts/load-compare.sh 500 3 /work/bench-base/dmp-server target/release/dmp-server
-# The generator is target/release/dmpctl (DMPCTL overrides it); port 50152.
+# The generator is target/release/dmpctl (DMPCTL overrides it); port 50152. LOAD_ARGS adds flags to the load
+# (e.g. LOAD_ARGS=--pose for pose robots at the Panda profile).
 set -euo pipefail
 n=$1 rounds=$2
 shift 2
@@ -18,7 +19,7 @@ one() {
   for _ in $(seq 100); do (echo >/dev/tcp/127.0.0.1/50152) 2>/dev/null && break; sleep 0.1; done
   t0=$(awk '{print $14+$15}' "/proc/$pid/stat")
   /usr/bin/time -f "%U %S" -o "$dir/gtime" "$generator" --server http://127.0.0.1:50152 load --robots "$n" \
-    --rate 1000 --segment-s 0.01 --duration-s 10 >"$dir/load.json" 2>"$dir/load.err"
+    --rate 1000 --segment-s 0.01 --duration-s 10 ${LOAD_ARGS:-} >"$dir/load.json" 2>"$dir/load.err"
   t1=$(awk '{print $14+$15}' "/proc/$pid/stat")
   rss=$(awk '/VmHWM/{print $2}' "/proc/$pid/status")
   kill -INT "$pid"
@@ -27,7 +28,7 @@ one() {
 import json, sys
 r = json.load(open(sys.argv[1]))
 ticks = int(sys.argv[3])
-print(f"{sys.argv[2]} N={r['robots']} on_time={r['setpoints_on_time_percent']}% "
+print(f"{sys.argv[2]} N={r['robots']}{' pose' if r.get('pose') else ''} on_time={r['setpoints_on_time_percent']}% "
       f"p99={r['lateness_ms']['p99']}ms server_cpu={ticks / 100:.1f}s generator_cpu={sys.argv[4]}s "
       f"rss={int(sys.argv[5]) // 1024}MiB failed={r['streams_failed']}")
 PY

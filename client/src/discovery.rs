@@ -64,6 +64,17 @@ pub async fn resolve_cell_via(
     cell: &str,
     timeout: Duration,
 ) -> Result<v1::PlantServer, ClientError> {
+    let mut found = resolve_cells_via(connect, config_file, &[cell.to_owned()], timeout).await?;
+    Ok(found.remove(0))
+}
+
+/// [`resolve_cell_via`] for several cells on one session, in order; the first cell no server serves fails it.
+pub async fn resolve_cells_via(
+    connect: &[String],
+    config_file: Option<&Path>,
+    cells: &[String],
+    timeout: Duration,
+) -> Result<Vec<v1::PlantServer>, ClientError> {
     let options = SessionOptions {
         mode: "client".into(),
         listen: Some(Vec::new()),
@@ -76,7 +87,16 @@ pub async fn resolve_cell_via(
     let config = session_config(&options)?;
     let session =
         zenoh::open(config).await.map_err(|e| ClientError::Zenoh(format!("opening the session: {e}")))?;
-    let found = resolve_cell(&session, cell, timeout).await;
+    let mut found = Ok(Vec::with_capacity(cells.len()));
+    for cell in cells {
+        match resolve_cell(&session, cell, timeout).await {
+            Ok(s) => found.as_mut().map(|f| f.push(s)).unwrap_or(()),
+            Err(e) => {
+                found = Err(e);
+                break;
+            }
+        }
+    }
     if let Err(e) = session.close().await {
         return Err(ClientError::Zenoh(format!("closing the session: {e}")));
     }

@@ -9,7 +9,7 @@
 //! | `dmp/@servers/<server-id>` | a server's liveliness token, and its queryable answering `dmp.v1.PlantServer` |
 //! | `dmp/@cells/<cell>` | the queryable of the server serving the cell, answering `dmp.v1.PlantServer` |
 //! | `dmp/@primitives/<robot-id>/<name>/<version>` | `dmp.v1.PrimitiveRecord` (protobuf), one stored version, replicated between servers |
-//! | `dmp/@primitives/<robot-id>/<name>` delete | every version of the primitive deleted |
+//! | `dmp/@primitives/<robot-id>/<name>/<version>` delete | a tombstone: every version of the primitive up to this one deleted |
 //!
 //! The plant's keys start with a verbatim chunk (`@...`): `dmp/*/...` and `dmp/**` do not match them, so the cells'
 //! subscribers never see them and access rules name them explicitly.

@@ -1,6 +1,7 @@
 //! A segment as a load generator's robots read it: the fields of `dmp.v1.Segment` that time and place it, with the
-//! positions kept as raw bytes (their count is the segment's length) and the robot id, velocities and
-//! accelerations skipped. Robots that only time the segments need no more, and decoding every number of a segment
+//! positions kept as raw bytes (their count is the segment's length), a pose run's orientations, angular velocities
+//! and accelerations likewise (their counts checked against it), and the robot id, velocities and accelerations
+//! skipped. Robots that only time the segments need no more, and decoding every number of a segment
 //! costs a generator of many robots a large share of its CPU, taken from the server it may share the machine with.
 //!
 //! The field numbers come from the schema ([`crate::tags::segment`]); the codec is written with prost's field
@@ -32,12 +33,31 @@ pub struct SegmentView {
     pub scene_version: u64,
     /// Wall time (Unix seconds) the first point is due at.
     pub start_unix_s: f64,
+    /// A pose run's orientations (4 per point), packed little-endian doubles; empty otherwise.
+    pub orientations: Bytes,
+    /// A pose run's angular velocities (3 per point), packed; empty otherwise.
+    pub angular_velocities: Bytes,
+    /// A pose run's angular accelerations (3 per point), packed; empty otherwise.
+    pub angular_accelerations: Bytes,
 }
 
 impl SegmentView {
     /// Points in the segment.
     pub fn points(&self) -> usize {
         self.positions.len() / 8 / (self.dim as usize).max(1)
+    }
+
+    /// Whether the pose fields hold `points()` orientations, angular velocities and accelerations (4, 3 and 3
+    /// doubles a point), and the first orientation is a unit quaternion (within 1e-6): what a pose robot needs of
+    /// every segment.
+    pub fn has_pose(&self) -> bool {
+        let n = self.points() * 8;
+        let first: Vec<f64> = self.orientations.chunks_exact(8).take(4).map(f64_le).collect();
+        let norm = first.iter().map(|v| v * v).sum::<f64>().sqrt();
+        self.orientations.len() == 4 * n
+            && self.angular_velocities.len() == 3 * n
+            && self.angular_accelerations.len() == 3 * n
+            && (n == 0 || (norm - 1.0).abs() <= 1e-6)
     }
 
     /// The status (an unknown value reads as the default).
@@ -72,6 +92,11 @@ impl prost::Message for SegmentView {
         if self.start_unix_s != 0.0 {
             encoding::double::encode(tag::START_UNIX_S, &self.start_unix_s, buf);
         }
+        for (t, b) in self.pose_fields() {
+            if !b.is_empty() {
+                encoding::bytes::encode(t, b, buf);
+            }
+        }
     }
 
     fn merge_field(
@@ -90,6 +115,13 @@ impl prost::Message for SegmentView {
             tag::STATUS => encoding::int32::merge(wire_type, &mut self.status, buf, ctx),
             tag::SCENE_VERSION => encoding::uint64::merge(wire_type, &mut self.scene_version, buf, ctx),
             tag::START_UNIX_S => encoding::double::merge(wire_type, &mut self.start_unix_s, buf, ctx),
+            tag::ORIENTATIONS => encoding::bytes::merge(wire_type, &mut self.orientations, buf, ctx),
+            tag::ANGULAR_VELOCITIES => {
+                encoding::bytes::merge(wire_type, &mut self.angular_velocities, buf, ctx)
+            }
+            tag::ANGULAR_ACCELERATIONS => {
+                encoding::bytes::merge(wire_type, &mut self.angular_accelerations, buf, ctx)
+            }
             _ => encoding::skip_field(wire_type, number, buf, ctx),
         }
     }
@@ -120,12 +152,31 @@ impl prost::Message for SegmentView {
         if self.start_unix_s != 0.0 {
             n += encoding::double::encoded_len(tag::START_UNIX_S, &self.start_unix_s);
         }
+        for (t, b) in self.pose_fields() {
+            if !b.is_empty() {
+                n += encoding::bytes::encoded_len(t, b);
+            }
+        }
         n
     }
 
     fn clear(&mut self) {
         *self = Self::default();
     }
+}
+
+impl SegmentView {
+    fn pose_fields(&self) -> [(u32, &Bytes); 3] {
+        [
+            (tag::ORIENTATIONS, &self.orientations),
+            (tag::ANGULAR_VELOCITIES, &self.angular_velocities),
+            (tag::ANGULAR_ACCELERATIONS, &self.angular_accelerations),
+        ]
+    }
+}
+
+fn f64_le(b: &[u8]) -> f64 {
+    f64::from_le_bytes(b.try_into().unwrap_or([0; 8]))
 }
 
 #[cfg(test)]
@@ -163,6 +214,26 @@ mod tests {
         assert_eq!(view.points(), 10);
         // The raw positions are the packed doubles, in order.
         assert_eq!(f64::from_le_bytes(view.positions[8..16].try_into().unwrap()), 1.0);
+        assert!(!view.has_pose(), "a position run has no orientations");
+        let s = 0.5f64.sqrt();
+        let pose = v1::Segment {
+            orientations: [0.0, 0.0, s, s].repeat(10),
+            angular_velocities: vec![0.1; 30],
+            angular_accelerations: vec![0.2; 30],
+            ..segment()
+        };
+        let view = SegmentView::decode(pose.encode_to_vec().as_slice()).unwrap();
+        assert!(view.has_pose());
+        let short = v1::Segment { angular_accelerations: vec![0.2; 27], ..pose.clone() };
+        assert!(!SegmentView::decode(short.encode_to_vec().as_slice()).unwrap().has_pose());
+        let skewed = v1::Segment { orientations: [0.0, 0.0, 0.5, s].repeat(10), ..pose.clone() };
+        assert!(!SegmentView::decode(skewed.encode_to_vec().as_slice()).unwrap().has_pose());
+        // A pose view encodes back to the same pose fields.
+        let back = v1::Segment::decode(view.encode_to_vec().as_slice()).unwrap();
+        assert_eq!(
+            (back.orientations, back.angular_velocities, back.angular_accelerations),
+            (pose.orientations, pose.angular_velocities, pose.angular_accelerations)
+        );
         // An empty segment (a packed field with no values is not sent at all).
         let empty = v1::Segment { dim: 3, ..Default::default() };
         assert_eq!(SegmentView::decode(empty.encode_to_vec().as_slice()).unwrap().points(), 0);

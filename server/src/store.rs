@@ -13,6 +13,7 @@
 //! | `primitives` | `(robot_id, name, version)` | the protobuf-encoded `v1::PrimitiveRecord` |
 //! | `last_versions` | `(robot_id, name)` | the last version ever given to the name |
 //! | `robots` | `robot_id` | the protobuf-encoded `v1::RobotRecord` (`store/robots.rs`) |
+//! | `tombstones` | `(robot_id, name)` | on a server of a plant, the version up to which the name is deleted (`store/tombstones.rs`) |
 //!
 //! Versions start at 1 and are never reused, even after a delete: `(robot_id, name, version)` always names one
 //! primitive.
@@ -172,6 +173,7 @@ impl Store {
                 tx.open_table(PRIMITIVES).map_err(|e| storage("create table primitives", e))?;
                 tx.open_table(LAST_VERSIONS).map_err(|e| storage("create table last_versions", e))?;
                 tx.open_table(robots::ROBOTS).map_err(|e| storage("create table robots", e))?;
+                tx.open_table(tombstones::TOMBSTONES).map_err(|e| storage("create table tombstones", e))?;
             }
             tx.commit().map_err(|e| storage("commit", e))?;
             return Ok(());
@@ -256,6 +258,7 @@ impl Store {
     /// Stores a version that another server of the plant stored (its record, checked by the caller) unless this
     /// store holds it already; durable when it returns. Returns whether it was stored. The same version from two
     /// origins (two servers stamping the same HLC time) keeps the record of the smaller origin id, on every server.
+    /// A version that a tombstone deletes is not stored.
     /// A version older than the `max_versions` kept is pruned at once, as it would have been.
     pub fn insert_replica(&self, record: &v1::PrimitiveRecord) -> Result<bool, ServerError> {
         self.count(PUT);
@@ -269,7 +272,8 @@ impl Store {
                 .map_err(|e| storage("read primitives", e))?
                 .map(|v| decode(v.value()))
                 .transpose()?;
-            let replace = held.is_none_or(|h| record.origin_server < h.origin_server);
+            let replace = held.is_none_or(|h| record.origin_server < h.origin_server)
+                && !tombstones::deleted(&tx, robot_id, name, version)?;
             if replace {
                 prims
                     .insert((robot_id, name, version), record.encode_to_vec().as_slice())
@@ -441,30 +445,10 @@ impl Store {
         Ok((out, None))
     }
 
-    /// Deletes every version of `(robot_id, name)`; returns how many were removed (NotFound when none).
+    /// Deletes every version of `(robot_id, name)`; returns how many were removed (NotFound when none). On a
+    /// server of a plant it also records a tombstone ([`Store::delete_versions`]).
     pub fn delete(&self, robot_id: &str, name: &str) -> Result<u64, ServerError> {
-        self.count(DELETE);
-        let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
-        tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
-        let removed = {
-            let mut prims = tx.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
-            let versions: Vec<u64> = prims
-                .range((robot_id, name, 0)..=(robot_id, name, u64::MAX))
-                .map_err(|e| storage("read primitives", e))?
-                .map(|entry| entry.map(|(k, _)| k.value().2))
-                .collect::<Result<_, _>>()
-                .map_err(|e| storage("read primitives", e))?;
-            for v in &versions {
-                prims.remove((robot_id, name, *v)).map_err(|e| storage("delete primitive", e))?;
-            }
-            versions.len() as u64
-        };
-        if removed == 0 {
-            tx.abort().map_err(|e| storage("abort", e))?;
-            return Err(ServerError::NotFound(format!("robot `{robot_id}` has no primitive named `{name}`")));
-        }
-        tx.commit().map_err(|e| storage("commit", e))?;
-        Ok(removed)
+        Ok(self.delete_versions(robot_id, name)?.versions)
     }
 }
 
@@ -474,6 +458,9 @@ fn decode(bytes: &[u8]) -> Result<v1::PrimitiveRecord, ServerError> {
 }
 
 mod robots;
+mod tombstones;
+
+pub use self::tombstones::{Deleted, TOMBSTONE_RETENTION, Tombstone};
 
 #[cfg(test)]
 mod tests;

@@ -378,7 +378,7 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
             let run =
                 async { Ok(dmp_sim::load::run_with(a, &server, &place.zenoh_connect, &options).await?) };
             let clean_up = async {
-                dmp_sim::load::clean_up(a, &server, &options).await?;
+                dmp_sim::load::clean_up(a, &server, &place.zenoh_connect, &options).await?;
                 Ok("deleted the robots' primitives and the cells' fixed obstacles".to_string())
             };
             let progress = Progress::new("load");

@@ -84,7 +84,8 @@ pub async fn resolve_place(cli: &Cli, server: &str, options: &ConnectOptions) ->
             *via == Via::Zenoh
         }
         Command::Sim(_) => true,
-        Command::Load(a) => a.scene_updates > 0.0,
+        // Through a plant, the load's cells are its own and its servers found over Zenoh: nothing to ask.
+        Command::Load(a) => a.scene_updates > 0.0 && !a.via_zenoh_discovery,
         _ => false,
     };
     let need_cell = cli.cell.is_none();

@@ -8,6 +8,7 @@
 //! | the live servers this one knows, to name the server of a cell it does not serve | `dmp/@servers/*` (liveliness, with history) | [`directory`] |
 //! | replicated primitives: every version stored is put, the others store it; a queryable over the store answers a server that (re)starts | `dmp/@primitives/<robot>/<name>/<version>` | [`replication`] |
 //! | fail-over: a dead server's cells served by one survivor each (rendezvous hashing over the live set), given back when it returns | `dmp/@cells/<cell>` (the taker's), `dmp/<cell>/obstacles/**` (queried) | [`failover`], [`taken`] |
+//! | replicated deletes: a tombstone, a Zenoh delete of every version up to `N`, answered by the same queryable | `dmp/@primitives/<robot>/<name>/<N>` (delete) | [`replication`], `store/tombstones.rs` |
 //!
 //! The order of versions: a version stored on a server of a plant is numbered with that server's HLC time (NTP64,
 //! `Session::new_timestamp`), or the last version plus one if that is later, and keeps its number on every server.
@@ -15,6 +16,16 @@
 //! learn the same (robot, name) at once both keep their versions (their clocks differ, and each HLC never gives one
 //! time twice), and the later stamp is the latest everywhere. Two records of one number from two servers (the same
 //! HLC time on both, which their HLCs make all but impossible) keep the record of the smaller server id everywhere.
+//!
+//! Deletes follow the same order. A delete on a server stamps a tombstone `N`, the later of its HLC time and the
+//! last version it knows, and deletes every version numbered `N` or less on every server, whenever the version or
+//! the tombstone arrives (a server that was down gets the tombstones in its catch-up, as it gets the versions). A
+//! version stamped after the delete is kept everywhere; a server that applied the tombstone numbers its next
+//! version above `N`, so a re-learn after a delete is the latest everywhere even with clocks apart. Of two
+//! tombstones of one name the larger holds. One tombstone per (robot, name) is kept, for
+//! [`crate::store::TOMBSTONE_RETENTION`] (7 days): a server down longer should start on an empty store.
+//!
+//! Robot records (`RobotService`) are not replicated: each server keeps its own.
 
 pub mod directory;
 pub mod discovery;

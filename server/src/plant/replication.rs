@@ -1,9 +1,12 @@
 //! Replicated primitives: every version stored on a server of the plant is put on
-//! `dmp/@primitives/<robot-id>/<name>/<version>` (`dmp.v1.PrimitiveRecord`, protobuf), and a delete on
-//! `dmp/@primitives/<robot-id>/<name>`; every server subscribes and stores what it lacks in its redb store
-//! ([`Store::insert_replica`]). A queryable over the store answers every version it holds, and a querier asks the
-//! other servers' queryables on start and each time one (re)appears (its matching status going from none to some),
-//! so a server that starts late or comes back catches up. What arrives is checked as a Put is (names, the
+//! `dmp/@primitives/<robot-id>/<name>/<version>` (`dmp.v1.PrimitiveRecord`, protobuf), and a delete is a Zenoh
+//! delete on `dmp/@primitives/<robot-id>/<name>/<N>`: its tombstone, every version up to `N` deleted
+//! (`store/tombstones.rs` has the order rule and the retention). Every server subscribes and stores what it lacks
+//! in its redb store ([`Store::insert_replica`], [`Store::apply_tombstone`]). A queryable over the store answers
+//! every version and every tombstone it holds (a tombstone as a delete reply), and a querier asks the other
+//! servers' queryables on start and each time one (re)appears (its matching status going from none to some), so a
+//! server that starts late or comes back catches up, deletes included. Versions and tombstones commute: whatever
+//! order they arrive in, a version up to a tombstone is deleted and a later one kept. What arrives is checked as a Put is (names, the
 //! primitive's ranges and `limits`, the message size): a refused record is logged and counted, never stored.
 //!
 //! Only servers may publish on these keys: the access control generated from the access file allows them to server
@@ -13,9 +16,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
-use dmp_proto::keys::{
-    check_name, every_primitive, parse_primitive_key, primitive_key, primitive_version_key,
-};
+use dmp_proto::keys::{check_name, every_primitive, parse_primitive_key, primitive_version_key};
 use dmp_proto::{codec, v1};
 use tokio::sync::mpsc::UnboundedSender;
 use tokio::task::JoinHandle;
@@ -31,7 +32,7 @@ use zenoh::sample::{Locality, Sample, SampleKind};
 use crate::config::Limits;
 use crate::convert::primitive_from_proto;
 use crate::error::ServerError;
-use crate::store::Store;
+use crate::store::{Store, Tombstone};
 
 /// How long a catch-up query waits for replies.
 const QUERY_TIMEOUT: Duration = Duration::from_secs(5);
@@ -143,9 +144,9 @@ impl Replicator {
         }
     }
 
-    /// Tells the others that every version of `(robot_id, name)` was deleted here.
-    pub async fn publish_delete(&self, robot_id: &str, name: &str) {
-        let key = primitive_key(robot_id, name);
+    /// Tells the others that every version of the tombstone's name up to its `up_to` was deleted here.
+    pub async fn publish_delete(&self, t: &Tombstone) {
+        let key = primitive_version_key(&t.robot_id, &t.name, t.up_to);
         if let Err(e) = self.session.delete(&key).allowed_destination(Locality::Remote).await {
             warn!(key, error = %e, "plant: primitive delete not replicated");
         }
@@ -212,10 +213,7 @@ async fn apply(
     let store = store.clone();
     let done = tokio::task::spawn_blocking(move || match checked? {
         Incoming::Version(record) => store.insert_replica(&record),
-        Incoming::Delete { robot_id, name } => match store.delete(&robot_id, &name) {
-            Ok(_) | Err(ServerError::NotFound(_)) => Ok(false),
-            Err(e) => Err(e),
-        },
+        Incoming::Delete(t) => store.apply_tombstone(&t),
     })
     .await
     .unwrap_or_else(|e| Err(ServerError::Internal(e.to_string())));
@@ -235,7 +233,7 @@ async fn apply(
 /// What a replication sample asks for.
 enum Incoming {
     Version(Box<v1::PrimitiveRecord>),
-    Delete { robot_id: String, name: String },
+    Delete(Tombstone),
 }
 
 /// Checks a sample as a Put is checked: the key, the names, the record matching its key, the primitive's ranges.
@@ -247,7 +245,9 @@ fn check(limits: &Limits, sample: &Sample) -> Result<Incoming, ServerError> {
     check_name("name", names.name)?;
     let (robot_id, name) = (names.robot_id.to_owned(), names.name.to_owned());
     match (sample.kind(), names.version) {
-        (SampleKind::Delete, None) => Ok(Incoming::Delete { robot_id, name }),
+        (SampleKind::Delete, Some(up_to)) if up_to > 0 => {
+            Ok(Incoming::Delete(Tombstone { robot_id, name, up_to }))
+        }
         (SampleKind::Put, Some(version)) => {
             if sample.payload().len() > limits.max_message_bytes {
                 return Err(ServerError::ResourceExhausted(format!(
@@ -271,20 +271,32 @@ fn check(limits: &Limits, sample: &Sample) -> Result<Incoming, ServerError> {
             primitive_from_proto(proto, limits)?.validate()?;
             Ok(Incoming::Version(Box::new(record)))
         }
-        _ => Err(ServerError::invalid("key", "a put names a version, a delete none")),
+        _ => Err(ServerError::invalid("key", "a put or a delete names a version (not 0)")),
     }
 }
 
-/// Answers a catch-up query with every stored version whose key it asks for.
+/// Answers a catch-up query with every stored tombstone (a delete reply) and version whose key it asks for.
 async fn answer(store: &Store, query: Query) {
     let asked: KeyExpr<'static> = query.key_expr().clone().into_owned();
     let store = store.clone();
-    let records = match tokio::task::spawn_blocking(move || store.all_records()).await {
+    let read = move || Ok::<_, ServerError>((store.all_tombstones()?, store.all_records()?));
+    let (tombstones, records) = match tokio::task::spawn_blocking(read).await {
         Ok(Ok(r)) => r,
         Ok(Err(e)) => return warn!(error = %e, "plant: cannot read the store for a catch-up query"),
         Err(e) => return warn!(error = %e, "plant: catch-up answer failed"),
     };
     let mut sent = 0;
+    for t in tombstones {
+        let key = primitive_version_key(&t.robot_id, &t.name, t.up_to);
+        let Ok(k) = KeyExpr::try_from(key.as_str()) else { continue };
+        if !asked.intersects(&k) {
+            continue;
+        }
+        match query.reply_del(k).await {
+            Ok(()) => sent += 1,
+            Err(e) => return warn!(error = %e, "plant: catch-up answer cut short"),
+        }
+    }
     for r in records {
         let key = primitive_version_key(&r.robot_id, &r.name, r.version);
         let Ok(k) = KeyExpr::try_from(key.as_str()) else { continue };

@@ -259,10 +259,11 @@ impl PrimitiveServiceImpl {
         caller.check(&Action::DeletePrimitive { robot: &req.robot_id })?;
         let store = self.state.store.clone();
         let (robot_id, name) = (req.robot_id.clone(), req.name.clone());
-        let versions_deleted = blocking(move || store.delete(&robot_id, &name)).await?;
-        if let Some(r) = &self.state.replicator {
-            r.publish_delete(&req.robot_id, &req.name).await;
+        let deleted = blocking(move || store.delete_versions(&robot_id, &name)).await?;
+        if let (Some(r), Some(t)) = (&self.state.replicator, &deleted.tombstone) {
+            r.publish_delete(t).await;
         }
+        let versions_deleted = deleted.versions;
         info!(robot = %req.robot_id, name = %req.name, versions = versions_deleted, "deleted");
         audit!(caller, "delete", robot = %req.robot_id, name = %req.name, versions = versions_deleted);
         Ok(v1::DeletePrimitiveResponse { versions_deleted })

@@ -125,6 +125,48 @@ async fn a_smoke_load_streams_twenty_robots_in_two_cells() {
     within("shutdown", handle.shutdown()).await.unwrap();
 }
 
+/// A small `dmpctl load --pose`: pose robots at the Panda profile stream with their orientations (a segment
+/// without them would end its robot with an error), turning a quarter at every goal change.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_pose_load_streams_orientations_within_the_panda_profile() {
+    let dir = tempfile::tempdir().unwrap();
+    let (handle, client) = serve(dir.path()).await;
+    let args = dmp_sim::load::LoadArgs {
+        robots: 10,
+        rate: 500.0,
+        segment_s: 0.02,
+        duration: 2.0,
+        tau: 0.5,
+        pose: true,
+        keep: true,
+        ..Default::default()
+    };
+    let url = format!("http://{}", handle.grpc_addr);
+    let report = within("the pose load", dmp_sim::load::run(&args, &url, &handle.zenoh_locators))
+        .await
+        .expect("the pose load runs");
+    assert!(report.errors.is_empty(), "{:#?}", report.errors);
+    assert!(report.pose);
+    assert_eq!((report.streams_started, report.streams_failed), (10, 0));
+    assert!(report.setpoints_on_time > 0 && report.retargets >= 10, "{report:?}");
+    // What the robots streamed: a pose primitive, and a plan of it keeps the Panda's angular speed.
+    let stored = within("get", client.get("load.c0.r3", "load", 0)).await.unwrap();
+    assert_eq!(stored.primitive.unwrap().orientation_reference.len(), 4);
+    let mut start = dmp_sim::load::setup::start_request(
+        &args.validate().unwrap(),
+        &dmp_sim::load::layout::robots(10, 10, 3, "load")[3],
+        "load-0",
+    );
+    let motion = start.motion.take().unwrap();
+    let plan = v1::PlanRequest { motion: Some(motion), dt: 0.002, duration: 1.0 };
+    let t = within("plan", client.plan(plan)).await.unwrap().trajectory.unwrap();
+    assert_eq!(t.orientations.len(), 4 * t.positions.len() / 3);
+    let fastest = t.angular_velocities.chunks(3).map(|w| w.iter().map(|v| v * v).sum::<f64>().sqrt());
+    let fastest = fastest.fold(0.0, f64::max);
+    assert!(fastest > 0.5 && fastest <= dmp::Limits::PANDA.max_angular_speed * 1.001, "{fastest} rad/s");
+    within("shutdown", handle.shutdown()).await.unwrap();
+}
+
 /// The load against a secured server: each robot streams with its own token (`--tokens`), set-up and monitoring
 /// with the admin's; a robot holding another robot's token is refused.
 #[tokio::test(flavor = "multi_thread")]

@@ -1,7 +1,7 @@
 //! A plant: three servers, each serving its own cell, clients of one Zenoh router in the test process (router
 //! mode, loopback, scouting off). Primitives replicate, a cell resolves to its server, robots of neighbouring cells
-//! on two servers avoid each other, a server that starts late or comes back catches up, and a server's cell is
-//! taken by one survivor while it is away (with its scene) and given back when it returns.
+//! on two servers avoid each other, a server that starts late or comes back catches up (deletes included), and a
+//! server's cell is taken by one survivor while it is away (with its scene) and given back when it returns.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -161,6 +161,132 @@ async fn a_server_that_starts_late_or_comes_back_catches_up() {
     assert_eq!(s2.state().store.get("r", "missed", 0).unwrap().primitive, missed.primitive);
 
     for h in [s1, s2] {
+        within("shutdown", h.shutdown()).await.unwrap();
+    }
+    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn a_delete_reaches_a_server_that_was_down_and_a_newer_relearn_wins_everywhere() {
+    let zenohd = router("tcp/127.0.0.1:0").await;
+    let endpoint = locators(&zenohd).await;
+    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
+    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
+    let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
+    until_all_known(&[&s1, &s2, &s3]).await;
+    let (c1, c3) = (client_of(&s1).await, client_of(&s3).await);
+    let gone =
+        within("put gone", c1.put_primitive("r", "gone", &line(vec![0.0], vec![1.0], 1.0))).await.unwrap();
+    let kept =
+        within("put kept", c1.put_primitive("r", "kept", &line(vec![0.0], vec![2.0], 1.0))).await.unwrap();
+    until("s2 holds both", || holds(&s2, "r", "gone", gone.version) && holds(&s2, "r", "kept", kept.version))
+        .await;
+
+    // s2 goes down; `gone` is deleted on s1 meanwhile; s2 comes back on its store and deletes it too.
+    within("s2 down", s2.shutdown()).await.unwrap();
+    within("delete on s1", c1.delete("r", "gone")).await.unwrap();
+    until("s3 applies the delete", || !holds(&s3, "r", "gone", gone.version)).await;
+    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
+    until("the restarted server applies the delete it missed", || !holds(&s2, "r", "gone", gone.version))
+        .await;
+    assert!(holds(&s2, "r", "kept", kept.version), "the other primitive stays");
+    assert!(s2.state().store.tombstone("r", "gone").unwrap().is_some_and(|n| n >= gone.version));
+    // s2 came back holding `gone` and the others asked it for its versions: the tombstone keeps it deleted.
+    for h in [&s1, &s2, &s3] {
+        assert!(h.state().store.get("r", "gone", 0).is_err(), "deleted everywhere");
+    }
+
+    // Deleted on s1, learned again on s3 after the delete: the new version is kept everywhere and is the latest.
+    within("delete kept", c1.delete("r", "kept")).await.unwrap();
+    until("s3 applies the second delete", || !holds(&s3, "r", "kept", kept.version)).await;
+    let again = within("relearn on s3", c3.put_primitive("r", "kept", &line(vec![0.0], vec![3.0], 1.0)))
+        .await
+        .unwrap();
+    assert!(again.version > kept.version);
+    let servers = [&s1, &s2, &s3];
+    until("the re-learned version everywhere", || {
+        servers.iter().all(|h| holds(h, "r", "kept", again.version))
+    })
+    .await;
+    for h in servers {
+        let latest = h.state().store.get("r", "kept", 0).unwrap();
+        assert_eq!((latest.version, &latest.primitive), (again.version, &again.primitive));
+        assert!(!holds(h, "r", "kept", kept.version));
+    }
+
+    for h in [s1, s2, s3] {
+        within("shutdown", h.shutdown()).await.unwrap();
+    }
+    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn a_load_via_zenoh_discovery_spreads_its_robots_over_the_plant() {
+    let zenohd = router("tcp/127.0.0.1:0").await;
+    let endpoint = locators(&zenohd).await;
+    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a", "d"], &[]).await;
+    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
+    let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
+    until_all_known(&[&s1, &s2, &s3]).await;
+    let cells = |names: &[&str]| names.iter().map(|c| c.to_string()).collect::<Vec<_>>();
+    // 8 robots in cells of 2: cells a, b, c, d; the server given is never asked.
+    let args = dmp_sim::load::LoadArgs {
+        robots: 8,
+        cell_size: 2,
+        rate: 100.0,
+        segment_s: 0.05,
+        duration: 1.5,
+        dim: 2,
+        cell_names: cells(&["a", "b", "c", "d"]),
+        via_zenoh_discovery: true,
+        ..Default::default()
+    };
+    let report = within("the load", dmp_sim::load::run(&args, "http://127.0.0.1:1", &endpoint))
+        .await
+        .expect("the load runs through the plant");
+    assert!(report.errors.is_empty(), "{:#?}", report.errors);
+    assert_eq!((report.cells, report.streams_started, report.streams_failed), (4, 8, 0));
+    let parts: Vec<(&str, String, Vec<String>, usize)> = report
+        .servers
+        .iter()
+        .map(|p| (p.server_id.as_str(), p.grpc_address.clone(), p.cells.clone(), p.robots))
+        .collect();
+    let url = |h: &ServerHandle| format!("http://{}", h.grpc_addr);
+    assert_eq!(
+        parts,
+        [
+            ("s1", url(&s1), cells(&["a", "d"]), 4),
+            ("s2", url(&s2), cells(&["b"]), 2),
+            ("s3", url(&s3), cells(&["c"]), 2)
+        ]
+    );
+    for p in &report.servers {
+        assert!(p.setpoints_expected > 0 && p.setpoints_on_time <= p.setpoints_expected, "{p:?}");
+        assert!(p.lateness_ms.count > 0 && p.segments_sent.is_some_and(|n| n > 0), "{p:?}");
+        assert!(p.rss_mib_max.is_some_and(|m| m > 0.0), "{p:?}");
+    }
+    let sum = |f: fn(&dmp_sim::load::report::ServerPart) -> u64| report.servers.iter().map(f).sum::<u64>();
+    assert_eq!(sum(|p| p.setpoints_expected), report.setpoints_expected);
+    assert_eq!(sum(|p| p.setpoints_on_time), report.setpoints_on_time);
+    assert_eq!(sum(|p| p.lateness_ms.count), report.lateness_ms.count);
+    // Each server streamed (its part's segments are its own count), and the clean-up removed the primitives
+    // everywhere.
+    for h in [&s1, &s2, &s3] {
+        assert!(h.state().counters.segments_sent.load(std::sync::atomic::Ordering::Relaxed) > 0);
+    }
+    until("the load's primitives deleted on every server", || {
+        [&s1, &s2, &s3].iter().all(|h| h.state().store.list("load.c0.r0").unwrap().is_empty())
+    })
+    .await;
+    // A cell no server serves is refused, naming it.
+    let lost = dmp_sim::load::LoadArgs { robots: 1, cell_names: cells(&["nowhere"]), ..args };
+    let e =
+        within("no server", dmp_sim::load::run(&lost, "http://127.0.0.1:1", &endpoint)).await.unwrap_err();
+    assert!(e.to_string().contains("cell `nowhere`"), "{e}");
+
+    for h in [s1, s2, s3] {
         within("shutdown", h.shutdown()).await.unwrap();
     }
     within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();

@@ -109,6 +109,11 @@ fn load_takes_its_flags_and_the_global_server() {
     assert_eq!(a, expected);
     let Command::Load(a) = parse(&["load"]).command else { panic!() };
     assert_eq!(a, dmp_sim::load::LoadArgs::default());
+    let Command::Load(a) = parse(&["load", "--via-zenoh-discovery", "--cells", "a,b,c"]).command else {
+        panic!()
+    };
+    assert!(a.via_zenoh_discovery);
+    assert_eq!(a.cell_names, ["a", "b", "c"]);
     // The server's adaptive step (at most 30 ms, tolerance 3e-6) unless told otherwise; a zero tolerance asks
     // for a fixed RK4 step, and a zero step for the server's default.
     assert_eq!((a.integration_step_s, a.integration_tolerance), (0.03, 3e-6));

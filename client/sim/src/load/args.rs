@@ -115,6 +115,19 @@ pub struct LoadArgs {
     /// also after an error or Ctrl-C.
     #[arg(long)]
     pub keep: bool,
+    /// The load's cells, in order, instead of `<prefix>-<c>`: at least as many as the load has (`--robots` /
+    /// `--cell-size`), each a cell some server serves. Letters, digits, `_`, `-` and `.`.
+    #[arg(long = "cells", value_name = "A,B,...", value_delimiter = ',')]
+    pub cell_names: Vec<String>,
+    /// A plant of servers: each cell's server is found through Zenoh (its `dmp/@cells/<cell>` queryable, through
+    /// `--zenoh-connect`, default tcp/127.0.0.1:7447) instead of `--server`; robots stream to their cell's
+    /// server and the report has a part per server (`servers`).
+    #[arg(long = "via-zenoh-discovery")]
+    pub via_zenoh_discovery: bool,
+    /// Pose robots (3-D only): a pose primitive, start and goal orientations a quarter turn apart (every goal
+    /// change turns the robot back), and the Panda's linear and angular limits (`load/pose.rs`).
+    #[arg(long)]
+    pub pose: bool,
 }
 
 impl Default for LoadArgs {
@@ -138,6 +151,9 @@ impl Default for LoadArgs {
             out: None,
             tokens: None,
             keep: false,
+            cell_names: Vec::new(),
+            via_zenoh_discovery: false,
+            pose: false,
         }
     }
 }
@@ -225,6 +241,9 @@ impl LoadArgs {
             return Err(bad("--dim", format!("{} is neither 2 nor 3", self.dim)));
         }
         in_range("--tau", self.tau, 0.1, 3_600.0, " s")?;
+        if self.pose && self.dim != 3 {
+            return Err(bad("--pose", format!("pose robots move in 3-D: use --dim 3, not {}", self.dim)));
+        }
         if let Some(c) = self.connections
             && !(1..=1_024).contains(&c)
         {
@@ -241,11 +260,41 @@ impl LoadArgs {
             return Err(bad("--prefix", format!("`{p}` is not 1 to 64 characters of [A-Za-z0-9_.-]")));
         }
         let cells = layout::cell_count(self.robots, self.cell_size);
+        if !self.cell_names.is_empty() {
+            if self.cell_names.len() < cells {
+                return Err(bad(
+                    "--cells",
+                    format!(
+                        "{} cells named, the load has {cells} (--robots {} / --cell-size {})",
+                        self.cell_names.len(),
+                        self.robots,
+                        self.cell_size
+                    ),
+                ));
+            }
+            for (i, c) in self.cell_names.iter().enumerate() {
+                dmp_proto::keys::check_name("--cells", c)
+                    .map_err(|e| bad("--cells", format!("`{c}` {}", e.rule)))?;
+                if self.cell_names[..i].contains(c) {
+                    return Err(bad("--cells", format!("`{c}` is named twice (a cell is one scene)")));
+                }
+            }
+        }
         let connections = self.connections.unwrap_or_else(|| {
             cells.min(MAX_DEFAULT_CONNECTIONS).max(self.robots.div_ceil(STREAMS_PER_CONNECTION))
         });
         let stagger_s = (self.duration / 4.0).min(MAX_STAGGER_S);
         Ok(Params { args: self, cells, connections, dt, stagger_s })
+    }
+}
+
+impl Params {
+    /// The load's cells: the first of `--cells`, else `<prefix>-<c>`.
+    pub fn cell_names(&self) -> Vec<String> {
+        match &self.args.cell_names[..] {
+            [] => (0..self.cells).map(|c| layout::cell_name(&self.args.prefix, c)).collect(),
+            named => named[..self.cells].to_vec(),
+        }
     }
 }
 
@@ -288,6 +337,18 @@ mod tests {
             assert!(e.starts_with(flag), "{flag}: {e}");
         }
         assert!(check(|a| a.connections = Some(0)).unwrap_err().starts_with("--connections"));
+        assert!(check(|a| (a.pose, a.dim) = (true, 2)).unwrap_err().starts_with("--pose"));
+        assert!(check(|a| a.pose = true).is_ok());
+        let named = |names: &[&str]| names.iter().map(|n| n.to_string()).collect::<Vec<_>>();
+        let p = check(|a| (a.robots, a.cell_names) = (25, named(&["a", "b", "c", "d"]))).unwrap();
+        assert_eq!(p.cell_names(), ["a", "b", "c"]);
+        assert_eq!(check(|a| a.robots = 15).unwrap().cell_names(), ["load-0", "load-1"]);
+        let e = check(|a| (a.robots, a.cell_names) = (25, named(&["a", "b"]))).unwrap_err();
+        assert!(e.starts_with("--cells: 2 cells named, the load has 3"), "{e}");
+        for names in [&["a", "a"][..], &["a/b"]] {
+            let e = check(|a| (a.robots, a.cell_names) = (1, named(names))).unwrap_err();
+            assert!(e.starts_with("--cells"), "{e}");
+        }
         // 2 ms segments at 500 Hz are one setpoint each.
         assert!(check(|a| (a.rate, a.segment_s) = (500.0, 0.002)).is_ok());
         assert!(check(|a| (a.rate, a.segment_ms) = (500.0, Some(2.0))).is_ok());

@@ -6,7 +6,9 @@
 //! | --- | --- |
 //! | the run | `mod.rs` |
 //! | the flags and their validation | `args.rs` |
+//! | the servers: `--server`, or each cell's found through Zenoh (`--via-zenoh-discovery`) | `servers.rs` |
 //! | cells, paths that cross, fixed obstacles, the primitive | `layout.rs` |
+//! | pose robots at the Panda profile (`--pose`) | `pose.rs` |
 //! | obstacles, primitives and session starts on the server | `setup.rs` |
 //! | one robot's session and the accounting of its setpoints | `robot.rs` |
 //! | a segment as the robots read it (setpoint arrays undecoded) | `dmp_proto::segment_view` |
@@ -36,9 +38,11 @@ pub mod args;
 pub mod layout;
 pub mod monitor;
 pub mod per_second;
+pub mod pose;
 pub mod report;
 pub mod robot;
 pub mod scene;
+pub mod servers;
 pub mod setup;
 pub mod stats;
 
@@ -56,9 +60,10 @@ pub use self::args::{
     DEFAULT_INTEGRATION_STEP_S, DEFAULT_INTEGRATION_TOLERANCE, DEFAULT_THREADS, LoadArgs,
     MAX_DEFAULT_CONNECTIONS, Params, STREAMS_PER_CONNECTION,
 };
-use self::report::{ErrorCount, LATENESS_DEFINITION, LoadReport};
+use self::report::{ErrorCount, LATENESS_DEFINITION, LoadReport, ServerPart, percent};
 use self::robot::{Ledger, RobotOutcome, RobotTask, STOP_TIMEOUT, Shared};
 use self::scene::{CellProbe, Updates};
+use self::stats::SignedHistogram;
 use self::stats::{Percentiles, SignedPercentiles};
 use crate::error::SimError;
 
@@ -149,7 +154,7 @@ pub async fn run_with(
 ) -> Result<LoadReport, SimError> {
     let p = args.validate()?;
     let measured = measure(&p, server, zenoh_connect, options).await;
-    let cleaned = if args.keep { Ok(()) } else { clean_up(args, server, options).await };
+    let cleaned = if args.keep { Ok(()) } else { clean_up(args, server, zenoh_connect, options).await };
     // The run's own error first: a clean-up that failed after it says less.
     let mut report = measured?;
     if let Err(e) = cleaned {
@@ -164,14 +169,31 @@ pub async fn run_with(
     Ok(report)
 }
 
-/// Deletes what the load with `args` stored on the server at `server`: each robot's primitive and each cell's
-/// fixed obstacles (the robots and cells are the load's own, [`layout::robot_id`] and [`layout::cell_name`]).
-pub async fn clean_up(args: &LoadArgs, server: &str, options: &ConnectOptions) -> Result<(), SimError> {
+/// Deletes what the load with `args` stored on its servers (`server`, or each cell's found through Zenoh at
+/// `zenoh_connect`): each robot's primitive and each cell's fixed obstacles, on the cell's server (the robots are
+/// the load's own, [`layout::robot_id`]).
+pub async fn clean_up(
+    args: &LoadArgs,
+    server: &str,
+    zenoh_connect: &[String],
+    options: &ConnectOptions,
+) -> Result<(), SimError> {
     let p = args.validate()?;
-    let client = DmpClient::connect_with(server, options).await?;
-    let cells: Vec<String> = (0..p.cells).map(|c| layout::cell_name(&args.prefix, c)).collect();
+    let cells = p.cell_names();
+    let servers = servers::find(&cells, server, args.via_zenoh_discovery, zenoh_connect).await?;
     let robots = layout::robots(args.robots, args.cell_size, args.dim, &args.prefix);
-    setup::clean_up(&client, &cells, &robots).await
+    let mut first_error = Ok(());
+    for (ti, t) in servers.targets.iter().enumerate() {
+        let client = DmpClient::connect_with(&t.url, options).await?;
+        let mine: Vec<String> = t.cells.iter().map(|&c| cells[c].clone()).collect();
+        let robots: Vec<layout::RobotPlan> =
+            robots.iter().filter(|r| servers.of_cell[r.cell] == ti).cloned().collect();
+        let done = setup::clean_up(&client, &mine, &robots).await;
+        if first_error.is_ok() {
+            first_error = done;
+        }
+    }
+    first_error
 }
 
 /// The run itself, its report not yet written.
@@ -183,19 +205,24 @@ async fn measure(
 ) -> Result<LoadReport, SimError> {
     let a = &p.args;
     let setup_started = Instant::now();
-    let mut clients = Vec::with_capacity(p.connections);
-    for _ in 0..p.connections {
-        clients.push(DmpClient::connect_with(server, options).await?);
-    }
-    let cells: Vec<String> = (0..p.cells).map(|c| layout::cell_name(&a.prefix, c)).collect();
+    let cells = p.cell_names();
+    let servers = servers::find(&cells, server, a.via_zenoh_discovery, zenoh_connect).await?;
+    // One client per cell (`clients[c]`), sharing the connections of its server.
+    let clients = servers.connect(p.connections, options).await?;
     let robots = layout::robots(a.robots, a.cell_size, a.dim, &a.prefix);
     let tokens = match &a.tokens {
         Some(dir) => Some(robot_tokens(dir, &robots)?),
         None => None,
     };
     eprintln!(
-        "dmpctl load: {} robots in {} cells over {} connections, {} Hz, {} s segments, {} s",
-        a.robots, p.cells, p.connections, a.rate, p.args.segment_s, a.duration
+        "dmpctl load: {} robots in {} cells over {} connections to {} server(s), {} Hz, {} s segments, {} s",
+        a.robots,
+        p.cells,
+        servers.connections(p.connections).iter().sum::<usize>(),
+        servers.targets.len(),
+        a.rate,
+        p.args.segment_s,
+        a.duration
     );
     let publisher = if a.scene_updates > 0.0 {
         let default = [DEFAULT_ZENOH.to_string()];
@@ -221,6 +248,8 @@ async fn measure(
     let seconds = (p.stagger_s + a.duration).ceil() as usize + 1;
     let shared = Arc::new(Shared::new(unix_of(begin), seconds));
     let probes: Vec<Arc<CellProbe>> = (0..p.cells).map(|_| Arc::new(CellProbe::default())).collect();
+    let lateness_of: Vec<Arc<SignedHistogram>> =
+        servers.targets.iter().map(|_| Arc::new(SignedHistogram::new())).collect();
 
     let mut tasks = JoinSet::new();
     let mut outcomes: Vec<RobotOutcome> = Vec::with_capacity(robots.len());
@@ -235,6 +264,8 @@ async fn measure(
             end_unix,
             rate: a.rate,
             retarget_every: Duration::from_secs_f64(a.tau),
+            server_lateness: lateness_of[servers.of_cell[r.cell]].clone(),
+            orientations: a.pose.then(|| pose::orientations(r)),
         };
         if let Some(e) = failed {
             // Its setpoints are expected all the same, and none is on time.
@@ -258,10 +289,15 @@ async fn measure(
         tasks.spawn(robot::run_robot(client, task, probe, shared));
     }
 
-    let monitor = {
-        let (client, errors) = (clients[0].clone(), errors.clone());
-        tokio::spawn(async move { monitor::watch(&client, begin, end, &errors).await })
-    };
+    // Each server sampled on its first cell's connection.
+    let monitors: Vec<_> = servers
+        .targets
+        .iter()
+        .map(|t| {
+            let (client, errors) = (clients[t.cells[0]].clone(), errors.clone());
+            tokio::spawn(async move { monitor::watch(&client, begin, end, &errors).await })
+        })
+        .collect();
     let updater = publisher.map(|publisher| {
         let (errors, probes) = (errors.clone(), probes.clone());
         let listing: Vec<DmpClient> = cells
@@ -305,7 +341,41 @@ async fn measure(
             }
         }
     }
-    let watched = monitor.await.unwrap_or_default();
+    let mut each_watched = Vec::with_capacity(monitors.len());
+    for m in monitors {
+        each_watched.push(m.await.unwrap_or_default());
+    }
+    let watched = each_watched[0].clone();
+    // Each robot's outcome by its server.
+    let server_of_robot: BTreeMap<&str, usize> =
+        robots.iter().map(|r| (r.id.as_str(), servers.of_cell[r.cell])).collect();
+    let parts: Vec<ServerPart> = servers
+        .targets
+        .iter()
+        .enumerate()
+        .map(|(t, target)| {
+            let mine = || outcomes.iter().filter(|o| server_of_robot.get(o.id.as_str()) == Some(&t));
+            let (expected, on_time) = mine().fold((0, 0), |(e, o), r| (e + r.expected, o + r.on_time));
+            let w = &each_watched[t];
+            ServerPart {
+                server_id: target.server_id.clone(),
+                grpc_address: target.url.clone(),
+                cells: target.cells.iter().map(|&c| cells[c].clone()).collect(),
+                robots: robots.iter().filter(|r| servers.of_cell[r.cell] == t).count(),
+                setpoints_expected: expected,
+                setpoints_on_time: on_time,
+                setpoints_on_time_percent: percent(on_time, expected),
+                lateness_ms: Percentiles::clamped(&lateness_of[t]),
+                cpu_percent: w.cpu_percent(),
+                rss_mib_max: w.rss_mib().into_iter().reduce(f64::max),
+                segments_sent: w
+                    .begin
+                    .as_ref()
+                    .zip(w.end.as_ref())
+                    .map(|(b, e)| e.segments_sent.saturating_sub(b.segments_sent)),
+            }
+        })
+        .collect();
     let updated = match updater {
         Some(u) => u.await.unwrap_or_default(),
         None => Default::default(),
@@ -324,8 +394,9 @@ async fn measure(
         duration_s: a.duration,
         scene_updates_hz: a.scene_updates,
         dim: a.dim,
+        pose: a.pose,
         tau_s: a.tau,
-        connections: p.connections,
+        connections: servers.connections(p.connections).iter().sum(),
         stagger_s: p.stagger_s,
         setup_s: (setup_s * 1e3).round() / 1e3,
         streams_started: sum(|o| o.started as u64),
@@ -333,11 +404,7 @@ async fn measure(
             + (a.robots - outcomes.len().min(a.robots)) as u64,
         setpoints_expected: expected,
         setpoints_on_time: on_time,
-        setpoints_on_time_percent: if expected > 0 {
-            (1e4 * on_time as f64 / expected as f64).floor() / 1e2
-        } else {
-            0.0
-        },
+        setpoints_on_time_percent: percent(on_time, expected),
         segments: sum(|o| o.segments),
         late_segments: sum(|o| o.late_segments),
         late_first_segments: sum(|o| o.late_first_segment as u64),
@@ -365,6 +432,7 @@ async fn measure(
             .zip(watched.end.as_ref())
             .map(|(b, e)| e.segments_sent.saturating_sub(b.segments_sent)),
         generator_cpu_percent: watched.own_cpu_percent(),
+        servers: parts,
         errors: errors.sorted(),
     };
     Ok(report)

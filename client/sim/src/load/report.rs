@@ -38,8 +38,10 @@ pub struct LoadReport {
     pub duration_s: f64,
     /// Scene updates per second (over Zenoh).
     pub scene_updates_hz: f64,
-    /// Dimension of the motions.
+    /// Dimension of the motions (of the position, for pose robots).
     pub dim: usize,
+    /// Pose robots at the Panda profile (`--pose`).
+    pub pose: bool,
     /// The primitives' time scale (a new goal every tau).
     pub tau_s: f64,
     /// HTTP/2 connections to the server.
@@ -106,6 +108,41 @@ pub struct LoadReport {
     pub server_segments_sent: Option<u64>,
     /// This load generator's CPU over the measurement, percent of one core (Linux).
     pub generator_cpu_percent: Option<f64>,
+    /// Each server's part: one with `--server`; with `--via-zenoh-discovery` one per server found (the
+    /// `server_*` figures above are then the first server's).
+    pub servers: Vec<ServerPart>,
     /// What went wrong, most frequent first.
     pub errors: Vec<ErrorCount>,
+}
+
+/// One server's part of a load run.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct ServerPart {
+    /// Its plant id (empty with `--server`).
+    pub server_id: String,
+    /// Its gRPC address.
+    pub grpc_address: String,
+    /// The load's cells it serves.
+    pub cells: Vec<String>,
+    /// Its robots.
+    pub robots: usize,
+    /// Setpoints due from it.
+    pub setpoints_expected: u64,
+    /// Of which on time.
+    pub setpoints_on_time: u64,
+    /// Their share, percent.
+    pub setpoints_on_time_percent: f64,
+    /// Lateness of its segments, clamped at 0.
+    pub lateness_ms: Percentiles,
+    /// Its CPU over the measurement, percent of one core.
+    pub cpu_percent: Option<f64>,
+    /// Its largest resident memory sample, MiB.
+    pub rss_mib_max: Option<f64>,
+    /// Segments it sent during the measurement.
+    pub segments_sent: Option<u64>,
+}
+
+/// A share in percent, floored to two decimals (0 of nothing).
+pub fn percent(part: u64, whole: u64) -> f64 {
+    if whole > 0 { (1e4 * part as f64 / whole as f64).floor() / 1e2 } else { 0.0 }
 }

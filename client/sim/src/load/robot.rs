@@ -79,6 +79,8 @@ pub struct Ledger {
     /// Points before this index are counted.
     frontier: i64,
     on_time: u64,
+    /// A pose robot's: every segment must carry its orientations.
+    pose: bool,
 }
 
 impl Ledger {
@@ -91,7 +93,15 @@ impl Ledger {
             end_unix,
             frontier: 0,
             on_time: 0,
+            pose: false,
         }
+    }
+
+    /// The same ledger for a pose robot (`pose`): a segment without the orientations, angular velocities and
+    /// accelerations of its points ([`SegmentView::has_pose`]) cannot be placed, and ends the robot.
+    pub fn with_pose(mut self, pose: bool) -> Self {
+        self.pose = pose;
+        self
     }
 
     /// Index of the last point due at or before the end.
@@ -116,6 +126,14 @@ impl Ledger {
             return Err(format!(
                 "segment {} has start_unix_s {} and dt {}: not real-time paced",
                 seg.sequence, seg.start_unix_s, seg.dt
+            ));
+        }
+        if self.pose && !seg.has_pose() {
+            return Err(format!(
+                "segment {} of a pose robot lacks the orientations, angular velocities or accelerations of its {} \
+                 points",
+                seg.sequence,
+                seg.points()
             ));
         }
         let origin = *self.origin_unix.get_or_insert(seg.start_unix_s - seg.start_time);
@@ -221,6 +239,11 @@ pub struct RobotTask {
     pub rate: f64,
     /// A new goal this often.
     pub retarget_every: Duration,
+    /// The lateness of its server's segments (with several servers, one per server; else `shared.lateness`'s
+    /// twin).
+    pub server_lateness: Arc<SignedHistogram>,
+    /// A pose robot's orientations, in the order of its goals (`--pose`); None for a position robot.
+    pub orientations: Option<[super::pose::Quaternion; 2]>,
 }
 
 /// What one robot saw.
@@ -260,7 +283,7 @@ pub async fn run_robot(
     shared: Arc<Shared>,
 ) -> RobotOutcome {
     let mut out = RobotOutcome { id: task.plan.id.clone(), ..Default::default() };
-    let mut ledger = Ledger::new(task.end_unix);
+    let mut ledger = Ledger::new(task.end_unix).with_pose(task.orientations.is_some());
     tokio::time::sleep_until(task.start_at).await;
     out.error = stream(&client, &task, &probe, &shared, &mut ledger, &mut out).await.err();
     (out.expected, out.on_time) = ledger.finish(task.start_unix, task.rate);
@@ -313,6 +336,7 @@ async fn stream(
                             shared.late_per_second.record(arrival_ns);
                         }
                         shared.lateness.record(facts.lateness_ns);
+                        task.server_lateness.record(facts.lateness_ns);
                         if facts.superseding {
                             out.superseding_segments += 1;
                             shared.superseding_lateness.record(facts.lateness_ns);
@@ -332,7 +356,12 @@ async fn stream(
             },
             _ = &mut retarget, if stop_deadline.is_none() => {
                 goal = 1 - goal;
-                sender.set_goal(task.plan.goals[goal].clone()).await.map_err(|e| format!("new goal: {e}"))?;
+                let position = task.plan.goals[goal].clone();
+                let sent = match task.orientations {
+                    Some(q) => sender.set_pose_goal(position, Some(q[goal])).await,
+                    None => sender.set_goal(position).await,
+                };
+                sent.map_err(|e| format!("new goal: {e}"))?;
                 out.retargets += 1;
                 let next = retarget.deadline() + task.retarget_every;
                 retarget.as_mut().reset(next);
@@ -427,6 +456,23 @@ mod tests {
         let (expected, on_time) = l.finish(T0, 1000.0);
         assert_eq!(expected, 10_001);
         assert_eq!(on_time, 940);
+    }
+
+    #[test]
+    fn a_pose_robot_needs_the_orientations_of_every_point() {
+        let mut l = Ledger::new(T0 + 1.0).with_pose(true);
+        let e = l.push(&seg(0, 0.0, 10), T0).unwrap_err();
+        assert!(e.contains("segment 0 of a pose robot lacks"), "{e}");
+        let pose = SegmentView {
+            orientations: [0.0f64, 0.0, 0.0, 1.0].repeat(10).iter().flat_map(|v| v.to_le_bytes()).collect(),
+            angular_velocities: vec![0u8; 8 * 30].into(),
+            angular_accelerations: vec![0u8; 8 * 30].into(),
+            ..seg(0, 0.0, 10)
+        };
+        assert!(l.push(&pose, T0 - 0.01).is_ok());
+        let short = SegmentView { angular_velocities: vec![0u8; 8 * 29].into(), ..pose.clone() };
+        assert!(l.push(&short, T0).is_err());
+        assert!(Ledger::new(T0 + 1.0).push(&seg(0, 0.0, 10), T0).is_ok(), "a position robot needs none");
     }
 
     #[test]

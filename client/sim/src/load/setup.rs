@@ -52,10 +52,11 @@ pub async fn set_up(
     let mut primitives = JoinSet::new();
     for (i, r) in robots.iter().enumerate() {
         let client = clients[r.cell % clients.len()].clone();
-        let (permits, r, tau) = (permits.clone(), r.clone(), p.args.tau);
+        let (permits, r, tau, pose) = (permits.clone(), r.clone(), p.args.tau, p.args.pose);
         primitives.spawn(async move {
             let _permit = permits.acquire_owned().await;
-            let put = match layout::primitive(&r, tau) {
+            let primitive = if pose { super::pose::primitive(&r, tau) } else { layout::primitive(&r, tau) };
+            let put = match primitive {
                 Ok(primitive) => {
                     setup_call("putting the primitive", client.put_primitive(&r.id, PRIMITIVE, &primitive))
                         .await
@@ -86,17 +87,21 @@ pub async fn set_up(
     Ok(failed)
 }
 
-/// The session start of a robot.
+/// The session start of a robot (a pose robot's with its orientations and limits, `--pose`).
 pub fn start_request(p: &Params, r: &RobotPlan, cell: &str) -> v1::ExecuteRequest {
+    let mut motion = v1::MotionSpec {
+        robot_id: r.id.clone(),
+        primitive: PRIMITIVE.into(),
+        tau: p.args.tau,
+        footprint: Some(layout::footprint(p.args.dim)),
+        cell: cell.into(),
+        ..Default::default()
+    };
+    if p.args.pose {
+        super::pose::pose_start(&mut motion, r);
+    }
     v1::ExecuteRequest {
-        motion: Some(v1::MotionSpec {
-            robot_id: r.id.clone(),
-            primitive: PRIMITIVE.into(),
-            tau: p.args.tau,
-            footprint: Some(layout::footprint(p.args.dim)),
-            cell: cell.into(),
-            ..Default::default()
-        }),
+        motion: Some(motion),
         dt: p.dt,
         segment_s: p.args.segment_s,
         pacing: v1::Pacing::Realtime as i32,
