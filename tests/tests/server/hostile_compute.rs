@@ -73,6 +73,10 @@ async fn a_learn_whose_client_left_is_not_stored() {
     let server = TestServer::start_with(|c| {
         c.zenoh.disabled = true;
         c.compute.batch_threads = 1;
+        // Room for a plan far longer than the learns' deadline, however fast this machine steps.
+        c.compute.max_request_work = 1e12;
+        c.compute.batch_queue_work = 1e13;
+        c.limits.max_obstacles = 5000;
     })
     .await;
     let client = server.client().await;
@@ -81,7 +85,7 @@ async fn a_learn_whose_client_left_is_not_stored() {
         .await
         .unwrap();
     let mut motion = spec("busy", "line");
-    motion.extra_obstacles = far_obstacles(1000);
+    motion.extra_obstacles = far_obstacles(5000);
     let plan = v1::PlanRequest { motion: Some(motion), duration: 30.0, dt: 1e-3 };
     let mut motion_client = MotionServiceClient::new(channel(&server).await);
     let busy = tokio::spawn(async move { motion_client.plan(plan).await });
