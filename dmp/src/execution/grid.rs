@@ -54,8 +54,8 @@ impl Execution {
         if let (Some(tol), false) = (self.stepping.tolerance, self.holding) {
             self.adaptive_step(tol, k1, diagnosis);
         } else if self.holding {
-            hold_step(&self.primitive, self.motion.tau, s, h, &mut self.knot0.xdd);
-            hold_acc(&self.primitive, self.motion.tau, &s.xd, &mut k1.xdd);
+            hold_step(&self.primitive, self.base_tau, s, h, &mut self.knot0.xdd);
+            hold_acc(&self.primitive, self.base_tau, &s.xd, &mut k1.xdd);
         } else {
             let mut both = FieldSum::new(
                 &mut self.field,

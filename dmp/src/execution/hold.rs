@@ -5,7 +5,9 @@ use crate::integrate::State;
 use crate::primitive::Primitive;
 
 /// The damping a holding robot decelerates with, per dimension: the primitive's `D / tau`, or critical damping if
-/// it has none (a robot must come to rest).
+/// it has none (a robot must come to rest). `tau` is the run's own (the request's), not the one temporal coupling
+/// stretched to keep the limits: a robot slowed tenfold must still stop as fast as its DMP would, the limiter keeping
+/// the deceleration within the limits.
 fn hold_rate(p: &Primitive, tau: f64, i: usize) -> f64 {
     let damping = if p.d[i] > 0.0 { p.d[i] } else { 2.0 * p.k[i].sqrt() };
     damping / tau

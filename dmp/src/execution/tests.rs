@@ -82,6 +82,35 @@ fn a_stop_comes_to_rest_ends_the_run_and_is_not_resumed() {
     assert!(e.at_rest() && !e.arrived());
 }
 
+/// A run slowed by temporal coupling (a tight speed limit stretches its `tau`) stops at the rate of its own `tau`:
+/// stretched tenfold, the damping would take ten times as long to bring it to rest.
+#[test]
+fn a_stop_of_a_run_slowed_by_its_limits_is_as_quick_as_its_own_tau() {
+    let p =
+        Primitive::straight_line(20, 4.0, vec![100.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 0.5]).unwrap();
+    let mut e = Execution::new(
+        p.clone(),
+        Motion::of(&p),
+        Scene::empty(),
+        CellMateAvoidance::NONE,
+        Stepping::rk4(1e-3),
+        200,
+    )
+    .unwrap();
+    e.set_limits(Limits { max_speed: 0.2, ..Limits::NONE }, false).unwrap();
+    e.advance(1000).unwrap();
+    assert!(e.tau_scale() > 3.0, "the limit did not slow the run: {}", e.tau_scale());
+    let moving = e.last().1.iter().map(|v| v * v).sum::<f64>().sqrt();
+    assert!(moving > 0.1, "{moving}");
+    e.stop();
+    let stopped_at = e.time();
+    assert_eq!(advance_until_final(&mut e, 200), Outcome::Stopped);
+    // From `moving` to ARRIVED_SPEED at the rate D / tau = 20 / s: ln(0.2 / 1e-3) / 20 ≈ 0.27 s (2.7 s stretched).
+    let took = e.time() - stopped_at;
+    let own = (moving / ARRIVED_SPEED).ln() / 20.0;
+    assert!(took < own + 0.05, "stopped in {took} s, its own tau's damping takes {own} s");
+}
+
 #[test]
 fn the_end_time_ends_the_run_on_its_point() {
     let mut e = reach(Stepping::rk4(1e-3));
