@@ -110,6 +110,14 @@ fn compose_parses_and_its_commands_ports_and_paths_agree_with_the_image() {
         assert_eq!(set_paths_in(&args, &set, name).len(), 4, "{name}: access file, certificate, key, CA");
         assert_eq!(parsed.zenoh_mode.as_deref(), Some("client"), "{name}: a client of the router");
         assert_eq!(parsed.zenoh_connect, [format!("tls/zenohd:{router_port}")], "{name}");
+        // The lease file, mounted from deploy/.
+        let lease = parsed.zenoh_config.clone().expect("--zenoh-config: the lease");
+        let lease = lease.to_str().unwrap();
+        assert_eq!(
+            m.get(lease).map(String::as_str),
+            Some("./zenoh-lease.json5"),
+            "{name}: {lease} is mounted"
+        );
     }
     served.sort();
     served.dedup();

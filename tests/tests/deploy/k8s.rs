@@ -117,6 +117,14 @@ fn the_kubernetes_files_parse_and_agree_with_the_image_the_server_and_each_other
     let router_port = router_listen_port(&cells);
     assert_eq!(config.zenoh.mode, "client");
     assert_eq!(config.zenoh.connect, [format!("tls/zenohd:{router_port}")]);
+    // The lease: deploy/zenoh-lease.json5, a key of the same ConfigMap, mounted with dmp-server.toml.
+    let lease = config.zenoh.config_file.as_ref().expect("zenoh.config_file: the lease");
+    let key = lease.file_name().unwrap().to_str().unwrap();
+    assert_eq!(
+        configmap["data"][key].as_str(),
+        Some(read(&deploy().join("zenoh-lease.json5")).as_str()),
+        "the ConfigMap's {key} is deploy/zenoh-lease.json5"
+    );
 
     // The StatefulSet: its arguments parse, a volume per pod for the store, the probes over TLS.
     let pod = &statefulset["spec"]["template"]["spec"];
@@ -138,6 +146,11 @@ fn the_kubernetes_files_parse_and_agree_with_the_image_the_server_and_each_other
     let config_dir = mount_of(pod, c, "configMap", "dmp-server-config");
     let config_path = parsed.config.expect("--config");
     assert_eq!(config_path, std::path::Path::new(&config_dir).join("dmp-server.toml"));
+    assert_eq!(
+        lease.parent(),
+        Some(std::path::Path::new(&config_dir)),
+        "the lease is in the ConfigMap's mount"
+    );
     assert_eq!(mount_of(pod, c, "secret", "dmp-server-set"), SET_DIR);
     let ports = named_ports(c);
     assert_eq!(ports.values().copied().collect::<BTreeSet<_>>(), docker.exposed);

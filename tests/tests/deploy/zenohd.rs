@@ -1,7 +1,7 @@
 //! The router's storage of obstacles: deploy/zenohd-obstacles.json5, and the same storage on the command line of
 //! the secured routers (compose, k8s).
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 
 use serde_json::Value;
 use zenoh::key_expr::KeyExpr;
@@ -32,6 +32,26 @@ pub fn check_router_args(args: &[String], set: &BTreeSet<String>, what: &str) {
     let (key, value) = cfg.split_once(':').unwrap();
     assert_eq!(key, "plugins/storage_manager/storages/dmp_obstacles", "{what}");
     check_storage(&json5(value, what), what);
+    check_router_lease(args, what);
+}
+
+/// The lease of deploy/zenoh-lease.json5 (`transport.link.tx`), for a node that fails over.
+pub fn lease() -> (u64, u64) {
+    let lease = json5(&read(&deploy().join("zenoh-lease.json5")), "zenoh-lease.json5");
+    let tx = &lease["transport"]["link"]["tx"];
+    (tx["lease"].as_u64().expect("tx.lease"), tx["keep_alive"].as_u64().expect("tx.keep_alive"))
+}
+
+/// Checks that a router's command line sets the lease of deploy/zenoh-lease.json5, with keys stock Zenoh takes.
+fn check_router_lease(args: &[String], what: &str) {
+    let cfgs: BTreeMap<&str, &str> =
+        args.iter().filter_map(|a| a.strip_prefix("--cfg=")).filter_map(|c| c.split_once(':')).collect();
+    let (lease, keep_alive) = lease();
+    for (key, value) in [("transport/link/tx/lease", lease), ("transport/link/tx/keep_alive", keep_alive)] {
+        assert_eq!(cfgs.get(key).copied(), Some(value.to_string().as_str()), "{what}: --cfg={key}:{value}");
+        let mut config = zenoh::Config::default();
+        config.insert_json5(key, cfgs[key]).unwrap_or_else(|e| panic!("{what}: {key}: {e}"));
+    }
 }
 
 /// The port the router of a set (`zenoh-router.json5` as `access init` writes it) listens on.
