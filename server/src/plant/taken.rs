@@ -6,6 +6,8 @@ use std::sync::{Arc, Mutex};
 
 use tokio_util::sync::{CancellationToken, WaitForCancellationFutureOwned};
 
+use crate::error::ServerError;
+
 /// A cell served for another server.
 #[derive(Debug, Clone)]
 struct Taken {
@@ -75,6 +77,22 @@ impl GivenBack {
     pub async fn wait(self) -> String {
         self.gone.await;
         self.to.lock().unwrap_or_else(|p| p.into_inner()).clone()
+    }
+
+    /// Waits until `cell` goes back: the error that ends its streams here (`UNAVAILABLE`, naming where to resume).
+    pub async fn moved(self, cell: &str) -> ServerError {
+        let to = self.wait().await;
+        ServerError::Moved(format!(
+            "cell `{cell}` moved to server {to} (this server served it while its own server was gone): resume there"
+        ))
+    }
+}
+
+/// [`GivenBack::moved`], or never for a cell that is not a taken one.
+pub async fn moved(given_back: Option<GivenBack>, cell: &str) -> ServerError {
+    match given_back {
+        Some(g) => g.moved(cell).await,
+        None => std::future::pending().await,
     }
 }
 

@@ -179,20 +179,12 @@ impl MotionServiceImpl {
         let cell_name = cell.name().to_owned();
         tokio::spawn(async move {
             let taken_over = claim.taken_over();
-            let moved = async move {
-                match given_back {
-                    Some(g) => g.wait().await,
-                    None => std::future::pending().await,
-                }
-            };
+            let moved = crate::plant::taken::moved(given_back, &cell_name);
             let shutdown = app.shutdown.clone();
             let ended = tokio::select! {
                 _ = run_stream(app, run, cell, cfg, tx.clone(), control, Admitted { budget, grant: Some(grant) }) => None,
                 _ = taken_over => Some(ServerError::Aborted("taken over by another stream".into())),
-                to = moved => Some(ServerError::Moved(format!(
-                    "cell `{cell_name}` moved to server {to} (this server served it while its own server was gone): \
-                     resume there"
-                ))),
+                moved = moved => Some(moved),
             };
             // Let go first: the stream taking over waits for it.
             drop(claim);

@@ -17,6 +17,7 @@ use crate::audit;
 use crate::cell::{Cell, ObstacleSet};
 use crate::clock::Clock;
 use crate::error::ServerError;
+use crate::plant::taken::GivenBack;
 use crate::state::AppState;
 use crate::stream_permits::{Peer, StreamKind};
 
@@ -45,7 +46,8 @@ pub fn snapshot_to_proto(snapshot: &ObstacleSet, now_unix_s: f64) -> v1::SceneSn
 /// Streams the current snapshot, then the snapshot after every change, into a channel of `buffer` events.
 ///
 /// One task per watch holds `permit` until it ends, or until its `grant` is revoked by a reload of the access file
-/// (a last PERMISSION_DENIED): when the client leaves (a send fails, or the channel closes
+/// (a last PERMISSION_DENIED), or until the cell, served for a dead server, goes back (`given_back`: a last
+/// UNAVAILABLE naming where it went): when the client leaves (a send fails, or the channel closes
 /// while no change comes) or on `shutdown` (a last `Unavailable` status, if there is room). The bound is the
 /// backpressure: a slow reader is sent the latest snapshot when it catches up (versions in between are skipped; each
 /// event is a whole snapshot, so nothing is lost), never a growing queue.
@@ -56,11 +58,15 @@ pub fn watch_stream(
     shutdown: CancellationToken,
     permit: impl Send + 'static,
     mut grant: Option<Grant>,
+    given_back: Option<GivenBack>,
 ) -> ReceiverStream<Result<v1::SceneEvent, Status>> {
     let (tx, rx) = mpsc::channel(buffer.max(1));
     let mut changes = scene.subscribe();
+    let cell = scene.name().to_owned();
     tokio::spawn(async move {
         let _permit = permit;
+        let moved = crate::plant::taken::moved(given_back, &cell);
+        tokio::pin!(moved);
         let revoked = async {
             match grant.as_mut() {
                 Some(g) => g.revoked().await,
@@ -83,6 +89,11 @@ pub fn watch_stream(
                 denied = &mut revoked => {
                     debug!(error = %denied, "scene watch revoked");
                     let _ = tx.try_send(Err(denied.into()));
+                    return;
+                }
+                moved = &mut moved => {
+                    debug!(error = %moved, "scene watch of a cell that went back");
+                    let _ = tx.try_send(Err(moved.into()));
                     return;
                 }
                 changed = changes.changed() => if changed.is_err() { break },
@@ -159,6 +170,7 @@ impl SceneService for SceneServiceImpl {
         caller.check(&Action::ReadScene { cell: &cell })?;
         let permit = s.stream_permit(StreamKind::Watch, &Peer::of(&request))?;
         let scene = s.cells.get(&cell)?;
+        let given_back = s.cells.taken().until_given_back(&cell);
         let grant =
             s.access.grant(caller, move |c, a| c.check_again(a, &Action::ReadScene { cell: &cell }))?;
         Ok(Response::new(watch_stream(
@@ -168,6 +180,7 @@ impl SceneService for SceneServiceImpl {
             s.shutdown.clone(),
             permit,
             Some(grant),
+            given_back,
         )))
     }
 }
@@ -220,7 +233,7 @@ mod tests {
         let permits = Arc::new(Semaphore::new(1));
         let shutdown = CancellationToken::new();
         let permit = permits.clone().try_acquire_owned().unwrap();
-        let mut stream = watch_stream(&scene, Clock::system(), 2, shutdown.clone(), permit, None);
+        let mut stream = watch_stream(&scene, Clock::system(), 2, shutdown.clone(), permit, None, None);
         let first = within("first", stream.next()).await.unwrap().unwrap();
         assert_eq!(ids(&first), ["a"]);
         scene.put(moving("b"), system_unix_s()).unwrap();
@@ -237,6 +250,30 @@ mod tests {
     }
 
     #[tokio::test(flavor = "multi_thread")]
+    async fn a_watch_of_a_taken_cell_ends_when_it_goes_back_naming_where() {
+        let scene = Cell::new("c", 10);
+        let taken = crate::plant::taken::TakenCells::default();
+        assert!(taken.take("c"));
+        let permits = Arc::new(Semaphore::new(1));
+        let mut stream = watch_stream(
+            &scene,
+            Clock::system(),
+            2,
+            CancellationToken::new(),
+            permits.clone().try_acquire_owned().unwrap(),
+            None,
+            taken.until_given_back("c"),
+        );
+        assert!(ids(&within("first", stream.next()).await.unwrap().unwrap()).is_empty());
+        assert!(taken.give_back("c", "`s1` at http://h:1"));
+        let last = within("the end", stream.next()).await.unwrap().unwrap_err();
+        assert_eq!(last.code(), tonic::Code::Unavailable);
+        assert!(last.message().contains("cell `c` moved to server `s1` at http://h:1"), "{}", last.message());
+        assert!(within("closed", stream.next()).await.is_none());
+        let _freed = within("permit", permits.clone().acquire_owned()).await.unwrap();
+    }
+
+    #[tokio::test(flavor = "multi_thread")]
     async fn a_watch_ends_on_shutdown() {
         let scene = Cell::new("c", 10);
         let permits = Arc::new(Semaphore::new(1));
@@ -247,6 +284,7 @@ mod tests {
             1,
             shutdown.clone(),
             permits.clone().try_acquire_owned().unwrap(),
+            None,
             None,
         );
         assert!(ids(&within("first", stream.next()).await.unwrap().unwrap()).is_empty());
@@ -267,6 +305,7 @@ mod tests {
             1,
             CancellationToken::new(),
             permits.clone().try_acquire_owned().unwrap(),
+            None,
             None,
         );
         for i in 0..50 {

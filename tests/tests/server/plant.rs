@@ -423,8 +423,11 @@ async fn a_cell_is_taken_while_its_server_is_away_and_given_back_when_it_returns
     };
     let mut stream = within("execute", c.execute(request)).await.unwrap();
     within("a segment", stream.next()).await.unwrap().unwrap();
+    // And an observer watches cell a's scene there.
+    let mut watch = within("watch", c.watch_scene()).await.unwrap();
+    within("the scene", watch.next()).await.unwrap().unwrap();
 
-    // s1 comes back: the taker gives cell a back, and its stream ends naming s1.
+    // s1 comes back: the taker gives cell a back, and its stream and watch end naming s1.
     let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
     let ended = within("the stream ends", async {
         loop {
@@ -439,6 +442,18 @@ async fn a_cell_is_taken_while_its_server_is_away_and_given_back_when_it_returns
     assert_eq!(ended.code(), Some(tonic::Code::Unavailable), "{ended}");
     let said = ended.to_string();
     assert!(said.contains("`s1`") && said.contains(&s1.grpc_addr.to_string()), "{said}");
+    let watch_ended = within("the watch ends", async {
+        loop {
+            match watch.next().await {
+                Some(Ok(_)) => continue,
+                Some(Err(e)) => return e,
+                None => panic!("the watch ended without a status"),
+            }
+        }
+    })
+    .await;
+    assert_eq!(watch_ended.code(), Some(tonic::Code::Unavailable), "{watch_ended}");
+    assert!(watch_ended.to_string().contains("`s1`"), "{watch_ended}");
     assert!(!taker.state().cells.serves("a") && !sees_obstacle(taker, "a", "box"), "the taker let it go");
 
     within("perception close", perception.close()).await.unwrap();
