@@ -149,7 +149,18 @@ impl Cells {
         let served = self.served().unwrap_or_default().join(", ");
         let owner = match self.directory.owner_of(cell) {
             Some(s) => format!("it is served by server `{}` at {}", s.server_id, s.grpc_address),
-            None => "no server of the plant is known to serve it".into(),
+            // A cell whose server is gone: the survivor the fail-over gives it to.
+            None => match self
+                .directory
+                .holder_of(cell, None)
+                .and_then(|(home, h)| self.directory.get(&h).map(|s| (home, s)))
+            {
+                Some((home, s)) => format!(
+                    "its server `{home}` is gone, and server `{}` at {} serves it meanwhile",
+                    s.server_id, s.grpc_address
+                ),
+                None => "no server of the plant is known to serve it".into(),
+            },
         };
         ServerError::FailedPrecondition(format!(
             "cell `{cell}` is not served by this server (it serves {served}): {owner}"
@@ -312,6 +323,20 @@ mod tests {
         let e = cells.resolve("c").unwrap_err();
         assert!(
             matches!(&e, ServerError::FailedPrecondition(m) if m.contains("served by server `s2` at http://s2:1"))
+        );
+        // s2 dies; s3 lives: the fail-over gives c to s3 (the only live server besides this one, which serves a
+        // and b and is not in its own directory here).
+        directory.insert(v1::PlantServer {
+            server_id: "s3".into(),
+            grpc_address: "http://s3:1".into(),
+            cells: vec!["d".into()],
+            taken: Vec::new(),
+        });
+        directory.remove("s2");
+        let e = cells.resolve("c").unwrap_err().to_string();
+        assert!(
+            e.contains("its server `s2` is gone, and server `s3` at http://s3:1 serves it meanwhile"),
+            "{e}"
         );
         assert_eq!(cells.avoiders_of("c"), ["a"]);
         assert!(cells.avoiders_of("a").is_empty());

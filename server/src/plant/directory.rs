@@ -9,25 +9,57 @@ use std::sync::{Arc, Mutex};
 use dmp_proto::v1;
 use tokio::sync::watch;
 
-/// The live servers of the plant, by id. Cheap to clone; the lock is never held across an await.
+/// The live servers of the plant, by id, and every cell's home. Cheap to clone; the locks are never held across
+/// an await.
 #[derive(Debug, Clone)]
 pub struct Directory {
     servers: Arc<Mutex<BTreeMap<String, v1::PlantServer>>>,
+    /// Each cell's home: the server whose announcement listed it last, remembered after it is gone.
+    homes: Arc<Mutex<BTreeMap<String, String>>>,
     /// Bumped at every change.
     changes: Arc<watch::Sender<u64>>,
 }
 
 impl Default for Directory {
     fn default() -> Self {
-        Self { servers: Arc::default(), changes: Arc::new(watch::Sender::new(0)) }
+        Self { servers: Arc::default(), homes: Arc::default(), changes: Arc::new(watch::Sender::new(0)) }
     }
 }
 
 impl Directory {
-    /// Records (or replaces) a live server.
+    /// Records (or replaces) a live server, and it as the home of the cells it lists.
     pub fn insert(&self, server: v1::PlantServer) {
+        {
+            let mut homes = self.homes.lock().unwrap_or_else(|p| p.into_inner());
+            for cell in &server.cells {
+                homes.insert(cell.clone(), server.server_id.clone());
+            }
+        }
         self.lock().insert(server.server_id.clone(), server);
         self.changes.send_modify(|n| *n += 1);
+    }
+
+    /// Every cell's home, as last announced.
+    pub fn homes(&self) -> BTreeMap<String, String> {
+        self.homes.lock().unwrap_or_else(|p| p.into_inner()).clone()
+    }
+
+    /// The home of `cell` and the server that holds it as the fail-over has it: its home while that is live, else
+    /// the live server (`me` included, when given) of highest rendezvous weight ([`super::failover::rendezvous`]).
+    /// None for a cell no server ever announced, or no server live.
+    pub fn holder_of(&self, cell: &str, me: Option<&str>) -> Option<(String, String)> {
+        let home = self.homes.lock().unwrap_or_else(|p| p.into_inner()).get(cell).cloned()?;
+        let mut live = self.server_ids();
+        if live.contains(&home) {
+            return Some((home.clone(), home));
+        }
+        if let Some(me) = me
+            && !live.iter().any(|s| s == me)
+        {
+            live.push(me.to_owned());
+        }
+        let holder = super::failover::rendezvous(cell, live.iter().map(String::as_str))?.to_owned();
+        Some((home, holder))
     }
 
     /// Forgets a server (its token went).
@@ -91,5 +123,23 @@ mod tests {
         d.remove("s1");
         assert_eq!(d.owner_of("a").unwrap().server_id, "s2");
         assert_eq!(d.server_ids(), ["s2"]);
+    }
+
+    #[test]
+    fn a_cell_is_held_by_its_home_while_it_lives_then_by_the_rendezvous_pick() {
+        let d = Directory::default();
+        assert_eq!(d.holder_of("a", Some("s3")), None, "a cell nobody announced");
+        d.insert(server("s1", &["a"]));
+        d.insert(server("s2", &["b"]));
+        assert_eq!(d.holder_of("a", Some("s3")), Some(("s1".into(), "s1".into())));
+        d.remove("s1");
+        assert_eq!(d.homes().get("a").map(String::as_str), Some("s1"), "remembered after it is gone");
+        let pick = super::super::failover::rendezvous("a", ["s2", "s3"]).unwrap();
+        assert_eq!(d.holder_of("a", Some("s3")), Some(("s1".into(), pick.into())));
+        assert_eq!(
+            d.holder_of("a", None),
+            Some(("s1".into(), "s2".into())),
+            "s2 is the only live one it knows"
+        );
     }
 }

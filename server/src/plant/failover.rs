@@ -112,7 +112,7 @@ struct State {
     cells: Cells,
     taken: TakenCells,
     scene: ObstacleSink,
-    /// Each cell's home server, as last announced.
+    /// Each cell's home server, as last announced (the directory's, at the last change).
     homes: BTreeMap<String, String>,
     /// The queryables announcing the taken cells.
     announced: BTreeMap<String, Queryable<()>>,
@@ -122,11 +122,7 @@ impl State {
     /// Brings the taken cells in line with the directory.
     async fn apply(&mut self) {
         let servers = self.directory.servers();
-        for s in &servers {
-            for cell in &s.cells {
-                self.homes.insert(cell.clone(), s.server_id.clone());
-            }
-        }
+        self.homes = self.directory.homes();
         let mut live: Vec<&str> = servers.iter().map(|s| s.server_id.as_str()).collect();
         if !live.contains(&self.me.server_id.as_str()) {
             live.push(&self.me.server_id);

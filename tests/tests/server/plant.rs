@@ -410,6 +410,17 @@ async fn a_cell_is_taken_while_its_server_is_away_and_given_back_when_it_returns
     .await
     .unwrap();
     assert_eq!(found.grpc_address, format!("http://{}", taker.grpc_addr));
+    // The other survivor refuses cell a, naming the taker.
+    let refused = within("the other refuses", client_of(other).await.with_cell("a").list_obstacles())
+        .await
+        .unwrap_err()
+        .to_string();
+    assert!(
+        refused.contains("its server `s1` is gone")
+            && refused.contains("serves it meanwhile")
+            && refused.contains(&taker.grpc_addr.to_string()),
+        "{refused}"
+    );
 
     // A robot of cell a streams on the taker.
     let c = client_of(taker).await.with_cell("a");
