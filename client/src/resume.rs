@@ -12,12 +12,19 @@
 //! start at the last setpoint's (the first point of the new session, the same state, supersedes it, as
 //! [`crate::Setpoints`] expects), and their sequence numbers go on from the last. The phase of the primitive starts
 //! over: the rest of the motion is the primitive replayed from where the robot is to the goal (the last goal and
-//! `tau` set through this session). A pose run's orientation resumes from rest; groups are not resumed.
+//! `tau` set through this session). A pose run resumes from the last orientation received, at rest in rotation;
+//! groups are not resumed.
+//!
+//! **Commands survive.** A session paused when its server went is resumed paused, and a stopped one stopped: the
+//! new server brings the robot to rest from the state it had, and never sets it moving towards the goal again.
 //!
 //! **Bounds.** At most [`ResumeOptions::max_attempts`] attempts within [`ResumeOptions::max_total`] for one
-//! resumption, waiting [`ResumeOptions::retry_delay`] (doubling, up to 16 times as long) between attempts; then the
-//! stream ends with [`ClientError::Resume`], naming the attempts, the time spent and the last failure. Bad input,
-//! a denied permission or a robot taken over by another stream end it at once, as they would a plain session.
+//! resumption, waiting [`ResumeOptions::retry_delay`] (doubling, up to 16 times as long) between attempts, and at
+//! most [`ResumeOptions::max_resumes`] resumptions per session; then the stream ends with [`ClientError::Resume`],
+//! naming the attempts, the time spent and the last failure. Only a server or a route that went away is resumed
+//! from (UNAVAILABLE, a transport error, a stall); anything else the server says ends the stream at once, as it
+//! would a plain session (a run that diverged, an internal error, bad input, a denied permission, a robot taken
+//! over by another stream).
 
 use std::time::{Duration, Instant};
 
@@ -45,7 +52,10 @@ pub struct ResumeOptions {
     pub connect: ConnectOptions,
     /// No segment for this long: the server is taken as gone (frozen, or cut off without its connection
     /// closing) and the session resumes. None: wait as long as the connection lasts (HTTP/2 keep-alive).
+    /// (At least twice the request's `segment_s`, so that long segments are not taken for a stall.)
     pub stall_timeout: Option<Duration>,
+    /// Resumptions per session, at least 1: a server that keeps failing the stream is not chased forever.
+    pub max_resumes: u32,
 }
 
 impl Default for ResumeOptions {
@@ -57,6 +67,7 @@ impl Default for ResumeOptions {
             resolve_timeout: Duration::from_millis(500),
             connect: ConnectOptions { timeout: Duration::from_secs(2), ..Default::default() },
             stall_timeout: Some(Duration::from_millis(500)),
+            max_resumes: 20,
         }
     }
 }
@@ -67,6 +78,8 @@ struct Setpoint {
     t: f64,
     position: Vec<f64>,
     velocity: Vec<f64>,
+    /// A pose run's orientation, x, y, z, w.
+    orientation: Option<Vec<f64>>,
 }
 
 /// The session's timeline across resumptions: each new session's run times start at the setpoint it resumed from,
@@ -88,10 +101,13 @@ impl Timeline {
         let d = seg.dim as usize;
         let n = seg.positions.len().checked_div(d).unwrap_or(0);
         if n > 0 && seg.velocities.len() == seg.positions.len() {
+            let orientation =
+                (seg.orientations.len() == 4 * n).then(|| seg.orientations[4 * (n - 1)..].to_vec());
             self.last = Some(Setpoint {
                 t: seg.start_time + (n - 1) as f64 * seg.dt,
                 position: seg.positions[(n - 1) * d..].to_vec(),
                 velocity: seg.velocities[(n - 1) * d..].to_vec(),
+                orientation,
             });
         }
         self.last_sequence = Some(seg.sequence);
@@ -121,6 +137,10 @@ pub struct ResumableSession {
     session: Session,
     timeline: Timeline,
     resumes: u32,
+    /// Paused through this session (kept if it resumes).
+    paused: bool,
+    /// Stopped through this session (kept if it resumes).
+    stopped: bool,
 }
 
 impl std::fmt::Debug for ResumableSession {
@@ -133,8 +153,18 @@ impl std::fmt::Debug for ResumableSession {
     }
 }
 
-/// Whether a failure of the stream or of an attempt is worth another attempt (the server or the route to it is
-/// gone, or the cell is moving), rather than the caller's to see.
+/// Whether a failure of a running stream is worth a resumption: its server or the route to it went away (a
+/// status of the server itself, e.g. a run that diverged, is the caller's to see).
+fn resumable(e: &ClientError) -> bool {
+    match e {
+        ClientError::Status { code, .. } => matches!(code, tonic::Code::Unavailable | tonic::Code::Unknown),
+        ClientError::Connect { .. } | ClientError::Closed(_) => true,
+        _ => false,
+    }
+}
+
+/// Whether a failure of an attempt to open the session is worth another attempt (the server or the route to it is
+/// gone, or the cell is moving: not served yet, or no server answers for it yet), rather than the caller's to see.
 fn retryable(e: &ClientError) -> bool {
     match e {
         ClientError::Status { code, .. } => matches!(
@@ -175,6 +205,8 @@ impl ResumableSession {
             session,
             timeline: Timeline::default(),
             resumes: 0,
+            paused: false,
+            stopped: false,
         })
     }
 
@@ -192,7 +224,10 @@ impl ResumableSession {
     /// cannot mend ends the stream with its error.
     pub async fn next_segment(&mut self) -> Option<Result<v1::Segment, ClientError>> {
         loop {
-            let next = match self.options.stall_timeout {
+            let segment_s = self.request.segment_s.max(0.0);
+            let stall =
+                self.options.stall_timeout.map(|s| s.max(Duration::from_secs_f64(2.0 * segment_s.min(60.0))));
+            let next = match stall {
                 Some(stall) => {
                     tokio::time::timeout(stall, self.session.next_segment()).await.unwrap_or_else(|_| {
                         Some(Err(ClientError::Closed(format!(
@@ -205,7 +240,18 @@ impl ResumableSession {
             };
             match next {
                 Some(Ok(seg)) => return Some(Ok(self.timeline.shift(seg))),
-                Some(Err(e)) if retryable(&e) => {
+                Some(Err(e)) if resumable(&e) => {
+                    if self.resumes >= self.options.max_resumes.max(1) {
+                        return Some(Err(ClientError::Resume {
+                            cell: self.cell.clone(),
+                            attempts: self.resumes,
+                            elapsed: Duration::ZERO,
+                            last: format!(
+                                "resumed {} times already (max_resumes); the last failure: {e}",
+                                self.resumes
+                            ),
+                        }));
+                    }
                     if let Err(e) = self.resume().await {
                         return Some(Err(e));
                     }
@@ -224,6 +270,9 @@ impl ResumableSession {
         if let (Some(m), Some(p)) = (request.motion.as_mut(), &from) {
             m.start = p.position.clone();
             m.start_velocity = p.velocity.clone();
+            if let Some(q) = &p.orientation {
+                m.start_orientation = q.clone();
+            }
         }
         let robot = request.motion.as_ref().map(|m| m.robot_id.clone()).unwrap_or_default();
         let state = from.as_ref().map(|p| v1::RobotState {
@@ -238,11 +287,39 @@ impl ResumableSession {
         self.session = session;
         self.timeline.resumed();
         self.resumes += 1;
+        // What the robot was told goes on: a stopped robot comes to rest, a paused one holds.
+        if self.stopped {
+            self.session.stop().await?;
+        } else if self.paused {
+            self.session.pause().await?;
+        }
         Ok(())
     }
 
-    /// Sends a command or a measured state to the current server.
-    pub async fn send(&self, message: Message) -> Result<(), ClientError> {
+    /// Sends a command or a measured state to the current server. Goals, taus, pauses and stops are kept if the
+    /// session resumes.
+    pub async fn send(&mut self, message: Message) -> Result<(), ClientError> {
+        match &message {
+            Message::SetGoal(g) => {
+                if let Some(m) = self.request.motion.as_mut() {
+                    if !g.goal.is_empty() {
+                        m.goal = g.goal.clone();
+                    }
+                    if !g.goal_orientation.is_empty() {
+                        m.goal_orientation = g.goal_orientation.clone();
+                    }
+                }
+            }
+            Message::SetTau(t) => {
+                if let Some(m) = self.request.motion.as_mut() {
+                    m.tau = t.tau;
+                }
+            }
+            Message::Pause(_) => self.paused = true,
+            Message::Resume(_) => self.paused = false,
+            Message::Stop(_) => self.stopped = true,
+            Message::Start(_) | Message::State(_) => {}
+        }
         self.session.sender().send(message).await
     }
 
@@ -262,8 +339,21 @@ impl ResumableSession {
         self.session.set_tau(tau).await
     }
 
-    /// Ends the run: the robot decelerates to rest and the stream closes.
-    pub async fn stop(&self) -> Result<(), ClientError> {
+    /// Holds the robot (the phase stops; kept if the session resumes).
+    pub async fn pause(&mut self) -> Result<(), ClientError> {
+        self.paused = true;
+        self.session.pause().await
+    }
+
+    /// Goes on after a pause.
+    pub async fn resume_motion(&mut self) -> Result<(), ClientError> {
+        self.paused = false;
+        self.session.resume().await
+    }
+
+    /// Ends the run: the robot decelerates to rest and the stream closes (a resumed session is stopped too).
+    pub async fn stop(&mut self) -> Result<(), ClientError> {
+        self.stopped = true;
         self.session.stop().await
     }
 }
@@ -380,6 +470,34 @@ mod tests {
         let mut early = Timeline::default();
         early.resumed();
         assert_eq!(early.shift(segment(0, 0.0, 0.0, 1)).start_time, 0.0);
+    }
+
+    #[test]
+    fn a_pose_run_resumes_from_its_last_orientation() {
+        let mut timeline = Timeline::default();
+        let mut seg = segment(0, 0.0, 0.0, 2);
+        seg.orientations = vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.6, 0.8];
+        timeline.shift(seg);
+        assert_eq!(timeline.last.unwrap().orientation, Some(vec![0.0, 0.0, 0.6, 0.8]));
+        timeline = Timeline::default();
+        timeline.shift(segment(0, 0.0, 0.0, 2));
+        assert_eq!(timeline.last.unwrap().orientation, None, "a position run");
+    }
+
+    #[test]
+    fn only_a_server_or_route_gone_is_resumed_from() {
+        let status = |code| ClientError::Status { code, message: String::new() };
+        assert!(resumable(&status(tonic::Code::Unavailable)) && resumable(&status(tonic::Code::Unknown)));
+        assert!(resumable(&ClientError::Closed("the session".into())));
+        for code in [
+            tonic::Code::FailedPrecondition,
+            tonic::Code::Internal,
+            tonic::Code::Aborted,
+            tonic::Code::InvalidArgument,
+            tonic::Code::ResourceExhausted,
+        ] {
+            assert!(!resumable(&status(code)), "{code:?}: the server's word, not its absence");
+        }
     }
 
     #[test]

@@ -14,7 +14,7 @@ use crate::config::Limits;
 use crate::error::ServerError;
 use crate::memory::MemoryBudget;
 use crate::plant::directory::Directory;
-use crate::plant::taken::TakenCells;
+use crate::plant::taken::{GivenBack, TakenCells};
 use crate::staleness::SceneConfig;
 
 /// Every cell's scene, by name. Cheap to clone.
@@ -142,6 +142,16 @@ impl Cells {
     /// The cells of this server whose robots avoid the robots of `cell` (its neighbours that list it).
     pub fn avoiders_of(&self, cell: &str) -> &[String] {
         self.avoiders.get(cell).map_or(&[], Vec::as_slice)
+    }
+
+    /// For a stream starting in `cell` (resolved earlier, maybe several awaits ago): what ends it when the cell, a
+    /// taken one, goes back (None for a cell of its own), or the refusal when it went back in the meantime.
+    pub fn stream_guard(&self, cell: &str) -> Result<Option<GivenBack>, ServerError> {
+        let given_back = self.taken.until_given_back(cell);
+        if given_back.is_none() && !self.serves(cell) {
+            return Err(self.not_served(cell));
+        }
+        Ok(given_back)
     }
 
     /// The refusal of a cell this server does not serve, naming the server that does when one is known.

@@ -408,6 +408,30 @@ async fn a_frozen_servers_robot_resumes_on_a_survivor_once_the_lease_expires() {
     plant.close().await;
 }
 
+/// A robot stopped just before its server dies is stopped on the survivor too: it comes to rest there and its
+/// stream ends, never set moving towards the goal again (the resumed session sends the stop again).
+#[tokio::test(flavor = "multi_thread")]
+async fn a_robot_stopped_as_its_server_dies_comes_to_rest_on_the_survivor() {
+    let (mut plant, mut robot) = setup().await;
+    robot.read_for(0.5).await;
+    within("stop", robot.session.stop()).await.unwrap();
+    plant.servers[0].kill();
+    within("the stream ends", async {
+        while let Some(seg) = robot.session.next_segment().await {
+            robot.setpoints.push(&seg.expect("no error")).unwrap();
+        }
+    })
+    .await;
+    assert_eq!(robot.session.resumes(), 1, "resumed once, on the survivor");
+    let t = robot.setpoints.trajectory().unwrap();
+    let n = t.t.len();
+    let (x, v) = (&t.x[2 * (n - 1)..], &t.xd[2 * (n - 1)..]);
+    assert!(v[0].hypot(v[1]) < 2e-3, "at rest: {v:?}");
+    assert!(x[0] < 0.2, "stopped on the way, not taken to the goal (1, 0.5): {x:?}");
+    assert_continuous(&robot.setpoints);
+    plant.close().await;
+}
+
 /// The figure of BENCHMARKS.md: `cargo test -p dmp-server --test failover -- --ignored --nocapture`.
 #[tokio::test(flavor = "multi_thread")]
 #[ignore = "a measurement: run it with --ignored --nocapture"]

@@ -157,22 +157,28 @@ impl State {
         }
         let home = self.homes.get(cell).cloned().unwrap_or_default();
         info!(cell, home = %home, "plant: fail-over: taking the cell of a server gone");
-        // Its scene, from whoever keeps it (the router's storage, perception nodes).
-        let sink = self.scene.clone();
+        // Its scene, from whoever keeps it (the router's storage, perception nodes): every reply is in before the
+        // cell is announced (the query ends when all have answered, or after SCENE_QUERY_TIMEOUT), so that no
+        // client starts a run in it on an empty scene.
         let asked = self
             .session
             .get(format!("{}/**", obstacles_of(cell)))
             .target(QueryTarget::All)
             .consolidation(ConsolidationMode::None)
             .timeout(SCENE_QUERY_TIMEOUT)
-            .callback(move |reply| {
-                if let Ok(sample) = reply.result() {
-                    sink(sample);
-                }
-            })
             .await;
-        if let Err(e) = asked {
-            warn!(cell, error = %e, "plant: fail-over: cannot ask for the taken cell's scene");
+        match asked {
+            Ok(replies) => {
+                let mut obstacles = 0usize;
+                while let Ok(reply) = replies.recv_async().await {
+                    if let Ok(sample) = reply.result() {
+                        (self.scene)(sample);
+                        obstacles += 1;
+                    }
+                }
+                debug!(cell, obstacles, "plant: fail-over: the taken cell's scene is in");
+            }
+            Err(e) => warn!(cell, error = %e, "plant: fail-over: cannot ask for the taken cell's scene"),
         }
         // Then clients find it here.
         let mut answer = self.me.clone();

@@ -175,7 +175,7 @@ impl MotionServiceImpl {
         let (tx, rx) = mpsc::channel(buffer);
         let app = self.state.clone();
         // A cell served for a dead server (fail-over): its streams end when it goes back.
-        let given_back = self.state.cells.taken().until_given_back(cell.name());
+        let given_back = self.state.cells.stream_guard(cell.name())?;
         let cell_name = cell.name().to_owned();
         tokio::spawn(async move {
             let taken_over = claim.taken_over();

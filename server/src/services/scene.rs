@@ -93,7 +93,8 @@ pub fn watch_stream(
                 }
                 moved = &mut moved => {
                     debug!(error = %moved, "scene watch of a cell that went back");
-                    let _ = tx.try_send(Err(moved.into()));
+                    // A reader whose buffer is full is waited for a little, not forever.
+                    let _ = tokio::time::timeout(std::time::Duration::from_secs(1), tx.send(Err(moved.into()))).await;
                     return;
                 }
                 changed = changes.changed() => if changed.is_err() { break },
@@ -170,7 +171,7 @@ impl SceneService for SceneServiceImpl {
         caller.check(&Action::ReadScene { cell: &cell })?;
         let permit = s.stream_permit(StreamKind::Watch, &Peer::of(&request))?;
         let scene = s.cells.get(&cell)?;
-        let given_back = s.cells.taken().until_given_back(&cell);
+        let given_back = s.cells.stream_guard(&cell)?;
         let grant =
             s.access.grant(caller, move |c, a| c.check_again(a, &Action::ReadScene { cell: &cell }))?;
         Ok(Response::new(watch_stream(

@@ -92,10 +92,14 @@ impl Store {
     }
 
     /// Applies a tombstone from another server of the plant: removes the versions up to `up_to` and records it
-    /// (merged with the one held), durable when it returns. Returns whether the store changed.
+    /// (merged with the one held), durable when it returns. Returns whether the store changed. A tombstone past
+    /// [`TOMBSTONE_RETENTION`] still removes its versions but is not recorded (nor the expired ones held kept), so
+    /// that expired tombstones do not travel back and forth between servers' catch-ups.
     pub fn apply_tombstone(&self, t: &Tombstone) -> Result<bool, ServerError> {
         self.count(super::DELETE);
         let (robot_id, name) = (t.robot_id.as_str(), t.name.as_str());
+        let oldest_kept = self.origin.as_ref().map(|(_, clock)| ntp64_before(clock(), TOMBSTONE_RETENTION));
+        let expired = oldest_kept.is_some_and(|oldest| t.up_to < oldest);
         let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
         tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
         let changed = {
@@ -104,8 +108,14 @@ impl Store {
                 stones.get((robot_id, name)).map_err(|e| storage("read tombstones", e))?.map(|v| v.value());
             if held.is_some_and(|h| h >= t.up_to) {
                 false
+            } else if expired {
+                let mut prims = tx.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
+                remove_up_to(&mut prims, robot_id, name, t.up_to)? > 0
             } else {
                 merge(&mut stones, robot_id, name, t.up_to)?;
+                if let Some(oldest) = oldest_kept {
+                    expire(&mut stones, oldest)?;
+                }
                 let mut prims = tx.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
                 remove_up_to(&mut prims, robot_id, name, t.up_to)?;
                 let mut last = tx.open_table(LAST_VERSIONS).map_err(|e| storage("open last_versions", e))?;
@@ -138,9 +148,11 @@ impl Store {
         Ok(stones.get((robot_id, name)).map_err(|e| storage("read tombstones", e))?.map(|v| v.value()))
     }
 
-    /// Every tombstone, in key order (what a server of the plant answers a catch-up query with, besides the
-    /// versions).
+    /// Every tombstone within [`TOMBSTONE_RETENTION`], in key order (what a server of the plant answers a catch-up
+    /// query with, besides the versions).
     pub fn all_tombstones(&self) -> Result<Vec<Tombstone>, ServerError> {
+        let oldest_kept =
+            self.origin.as_ref().map_or(0, |(_, clock)| ntp64_before(clock(), TOMBSTONE_RETENTION));
         let read = self.db.begin_read().map_err(|e| storage("begin read", e))?;
         let stones = match read.open_table(TOMBSTONES) {
             Ok(t) => t,
@@ -151,7 +163,9 @@ impl Store {
         for entry in stones.iter().map_err(|e| storage("read tombstones", e))? {
             let (k, v) = entry.map_err(|e| storage("read tombstones", e))?;
             let (robot_id, name) = k.value();
-            out.push(Tombstone { robot_id: robot_id.into(), name: name.into(), up_to: v.value() });
+            if v.value() >= oldest_kept {
+                out.push(Tombstone { robot_id: robot_id.into(), name: name.into(), up_to: v.value() });
+            }
         }
         Ok(out)
     }
@@ -271,6 +285,26 @@ mod tests {
         s.delete_versions("r", "b").unwrap();
         let names: Vec<String> = s.all_tombstones().unwrap().into_iter().map(|t| t.name).collect();
         assert_eq!(names, ["b"], "the tombstone of 8 days ago went");
+
+        // One of 8 days ago arriving from another server (a catch-up) removes its versions but is not kept, nor
+        // answered on: expired tombstones do not travel back and forth.
+        s.put("r", "c", &line(), 1).unwrap();
+        let stale = Tombstone { robot_id: "r".into(), name: "c".into(), up_to: day * 9 + 1 };
+        let expired = Tombstone { robot_id: "r".into(), name: "d".into(), up_to: day };
+        s.put("r", "d", &line(), 1).unwrap();
+        assert!(s.apply_tombstone(&expired).is_ok());
+        assert!(s.get("r", "d", 0).is_ok(), "its versions are newer than it");
+        assert_eq!(s.tombstone("r", "d").unwrap(), None, "not recorded");
+        assert!(s.apply_tombstone(&stale).unwrap());
+        assert!(s.get("r", "c", 0).is_err());
+        // 8 days later: the tombstones of b and c expire, at the next tombstone applied and in the answers.
+        now.store(day * 17, Ordering::SeqCst);
+        assert!(s.all_tombstones().unwrap().is_empty());
+        s.put("r", "e", &line(), 1).unwrap();
+        let fresh = Tombstone { robot_id: "r".into(), name: "e".into(), up_to: day * 17 + 5 };
+        assert!(s.apply_tombstone(&fresh).unwrap());
+        assert_eq!((s.tombstone("r", "b").unwrap(), s.tombstone("r", "c").unwrap()), (None, None));
+        assert_eq!(s.all_tombstones().unwrap(), vec![fresh]);
 
         let lone_dir = tempfile::tempdir().unwrap();
         let lone = Store::open(lone_dir.path()).unwrap();
