@@ -328,7 +328,7 @@ mod tests {
             server_id: "s2".into(),
             grpc_address: "http://s2:1".into(),
             cells: vec!["c".into()],
-            taken: Vec::new(),
+            ..Default::default()
         });
         let e = cells.resolve("c").unwrap_err();
         assert!(
@@ -340,7 +340,7 @@ mod tests {
             server_id: "s3".into(),
             grpc_address: "http://s3:1".into(),
             cells: vec!["d".into()],
-            taken: Vec::new(),
+            ..Default::default()
         });
         directory.remove("s2");
         let e = cells.resolve("c").unwrap_err().to_string();

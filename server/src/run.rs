@@ -188,7 +188,7 @@ pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHand
                     .clone()
                     .unwrap_or_else(|| format!("{scheme}://{grpc_addr}")),
                 cells: crate::plant::announced_cells(&cells),
-                taken: Vec::new(),
+                ..Default::default()
             };
             let scene = bridge.as_ref().map(|b| b.obstacle_sink()).ok_or_else(|| {
                 ServerError::Internal("a server of a plant without its Zenoh bridge".into())

@@ -34,6 +34,10 @@ impl Directory {
             for cell in &server.cells {
                 homes.insert(cell.clone(), server.server_id.clone());
             }
+            // The cells whose server it knows gone: their home, unless this server knows it already.
+            for (cell, home) in &server.homes_away {
+                homes.entry(cell.clone()).or_insert_with(|| home.clone());
+            }
         }
         self.lock().insert(server.server_id.clone(), server);
         self.changes.send_modify(|n| *n += 1);
@@ -42,6 +46,13 @@ impl Directory {
     /// Every cell's home, as last announced.
     pub fn homes(&self) -> BTreeMap<String, String> {
         self.homes.lock().unwrap_or_else(|p| p.into_inner()).clone()
+    }
+
+    /// The cells whose home is not live, with their home (what a server tells one that joins, `homes_away`).
+    pub fn homes_away(&self) -> std::collections::HashMap<String, String> {
+        let live = self.server_ids();
+        let homes = self.homes.lock().unwrap_or_else(|p| p.into_inner());
+        homes.iter().filter(|(_, h)| !live.contains(h)).map(|(c, h)| (c.clone(), h.clone())).collect()
     }
 
     /// The home of `cell` and the server that holds it as the fail-over has it: its home while that is live, else
@@ -108,7 +119,7 @@ mod tests {
             server_id: id.into(),
             grpc_address: format!("http://{id}:1"),
             cells: cells.iter().map(|c| c.to_string()).collect(),
-            taken: Vec::new(),
+            ..Default::default()
         }
     }
 
@@ -141,5 +152,21 @@ mod tests {
             Some(("s1".into(), "s2".into())),
             "s2 is the only live one it knows"
         );
+    }
+
+    #[test]
+    fn a_server_joining_while_a_home_is_away_learns_it_from_the_taker() {
+        let d = Directory::default();
+        let mut taker = server("s2", &["b"]);
+        taker.homes_away.insert("a".into(), "s1".into());
+        d.insert(taker);
+        assert_eq!(d.homes().get("a").map(String::as_str), Some("s1"));
+        assert_eq!(d.homes_away().get("a").map(String::as_str), Some("s1"), "and tells the next one");
+        assert!(!d.homes_away().contains_key("b"), "s2 is live");
+        let pick = super::super::failover::rendezvous("a", ["s2", "s4"]).unwrap();
+        assert_eq!(d.holder_of("a", Some("s4")), Some(("s1".into(), pick.into())));
+        // The home's own announcement wins over what a taker said.
+        d.insert(server("s9", &["a"]));
+        assert_eq!(d.homes().get("a").map(String::as_str), Some("s9"));
     }
 }

@@ -42,19 +42,35 @@ impl Discovery {
     ) -> Result<Self, ServerError> {
         let zenoh_err = |e: zenoh::Error| ServerError::Internal(format!("zenoh: plant discovery: {e}"));
         let answer = codec::encode(server);
-        let keys = std::iter::once(server_key(&server.server_id))
-            .chain(server.cells.iter().map(|c| cell_server_key(c)));
+        let own_key = server_key(&server.server_id);
+        let keys = std::iter::once(own_key.clone()).chain(server.cells.iter().map(|c| cell_server_key(c)));
         let mut queryables = Vec::new();
         for key in keys {
             let payload = answer.clone();
             let reply_key = key.clone();
+            // The server's own key also names the cells whose server is gone, with their homes (read at each
+            // query): a server joining meanwhile learns them, whoever serves them now.
+            let homes_away = (key == own_key).then(|| (server.clone(), directory.clone()));
             let q = session
                 .declare_queryable(&key)
                 .callback(move |query| {
-                    let sent = query
-                        .reply(&reply_key, payload.clone())
-                        .encoding(Encoding::APPLICATION_PROTOBUF)
-                        .wait();
+                    let away = homes_away.as_ref().map(|(me, d)| (me, d.homes_away()));
+                    let payload = match away {
+                        Some((me, mut away)) => {
+                            // Never its own cells (its directory may not list itself).
+                            away.retain(|_, home| *home != me.server_id);
+                            if away.is_empty() {
+                                payload.clone()
+                            } else {
+                                let mut me = me.clone();
+                                me.homes_away = away;
+                                codec::encode(&me)
+                            }
+                        }
+                        _ => payload.clone(),
+                    };
+                    let sent =
+                        query.reply(&reply_key, payload).encoding(Encoding::APPLICATION_PROTOBUF).wait();
                     if let Err(e) = sent {
                         debug!(key = %reply_key, error = %e, "plant: discovery answer not sent");
                     }

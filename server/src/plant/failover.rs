@@ -1,8 +1,8 @@
 //! Fail-over: when a server of the plant dies, one survivor serves each of its cells until it comes back.
 //!
 //! **Who takes a cell.** Every server knows each cell's home (the server whose announcement on
-//! `dmp/@servers/<id>` lists it, remembered after that server is gone) and the live servers (their liveliness
-//! tokens, [`Directory`]). A cell whose home is not live is served by the live server of highest rendezvous weight
+//! `dmp/@servers/<id>` lists it, remembered after that server is gone; a server that joins meanwhile learns it from
+//! the others' `homes_away`) and the live servers (their liveliness tokens, [`Directory`]). A cell whose home is not live is served by the live server of highest rendezvous weight
 //! (highest-random-weight hashing): the weight of (cell, server) is the first 8 bytes of SHA-256 of
 //! `cell \0 server-id`, ties going to the smaller id. Every server computes it alike from the same live set, so
 //! each cell is taken by one server once their directories agree (a few milliseconds after a token goes), and a

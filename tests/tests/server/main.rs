@@ -14,6 +14,7 @@ mod matches_the_engine;
 mod metrics;
 mod motion_limits;
 mod plant;
+mod plant_joiner;
 mod poses;
 mod primitives;
 mod python_clients;

@@ -19,7 +19,7 @@ use crate::stale_scene::router;
 use crate::{line, spec, until};
 
 /// A server of the plant: id `id`, serving `cells`, a client of the router at `router`, its store in `dir`.
-async fn plant_server(
+pub(crate) async fn plant_server(
     dir: &Path,
     router: &[String],
     id: &str,
@@ -42,7 +42,7 @@ async fn client_of(h: &ServerHandle) -> DmpClient {
 }
 
 /// Waits until every server knows every other (their tokens and announcements went through the router).
-async fn until_all_known(servers: &[&ServerHandle]) {
+pub(crate) async fn until_all_known(servers: &[&ServerHandle]) {
     let n = servers.len();
     until("every server knows the plant", || {
         servers.iter().all(|h| h.state().cells.directory().server_ids().len() == n)
