@@ -15,6 +15,10 @@
 //! `tau` set through this session). A pose run resumes from the last orientation received, at rest in rotation;
 //! groups are not resumed.
 //!
+//! **The same primitive.** A request for the latest version is pinned, when the session opens, to the version
+//! that is the latest then: every resumption runs it, even if another is learned meanwhile or the server resumed on
+//! has not caught up with a newer one.
+//!
 //! **Commands survive.** A session paused when its server went is resumed paused, and a stopped one stopped: the
 //! new server brings the robot to rest from the state it had, and never sets it moving towards the goal again.
 //!
@@ -195,7 +199,8 @@ impl ResumableSession {
             return Err(ClientError::argument("motion.cell", "must name the cell to find its server"));
         }
         let cell = motion.cell.clone();
-        let (server, session) = attempts(zenoh, &cell, &request, None, &options).await?;
+        let mut request = request;
+        let (server, session) = attempts(zenoh, &cell, &mut request, None, &options).await?;
         Ok(Self {
             zenoh: zenoh.clone(),
             options,
@@ -282,7 +287,7 @@ impl ResumableSession {
             velocity: p.velocity.clone(),
             ..Default::default()
         });
-        let (server, session) = attempts(&self.zenoh, &self.cell, &request, state, &self.options).await?;
+        let (server, session) = attempts(&self.zenoh, &self.cell, &mut request, state, &self.options).await?;
         self.server = server;
         self.session = session;
         self.timeline.resumed();
@@ -358,11 +363,14 @@ impl ResumableSession {
     }
 }
 
-/// Resolves the cell and opens the session, retrying within the bounds; sends `state` first when given.
+/// Resolves the cell and opens the session, retrying within the bounds; sends `state` first when given. A request
+/// for the latest version of the primitive is pinned to the version that is the latest then, so that every
+/// resumption runs the same primitive (a server that comes back may not have caught up yet, or one may be learned
+/// meanwhile).
 async fn attempts(
     zenoh: &zenoh::Session,
     cell: &str,
-    request: &v1::ExecuteRequest,
+    request: &mut v1::ExecuteRequest,
     state: Option<v1::RobotState>,
     options: &ResumeOptions,
 ) -> Result<(v1::PlantServer, Session), ClientError> {
@@ -396,12 +404,17 @@ async fn attempts(
 async fn once(
     zenoh: &zenoh::Session,
     cell: &str,
-    request: &v1::ExecuteRequest,
+    request: &mut v1::ExecuteRequest,
     state: Option<v1::RobotState>,
     options: &ResumeOptions,
 ) -> Result<(v1::PlantServer, Session), ClientError> {
     let server = resolve_cell(zenoh, cell, options.resolve_timeout).await?;
     let client = DmpClient::connect_with(&server.grpc_address, &options.connect).await?.with_cell(cell);
+    if let Some(m) = request.motion.as_mut()
+        && m.version == 0
+    {
+        m.version = client.get(&m.robot_id, &m.primitive, 0).await?.version;
+    }
     let mut session = client.session(request.clone()).await?;
     if let Some(s) = state {
         session.state(s).await?;

@@ -374,8 +374,15 @@ async fn a_killed_servers_robot_resumes_on_a_survivor_and_comes_back_with_its_ce
     eprintln!("kill -9 to the first segment from the survivor: {gap:?}; setpoints left then: {margin:.4} s");
     robot.read_for(0.3).await;
 
-    // Learned while s1 is down: s1 catches up when it comes back.
+    // Learned while s1 is down: s1 catches up when it comes back. A new version of the running primitive, the
+    // other way, is learned too: the session runs the version it started with wherever it resumes.
     let missed = within("put missed", plant.client(&taker).await.put_primitive("r1", "missed", &reach()))
+        .await
+        .unwrap();
+    let back =
+        dmp::Primitive::straight_line(50, 4.0, vec![3050.0; 2], None, 30.0, vec![0.0; 2], vec![-1.0, -0.5])
+            .unwrap();
+    within("put the other way", plant.client(&taker).await.put_primitive("r1", "reach", &back))
         .await
         .unwrap();
     restart_a(&mut plant, &mut robot).await;
@@ -388,6 +395,9 @@ async fn a_killed_servers_robot_resumes_on_a_survivor_and_comes_back_with_its_ce
     .await;
     robot.read_for(0.3).await;
     assert_eq!(robot.session.resumes(), 2);
+    let t = robot.setpoints.trajectory().unwrap();
+    let v = &t.xd[t.xd.len() - 2..];
+    assert!(v[0] > 0.0 && v[1] > 0.0, "still on the way to (1, 0.5), the version it started with: {v:?}");
     assert_continuous(&robot.setpoints);
     within("stop", robot.session.stop()).await.unwrap();
     plant.close().await;
