@@ -24,7 +24,8 @@
 //!
 //! **Bounds.** At most [`ResumeOptions::max_attempts`] attempts within [`ResumeOptions::max_total`] for one
 //! resumption, waiting [`ResumeOptions::retry_delay`] (doubling, up to 16 times as long) between attempts, and at
-//! most [`ResumeOptions::max_resumes`] resumptions per session; then the stream ends with [`ClientError::Resume`],
+//! most [`ResumeOptions::max_resumes`] resumptions within [`ResumeOptions::resume_window`] (a server that keeps failing
+//! the stream is not chased forever; a session that runs all day may fail over any number of times); then the stream ends with [`ClientError::Resume`],
 //! naming the attempts, the time spent and the last failure. Only a server or a route that went away is resumed
 //! from (UNAVAILABLE, a transport error, a stall); anything else the server says ends the stream at once, as it
 //! would a plain session (a run that diverged, an internal error, bad input, a denied permission, a robot taken
@@ -58,8 +59,11 @@ pub struct ResumeOptions {
     /// closing) and the session resumes. None: wait as long as the connection lasts (HTTP/2 keep-alive).
     /// (At least twice the request's `segment_s`, so that long segments are not taken for a stall.)
     pub stall_timeout: Option<Duration>,
-    /// Resumptions per session, at least 1: a server that keeps failing the stream is not chased forever.
+    /// Resumptions within [`ResumeOptions::resume_window`], at least 1: a server that keeps failing the stream is
+    /// not chased forever.
     pub max_resumes: u32,
+    /// The window [`ResumeOptions::max_resumes`] counts in.
+    pub resume_window: Duration,
 }
 
 impl Default for ResumeOptions {
@@ -72,6 +76,7 @@ impl Default for ResumeOptions {
             connect: ConnectOptions { timeout: Duration::from_secs(2), ..Default::default() },
             stall_timeout: Some(Duration::from_millis(500)),
             max_resumes: 20,
+            resume_window: Duration::from_secs(60),
         }
     }
 }
@@ -141,6 +146,8 @@ pub struct ResumableSession {
     session: Session,
     timeline: Timeline,
     resumes: u32,
+    /// When the resumptions within the window were.
+    recent_resumes: std::collections::VecDeque<Instant>,
     /// Paused through this session (kept if it resumes).
     paused: bool,
     /// Stopped through this session (kept if it resumes).
@@ -210,6 +217,7 @@ impl ResumableSession {
             session,
             timeline: Timeline::default(),
             resumes: 0,
+            recent_resumes: std::collections::VecDeque::new(),
             paused: false,
             stopped: false,
         })
@@ -246,17 +254,26 @@ impl ResumableSession {
             match next {
                 Some(Ok(seg)) => return Some(Ok(self.timeline.shift(seg))),
                 Some(Err(e)) if resumable(&e) => {
-                    if self.resumes >= self.options.max_resumes.max(1) {
+                    let now = Instant::now();
+                    let window = self.options.resume_window;
+                    while self.recent_resumes.front().is_some_and(|t| now.duration_since(*t) > window) {
+                        self.recent_resumes.pop_front();
+                    }
+                    if self.recent_resumes.len() >= self.options.max_resumes.max(1) as usize {
                         return Some(Err(ClientError::Resume {
                             cell: self.cell.clone(),
-                            attempts: self.resumes,
-                            elapsed: Duration::ZERO,
+                            attempts: self.recent_resumes.len() as u32,
+                            elapsed: self
+                                .recent_resumes
+                                .front()
+                                .map_or(Duration::ZERO, |t| now.duration_since(*t)),
                             last: format!(
-                                "resumed {} times already (max_resumes); the last failure: {e}",
-                                self.resumes
+                                "resumed {} times within {window:?} already (max_resumes); the last failure: {e}",
+                                self.recent_resumes.len()
                             ),
                         }));
                     }
+                    self.recent_resumes.push_back(now);
                     if let Err(e) = self.resume().await {
                         return Some(Err(e));
                     }

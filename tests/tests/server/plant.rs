@@ -370,6 +370,19 @@ async fn robots_of_neighbouring_cells_on_two_servers_avoid_each_other() {
 }
 
 /// Whether `h` holds obstacle `id` in `cell` (never creating the cell).
+/// Reads `stream` to its end: the status it ends with (an end without one fails the test).
+async fn last_status<T>(
+    stream: &mut (impl tokio_stream::Stream<Item = Result<T, dmp_client::ClientError>> + Unpin),
+) -> dmp_client::ClientError {
+    loop {
+        match stream.next().await {
+            Some(Ok(_)) => continue,
+            Some(Err(e)) => return e,
+            None => panic!("the stream ended without a status"),
+        }
+    }
+}
+
 fn sees_obstacle(h: &ServerHandle, cell: &str, id: &str) -> bool {
     h.state().cells.find(cell).ok().flatten().is_some_and(|c| c.snapshot().obstacles.contains_key(id))
 }
@@ -440,29 +453,11 @@ async fn a_cell_is_taken_while_its_server_is_away_and_given_back_when_it_returns
 
     // s1 comes back: the taker gives cell a back, and its stream and watch end naming s1.
     let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
-    let ended = within("the stream ends", async {
-        loop {
-            match stream.next().await {
-                Some(Ok(_)) => continue,
-                Some(Err(e)) => return e,
-                None => panic!("the stream ended without a status"),
-            }
-        }
-    })
-    .await;
+    let ended = within("the stream ends", last_status(&mut stream)).await;
     assert_eq!(ended.code(), Some(tonic::Code::Unavailable), "{ended}");
     let said = ended.to_string();
     assert!(said.contains("`s1`") && said.contains(&s1.grpc_addr.to_string()), "{said}");
-    let watch_ended = within("the watch ends", async {
-        loop {
-            match watch.next().await {
-                Some(Ok(_)) => continue,
-                Some(Err(e)) => return e,
-                None => panic!("the watch ended without a status"),
-            }
-        }
-    })
-    .await;
+    let watch_ended = within("the watch ends", last_status(&mut watch)).await;
     assert_eq!(watch_ended.code(), Some(tonic::Code::Unavailable), "{watch_ended}");
     assert!(watch_ended.to_string().contains("`s1`"), "{watch_ended}");
     assert!(!taker.state().cells.serves("a") && !sees_obstacle(taker, "a", "box"), "the taker let it go");
