@@ -50,6 +50,18 @@ pub(crate) async fn until_all_known(servers: &[&ServerHandle]) {
     .await;
 }
 
+/// Servers s1, s2 and s3 of cells a, b and c, stores in `dirs[0..3]`, once each knows the others.
+pub(crate) async fn three_servers(
+    endpoint: &[String],
+    dirs: &[tempfile::TempDir],
+) -> (ServerHandle, ServerHandle, ServerHandle) {
+    let s1 = plant_server(dirs[0].path(), endpoint, "s1", &["a"], &[]).await;
+    let s2 = plant_server(dirs[1].path(), endpoint, "s2", &["b"], &[]).await;
+    let s3 = plant_server(dirs[2].path(), endpoint, "s3", &["c"], &[]).await;
+    until_all_known(&[&s1, &s2, &s3]).await;
+    (s1, s2, s3)
+}
+
 /// Whether `h` holds version `version` of `(robot, name)`.
 fn holds(h: &ServerHandle, robot: &str, name: &str, version: u64) -> bool {
     h.state().store.get(robot, name, version).is_ok()
@@ -60,10 +72,7 @@ async fn primitives_replicate_and_a_cell_resolves_to_its_server() {
     let zenohd = router("tcp/127.0.0.1:0").await;
     let endpoint = locators(&zenohd).await;
     let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
-    let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
-    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
-    let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
-    until_all_known(&[&s1, &s2, &s3]).await;
+    let (s1, s2, s3) = three_servers(&endpoint, &dirs).await;
     let (c1, c2) = (client_of(&s1).await, client_of(&s2).await);
 
     // Put on s1: readable on s2 and s3 within a second, the same version, bit for bit.
@@ -171,10 +180,7 @@ async fn a_delete_reaches_a_server_that_was_down_and_a_newer_relearn_wins_everyw
     let zenohd = router("tcp/127.0.0.1:0").await;
     let endpoint = locators(&zenohd).await;
     let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
-    let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
-    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
-    let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
-    until_all_known(&[&s1, &s2, &s3]).await;
+    let (s1, s2, s3) = three_servers(&endpoint, &dirs).await;
     let (c1, c3) = (client_of(&s1).await, client_of(&s3).await);
     let gone =
         within("put gone", c1.put_primitive("r", "gone", &line(vec![0.0], vec![1.0], 1.0))).await.unwrap();
@@ -393,10 +399,7 @@ async fn a_cell_is_taken_while_its_server_is_away_and_given_back_when_it_returns
     let zenohd = router("tcp/127.0.0.1:0").await;
     let endpoint = locators(&zenohd).await;
     let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
-    let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
-    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
-    let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
-    until_all_known(&[&s1, &s2, &s3]).await;
+    let (s1, s2, s3) = three_servers(&endpoint, &dirs).await;
     // A perception node keeping cell a's latest obstacle: what a taker asks for the cell's scene.
     let mut perception =
         within("perception open", ObstaclePublisher::open("a", &endpoint, &[])).await.unwrap();

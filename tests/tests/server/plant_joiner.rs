@@ -6,7 +6,7 @@ use dmp_proto::zenoh_session::locators;
 use dmp_server::plant::failover::{rendezvous, weight};
 use dmp_tests::within;
 
-use crate::plant::{plant_server, until_all_known};
+use crate::plant::{plant_server, three_servers, until_all_known};
 use crate::stale_scene::router;
 use crate::until;
 
@@ -15,10 +15,7 @@ async fn a_server_joining_during_an_outage_takes_the_cell_it_wins() {
     let zenohd = router("tcp/127.0.0.1:0").await;
     let endpoint = locators(&zenohd).await;
     let dirs: Vec<_> = (0..4).map(|_| tempfile::tempdir().unwrap()).collect();
-    let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
-    let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
-    let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
-    until_all_known(&[&s1, &s2, &s3]).await;
+    let (s1, s2, s3) = three_servers(&endpoint, &dirs).await;
     within("s1 down", s1.shutdown()).await.unwrap();
     let taker = match rendezvous("a", ["s2", "s3"]).unwrap() {
         "s2" => &s2,
