@@ -101,7 +101,7 @@ async fn panda_picks_and_places_past_the_red_peg() {
         assert_pose_within_panda(id, r);
         assert!(r.setpoints >= 1000, "{id}: {} setpoints at 1 kHz", r.setpoints);
         // What a real Panda would accept: it runs with the PANDA profile in its robot record.
-        assert_eq!(r.profile, Some((&dmp::Limits::PANDA).into()), "{id}");
+        assert_eq!(r.profile, Some(dmp::Limits::PANDA), "{id}");
         assert!(r.peak_speed <= panda::MAX_SPEED, "{id}: peak speed {} m/s", r.peak_speed);
         assert!(r.peak_acceleration <= panda::MAX_ACCELERATION, "{id}: {} m/s^2", r.peak_acceleration);
         assert!(r.peak_jerk <= panda::MAX_JERK, "{id}: peak jerk {} m/s^3", r.peak_jerk);

@@ -1,6 +1,7 @@
 //! Goal filtering, obstacle blending and limits under the run's changes: rollbacks, pause and resume, `tau`
 //! changes and a second goal change while the first is filtered.
 
+use super::tests::alone;
 use super::*;
 use crate::Obstacle;
 use crate::avoidance::Method;
@@ -11,7 +12,7 @@ use crate::isopotential::{Shape, Superquadric};
 fn reach(stepping: Stepping, scene: Scene) -> Execution {
     let p =
         Primitive::straight_line(20, 4.0, vec![1000.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 0.5]).unwrap();
-    Execution::new(p.clone(), Motion::of(&p), scene, CellMateAvoidance::NONE, stepping, 2000).unwrap()
+    alone(&p, scene, stepping, 2000)
 }
 
 fn bits(v: &[f64]) -> Vec<u64> {
@@ -177,15 +178,7 @@ fn a_pose_run_keeps_the_angular_limits_on_its_rotation_vector() {
     let start = vec![0.3, 0.0, 0.4, 0.0, 0.0, 0.0];
     let goal = vec![0.5, 0.1, 0.4, 0.0, 0.0, 1.0];
     let p = Primitive::straight_line(20, 4.0, vec![1000.0; 6], None, 0.5, start, goal).unwrap();
-    let mut e = Execution::new(
-        p.clone(),
-        Motion::of(&p),
-        Scene::empty(),
-        CellMateAvoidance::NONE,
-        Stepping::rk4(1e-3),
-        10,
-    )
-    .unwrap();
+    let mut e = alone(&p, Scene::empty(), Stepping::rk4(1e-3), 10);
     assert!(e.set_limits(Limits::PANDA, true).is_ok());
     let mut x = e.advance(200).unwrap().x;
     e.set_goal(vec![0.5, 0.1, 0.4, 0.0, 1.5, -1.0]).unwrap();
@@ -200,15 +193,7 @@ fn a_pose_run_keeps_the_angular_limits_on_its_rotation_vector() {
     // Without the orientation, the same limits bound the six dimensions as one position.
     let tiny =
         Primitive::straight_line(20, 4.0, vec![1000.0; 3], None, 0.5, vec![0.0; 3], vec![0.1; 3]).unwrap();
-    let mut e3 = Execution::new(
-        tiny.clone(),
-        Motion::of(&tiny),
-        Scene::empty(),
-        CellMateAvoidance::NONE,
-        Stepping::rk4(1e-3),
-        10,
-    )
-    .unwrap();
+    let mut e3 = alone(&tiny, Scene::empty(), Stepping::rk4(1e-3), 10);
     assert_eq!(e3.set_limits(Limits::PANDA, true).unwrap_err().field, "limits");
     let bad = Limits { max_speed: -1.0, ..Limits::PANDA };
     assert_eq!(e3.set_limits(bad, false).unwrap_err().field, "limits.max_speed");

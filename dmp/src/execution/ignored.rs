@@ -226,7 +226,7 @@ mod tests {
     fn reach(obstacles: Vec<Obstacle>, stepping: Stepping) -> Execution {
         let p = reach_primitive();
         let scene = Scene::with_obstacles(obstacles, avoidance(), 0);
-        Execution::new(p.clone(), Motion::of(&p), scene, CellMateAvoidance::NONE, stepping, 200).unwrap()
+        super::super::tests::alone(&p, scene, stepping, 200)
     }
 
     fn disc(id: &str, a: f64, center: Vec<f64>) -> Obstacle {
@@ -357,15 +357,7 @@ mod tests {
     fn a_step_that_is_not_finite_without_obstacles_is_still_an_error() {
         let mut p = reach_primitive();
         p.weights[0].fill(1e308);
-        let mut e = Execution::new(
-            p.clone(),
-            Motion::of(&p),
-            Scene::empty(),
-            CellMateAvoidance::NONE,
-            Stepping::rk4(1e-3),
-            10,
-        )
-        .unwrap();
+        let mut e = super::super::tests::alone(&p, Scene::empty(), Stepping::rk4(1e-3), 10);
         let diverged = (0..100).find_map(|_| e.advance(10).err());
         assert!(matches!(diverged, Some(crate::DmpError::Diverged { .. })), "{diverged:?}");
     }

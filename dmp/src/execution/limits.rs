@@ -1,6 +1,8 @@
 //! A robot's limits: the largest speed, acceleration and jerk of its position, and of its orientation in a pose
 //! run, with the profiles of the cell's robots and their sources.
 
+use serde::{Deserialize, Serialize};
+
 use crate::error::InvalidInput;
 
 /// The limits a run's setpoints keep, in SI units (metres, radians, seconds); 0 means no limit.
@@ -9,7 +11,7 @@ use crate::error::InvalidInput;
 /// orientation of a pose run (its last three dimensions, the rotation vector `y`: see
 /// [`Execution::set_limits`](super::Execution::set_limits)). They are measured as the setpoints' backward finite
 /// differences at the output rate.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Limits {
     /// m/s.
     pub max_speed: f64,

@@ -3,11 +3,16 @@
 
 use super::*;
 
+/// A run of `p` with its own motion, in `scene`, without cell-mates, keeping `history` points.
+pub(super) fn alone(p: &Primitive, scene: Scene, stepping: Stepping, history: usize) -> Execution {
+    Execution::new(p.clone(), Motion::of(p), scene, CellMateAvoidance::NONE, stepping, history).unwrap()
+}
+
 /// A 2-D straight reach from the origin to (1, 0.5) in 1 s, alone, at `stepping`.
 fn reach(stepping: Stepping) -> Execution {
     let p =
         Primitive::straight_line(20, 4.0, vec![1000.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 0.5]).unwrap();
-    Execution::new(p.clone(), Motion::of(&p), Scene::empty(), CellMateAvoidance::NONE, stepping, 200).unwrap()
+    alone(&p, Scene::empty(), stepping, 200)
 }
 
 /// Advances ten points at a time until the run is complete, at most `stretches` times; the last outcome.
@@ -88,15 +93,7 @@ fn a_stop_comes_to_rest_ends_the_run_and_is_not_resumed() {
 fn a_stop_of_a_run_slowed_by_its_limits_is_as_quick_as_its_own_tau() {
     let p =
         Primitive::straight_line(20, 4.0, vec![100.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 0.5]).unwrap();
-    let mut e = Execution::new(
-        p.clone(),
-        Motion::of(&p),
-        Scene::empty(),
-        CellMateAvoidance::NONE,
-        Stepping::rk4(1e-3),
-        200,
-    )
-    .unwrap();
+    let mut e = alone(&p, Scene::empty(), Stepping::rk4(1e-3), 200);
     e.set_limits(Limits { max_speed: 0.2, ..Limits::NONE }, false).unwrap();
     e.advance(1000).unwrap();
     assert!(e.tau_scale() > 3.0, "the limit did not slow the run: {}", e.tau_scale());

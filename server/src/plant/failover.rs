@@ -105,6 +105,32 @@ impl Failover {
     }
 }
 
+/// Asks `dmp/<cell>/obstacles/**` for a taken cell's scene, from whoever keeps it (the router's storage, perception
+/// nodes), and applies every reply: all are in when it returns (the query ends when every queryable has answered,
+/// or after [`SCENE_QUERY_TIMEOUT`]), so that the cell is announced only then and no client starts a run in it on
+/// an empty scene.
+async fn ask_scene(session: &Session, sink: &ObstacleSink, cell: &str) {
+    let asked = session
+        .get(format!("{}/**", obstacles_of(cell)))
+        .target(QueryTarget::All)
+        .consolidation(ConsolidationMode::None)
+        .timeout(SCENE_QUERY_TIMEOUT)
+        .await;
+    match asked {
+        Ok(replies) => {
+            let mut obstacles = 0usize;
+            while let Ok(reply) = replies.recv_async().await {
+                if let Ok(sample) = reply.result() {
+                    sink(sample);
+                    obstacles += 1;
+                }
+            }
+            debug!(cell, obstacles, "plant: fail-over: the taken cell's scene is in");
+        }
+        Err(e) => warn!(cell, error = %e, "plant: fail-over: cannot ask for the taken cell's scene"),
+    }
+}
+
 struct State {
     session: Session,
     me: v1::PlantServer,
@@ -143,44 +169,34 @@ impl State {
                 moves.push((cell.clone(), (!mine).then(|| holder.to_owned())));
             }
         }
+        let mut taking = tokio::task::JoinSet::new();
         for (cell, to) in moves {
             match to {
-                None => self.take(&cell).await,
                 Some(to) => self.give_back(&cell, &to).await,
+                None if self.taken.take(&cell) => {
+                    let home = self.homes.get(&cell).cloned().unwrap_or_default();
+                    info!(cell, home = %home, "plant: fail-over: taking the cell of a server gone");
+                    // The scenes of all the cells taken at once: a dead server's many cells wait for the slowest
+                    // query, not for their sum.
+                    let (session, sink) = (self.session.clone(), self.scene.clone());
+                    taking.spawn(async move {
+                        ask_scene(&session, &sink, &cell).await;
+                        cell
+                    });
+                }
+                None => {}
+            }
+        }
+        while let Some(taken) = taking.join_next().await {
+            match taken {
+                Ok(cell) => self.announce(&cell).await,
+                Err(e) => warn!(error = %e, "plant: fail-over: a scene query failed"),
             }
         }
     }
 
-    async fn take(&mut self, cell: &str) {
-        if !self.taken.take(cell) {
-            return;
-        }
-        let home = self.homes.get(cell).cloned().unwrap_or_default();
-        info!(cell, home = %home, "plant: fail-over: taking the cell of a server gone");
-        // Its scene, from whoever keeps it (the router's storage, perception nodes): every reply is in before the
-        // cell is announced (the query ends when all have answered, or after SCENE_QUERY_TIMEOUT), so that no
-        // client starts a run in it on an empty scene.
-        let asked = self
-            .session
-            .get(format!("{}/**", obstacles_of(cell)))
-            .target(QueryTarget::All)
-            .consolidation(ConsolidationMode::None)
-            .timeout(SCENE_QUERY_TIMEOUT)
-            .await;
-        match asked {
-            Ok(replies) => {
-                let mut obstacles = 0usize;
-                while let Ok(reply) = replies.recv_async().await {
-                    if let Ok(sample) = reply.result() {
-                        (self.scene)(sample);
-                        obstacles += 1;
-                    }
-                }
-                debug!(cell, obstacles, "plant: fail-over: the taken cell's scene is in");
-            }
-            Err(e) => warn!(cell, error = %e, "plant: fail-over: cannot ask for the taken cell's scene"),
-        }
-        // Then clients find it here.
+    /// Answers for a cell taken on `dmp/@cells/<cell>`: clients find it here.
+    async fn announce(&mut self, cell: &str) {
         let mut answer = self.me.clone();
         answer.taken = vec![cell.to_owned()];
         let payload = codec::encode(&answer);

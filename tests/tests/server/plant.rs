@@ -62,6 +62,14 @@ pub(crate) async fn three_servers(
     (s1, s2, s3)
 }
 
+/// Shuts `servers` down, then the router.
+pub(crate) async fn shut_down(servers: impl IntoIterator<Item = ServerHandle>, zenohd: zenoh::Session) {
+    for h in servers {
+        within("shutdown", h.shutdown()).await.unwrap();
+    }
+    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+}
+
 /// Whether `h` holds version `version` of `(robot, name)`.
 fn holds(h: &ServerHandle, robot: &str, name: &str, version: u64) -> bool {
     h.state().store.get(robot, name, version).is_ok()
@@ -139,10 +147,7 @@ async fn primitives_replicate_and_a_cell_resolves_to_its_server() {
         "{said}"
     );
 
-    for h in [s1, s2, s3] {
-        within("shutdown", h.shutdown()).await.unwrap();
-    }
-    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+    shut_down([s1, s2, s3], zenohd).await;
 }
 
 #[tokio::test(flavor = "multi_thread")]
@@ -169,10 +174,7 @@ async fn a_server_that_starts_late_or_comes_back_catches_up() {
     assert!(holds(&s2, "r", "early", early.version), "kept in its store");
     assert_eq!(s2.state().store.get("r", "missed", 0).unwrap().primitive, missed.primitive);
 
-    for h in [s1, s2] {
-        within("shutdown", h.shutdown()).await.unwrap();
-    }
-    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+    shut_down([s1, s2], zenohd).await;
 }
 
 #[tokio::test(flavor = "multi_thread")]
@@ -221,10 +223,7 @@ async fn a_delete_reaches_a_server_that_was_down_and_a_newer_relearn_wins_everyw
         assert!(!holds(h, "r", "kept", kept.version));
     }
 
-    for h in [s1, s2, s3] {
-        within("shutdown", h.shutdown()).await.unwrap();
-    }
-    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+    shut_down([s1, s2, s3], zenohd).await;
 }
 
 #[tokio::test(flavor = "multi_thread")]
@@ -292,10 +291,7 @@ async fn a_load_via_zenoh_discovery_spreads_its_robots_over_the_plant() {
         within("no server", dmp_sim::load::run(&lost, "http://127.0.0.1:1", &endpoint)).await.unwrap_err();
     assert!(e.to_string().contains("cell `nowhere`"), "{e}");
 
-    for h in [s1, s2, s3] {
-        within("shutdown", h.shutdown()).await.unwrap();
-    }
-    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+    shut_down([s1, s2, s3], zenohd).await;
 }
 
 /// The closest that a planned path of `seg` (2-D) comes to `point`.
@@ -369,10 +365,7 @@ async fn robots_of_neighbouring_cells_on_two_servers_avoid_each_other() {
     assert!(!sees_r1(&s3, "c"), "cell c does not take cell a's robots");
 
     reader.abort();
-    for h in [s1, s2, s3] {
-        within("shutdown", h.shutdown()).await.unwrap();
-    }
-    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+    shut_down([s1, s2, s3], zenohd).await;
 }
 
 /// Whether `h` holds obstacle `id` in `cell` (never creating the cell).
@@ -466,8 +459,5 @@ async fn a_cell_is_taken_while_its_server_is_away_and_given_back_when_it_returns
     assert!(!taker.state().cells.serves("a") && !sees_obstacle(taker, "a", "box"), "the taker let it go");
 
     within("perception close", perception.close()).await.unwrap();
-    for h in [s1, s2, s3] {
-        within("shutdown", h.shutdown()).await.unwrap();
-    }
-    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+    shut_down([s1, s2, s3], zenohd).await;
 }

@@ -6,7 +6,7 @@ use dmp_proto::zenoh_session::locators;
 use dmp_server::plant::failover::{rendezvous, weight};
 use dmp_tests::within;
 
-use crate::plant::{plant_server, three_servers, until_all_known};
+use crate::plant::{plant_server, shut_down, three_servers, until_all_known};
 use crate::stale_scene::router;
 use crate::until;
 
@@ -44,8 +44,5 @@ async fn a_server_joining_during_an_outage_takes_the_cell_it_wins() {
     // s1 comes back: the newcomer gives cell a back to it.
     let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
     until("the newcomer gave cell a back", || !s4.state().cells.serves("a")).await;
-    for h in [s1, s2, s3, s4] {
-        within("shutdown", h.shutdown()).await.unwrap();
-    }
-    within("router close", std::future::IntoFuture::into_future(zenohd.close())).await.unwrap();
+    shut_down([s1, s2, s3, s4], zenohd).await;
 }

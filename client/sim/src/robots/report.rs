@@ -19,36 +19,6 @@ pub const GOAL_TOLERANCE_M: f64 = 1e-2;
 /// Clearance at or below this (metres) is a contact.
 pub const CONTACT_M: f64 = 1e-9;
 
-/// A robot's limits in a report, SI units (0: no limit); the angular ones bound a pose run's orientation.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
-pub struct ProfileLimits {
-    /// Speed, m/s.
-    pub max_speed: f64,
-    /// Acceleration, m/s².
-    pub max_acceleration: f64,
-    /// Jerk, m/s³.
-    pub max_jerk: f64,
-    /// Angular speed, rad/s.
-    pub max_angular_speed: f64,
-    /// Angular acceleration, rad/s².
-    pub max_angular_acceleration: f64,
-    /// Angular jerk, rad/s³.
-    pub max_angular_jerk: f64,
-}
-
-impl From<&dmp::Limits> for ProfileLimits {
-    fn from(l: &dmp::Limits) -> Self {
-        Self {
-            max_speed: l.max_speed,
-            max_acceleration: l.max_acceleration,
-            max_jerk: l.max_jerk,
-            max_angular_speed: l.max_angular_speed,
-            max_angular_acceleration: l.max_angular_acceleration,
-            max_angular_jerk: l.max_angular_jerk,
-        }
-    }
-}
-
 /// One robot's figures.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct RobotReport {
@@ -73,7 +43,7 @@ pub struct RobotReport {
     /// checked on).
     pub finite_difference_peaks: Peaks,
     /// The robot's limit profile (put in its robot record before the run; unset: none).
-    pub profile: Option<ProfileLimits>,
+    pub profile: Option<dmp::Limits>,
     /// Setpoints over the profile, as finite differences of the executed positions (expected 0).
     pub limit_violations: u64,
     /// Setpoints that arrived after their time (real time only).
@@ -280,7 +250,7 @@ pub fn measure(
         peak_speed: checks.peak_speed,
         peak_jerk: checks.peak_jerk,
         finite_difference_peaks,
-        profile: profile.map(ProfileLimits::from),
+        profile: profile.copied(),
         limit_violations,
         late_setpoints: exec.late_setpoints,
         setpoints: traj.len() as u64,
