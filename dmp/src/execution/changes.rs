@@ -127,6 +127,9 @@ impl Execution {
         // Whatever changes, the field or the motion no longer gives the acceleration stored at knot0.
         self.acc0_current = false;
         let Some(k1) = self.knot1.take() else { return };
+        if self.out_t < k1.t - 0.5 * self.stepping.dt {
+            self.cost.restarts += 1;
+        }
         if self.out_t > self.knot0.t {
             // Into the scratch state, then the knot: no allocation (this runs every stretch with cell-mates).
             let st = &mut self.scratch;

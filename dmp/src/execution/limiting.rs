@@ -5,9 +5,12 @@
 //!    `dc/dt = COUPLE_RATE c`; once it uses less than [`RELAX_BELOW`], `c` relaxes back to 1 at
 //!    `dc/dt = -RELAX_RATE c`. The phase slows, so the forcing term and the attractor ask less of the robot, and
 //!    the motion's path is kept. `c` is applied (a change of `tau` from the next output point, continuous in
-//!    position and velocity) whenever it moved by [`COUPLE_STEP`] since it was last applied.
+//!    position and velocity) whenever it moved by [`COUPLE_STEP`] since it was last applied, at the internal grid's
+//!    next knot (where a new step starts anyway), or at once when it moved by [`COUPLE_STEP_NOW`].
 //! 2. **The limiter** ([`super::limiter`]): a point that would still exceed a bound is replaced by the nearest one
-//!    within the bounds, and the DMP is restarted from it ([`LimitAction::Limited`]).
+//!    within the bounds, and the DMP is restarted from it ([`LimitAction::Limited`]). On a coarse grid the next
+//!    point is the restarted DMP's probe ([`Execution::probe_step`]): one output step at the acceleration of the
+//!    restart point, one evaluation instead of a whole step, since a limited point is mostly followed by more.
 //! 3. **Braking.** Where the DMP asks to decelerate (an acceleration against the velocity) at more than
 //!    [`BRAKE_ABOVE`] times the acceleration bound (an obstacle appears right in front), the robot brakes to rest within its limits
 //!    ([`LimitAction::Braking`]), and the DMP restarts from rest.
@@ -34,6 +37,8 @@ pub const RELAX_RATE: f64 = 1.0;
 pub const MAX_TAU_SCALE: f64 = 10.0;
 /// Relative change of the time scale factor that is applied.
 pub const COUPLE_STEP: f64 = 0.01;
+/// Relative change of the time scale factor applied at once; a smaller one waits for the grid's next knot.
+pub const COUPLE_STEP_NOW: f64 = 0.05;
 /// Braking to rest starts when the DMP asks to decelerate at this many times the acceleration bound.
 pub const BRAKE_ABOVE: f64 = 4.0;
 
@@ -147,6 +152,7 @@ impl Execution {
             }
         }
         if verdict.changed || action == LimitAction::Braking {
+            self.cost.limited += 1;
             self.restart_dmp_at(t, s, x, xd);
         }
         if !self.holding {
@@ -169,8 +175,11 @@ impl Execution {
             self.tau_scale_target
         };
         self.tau_scale_target = wanted;
-        let moved = (wanted / self.tau_scale - 1.0).abs() >= COUPLE_STEP;
-        if moved || (wanted == 1.0 && self.tau_scale != 1.0) {
+        let change = (wanted / self.tau_scale - 1.0).abs();
+        let moved = change >= COUPLE_STEP || (wanted == 1.0 && self.tau_scale != 1.0);
+        // At the grid's next knot a new step starts anyway: a change applied there costs no step thrown away.
+        let at_knot = self.knot1.as_ref().is_none_or(|k1| self.out_t >= k1.t - 0.5 * dt);
+        if moved && (at_knot || change >= COUPLE_STEP_NOW) {
             self.rebase();
             self.anchor_goal(self.holding);
             self.tau_scale = wanted;
@@ -186,8 +195,14 @@ impl Execution {
         self.knot0.x.copy_from_slice(x);
         self.knot0.xd.copy_from_slice(xd);
         if let Some(k1) = self.knot1.take() {
+            if self.out_t < k1.t - 0.5 * self.stepping.dt {
+                self.cost.restarts += 1;
+            }
             self.spare = Some(k1);
         }
         self.acc0_current = false;
+        // On a coarse grid the next point comes from a probe, not a whole step (most limited points are followed
+        // by more).
+        self.probe = self.stepping.is_coarse();
     }
 }

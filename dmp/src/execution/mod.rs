@@ -181,6 +181,10 @@ pub struct Execution {
     /// `knot0.xdd` is the acceleration at `knot0` under the current field and motion (it was computed as the
     /// previous step's end knot and nothing changed since): the next step reuses it as its first stage.
     acc0_current: bool,
+    /// The next knot is a probe ([`Execution::probe_step`]): the DMP restarted at a point the limiter changed.
+    probe: bool,
+    /// `knot1` is a probe's: its acceleration is `knot0`'s, not the one at its own state.
+    knot1_probed: bool,
     /// The interpolant of `knot0` and `knot1`, fitted when `knot1` is computed.
     interpolant: Interpolant,
     /// Scratch acceleration of an interpolated point.
@@ -310,6 +314,8 @@ impl Execution {
             knot1: None,
             spare: None,
             acc0_current: false,
+            probe: false,
+            knot1_probed: false,
             interpolant: Interpolant::default(),
             xdd: vec![0.0; dim],
             scratch: state,

@@ -87,4 +87,8 @@ pub struct IntegrationCost {
     pub rejected: u64,
     /// Evaluations of the acceleration.
     pub evaluations: u64,
+    /// Output points the limiter changed or braked ([`super::LimitAction::Limited`], [`super::LimitAction::Braking`]).
+    pub limited: u64,
+    /// Restarts of the internal grid before its next knot (a change, a limited point, the time scale coupled).
+    pub restarts: u64,
 }

@@ -135,3 +135,29 @@ fn a_pause_holds_without_stalling_and_a_resume_goes_on() {
     let outcome = advance_until_final(&mut e, 400);
     assert_eq!(outcome, Outcome::GoalReached);
 }
+
+/// On a coarse grid, each point the limiter changes restarts the DMP with a probe of one output step (one
+/// evaluation), not a whole step: a run held at its speed limit costs about one evaluation a point, and follows
+/// the same limited run at RK4 on every output point.
+#[test]
+fn limited_points_on_a_coarse_grid_cost_one_evaluation_and_follow_the_fine_grid() {
+    let p =
+        Primitive::straight_line(20, 4.0, vec![100.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 0.5]).unwrap();
+    let limits = Limits { max_speed: 0.3, max_acceleration: 5.0, max_jerk: 500.0, ..Limits::NONE };
+    let run = |stepping| {
+        let mut e = alone(&p, Scene::empty(), stepping, 200);
+        e.set_limits(limits, false).unwrap();
+        let mut x = Vec::new();
+        for _ in 0..300 {
+            x.extend(e.advance(10).unwrap().x);
+        }
+        (x, e.cost())
+    };
+    let (fine, _) = run(Stepping::rk4(1e-3));
+    let (coarse, cost) = run(Stepping { dt: 1e-3, step_points: 30, tolerance: Some(3e-6) });
+    assert!(cost.limited > 300, "the run is not held at its limits: {cost:?}");
+    let extra = cost.evaluations as f64 - 6.0 * cost.steps.saturating_sub(cost.limited) as f64;
+    assert!(extra <= 1.2 * cost.limited as f64, "limited points cost more than one evaluation: {cost:?}");
+    let worst = fine.iter().zip(&coarse).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-3, "the coarse grid leaves the fine one by {worst} m");
+}
