@@ -1,11 +1,12 @@
 //! One cell of the load (`dmpctl load`), offline: ten robots whose paths cross, five fixed obstacles, each robot
-//! avoiding the others as moving obstacles updated every segment (seen where they are, without the server's
-//! delays), a new goal every `tau`, the load's adaptive step. Prints what stepping them cost per output point
+//! avoiding the others as moving obstacles, a new goal every `tau`, the load's adaptive step. Prints what stepping them cost per output point
 //! (time, evaluations of the field, steps, points the limiter changed, restarts of the grid), what keeping the
 //! limits did per segment, and the segments with a contact: as position and as pose robots, without limits and at
 //! the Panda profile. The pose robots turn a quarter turn each leg, as `dmpctl load --pose` does.
 //!
-//! `cargo run --release -p dmp --example load_cell [seconds]` (default 10 s of run time).
+//! `cargo run --release -p dmp --example load_cell [seconds] [lag] [every]`: `seconds` of run time (default 10);
+//! each robot sees its cell-mates as they were `lag` segments before (default 0), every `every` segments (default
+//! 1; the server, at 1,000 streams, about 5 and 6). Robot `k` starts `k` [`STAGGER`] after the first.
 
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -22,6 +23,8 @@ const ROBOTS: usize = 10;
 const TAU: f64 = 2.0;
 const DT: f64 = 1e-3;
 const SEGMENT: usize = 10;
+/// Robot `k` starts `k STAGGER` seconds after the first (the load starts its 1,000 robots over a second).
+const STAGGER: f64 = 0.001;
 
 fn ball(r: f64) -> Shape {
     Shape::Superquadric(Superquadric::new(vec![r; 3], vec![1.0; 3]).unwrap())
@@ -101,27 +104,40 @@ fn cell(pose: bool, limits: Limits) -> Vec<Robot> {
         .collect()
 }
 
-fn run(name: &str, pose: bool, limits: Limits, seconds: f64) {
+/// A cell-mate as seen: its id, position and velocity.
+type Seen = (String, Vec<f64>, Vec<f64>);
+
+/// Runs the cell for `seconds`; each robot sets its cell-mates every `every` segments, as they were `lag` segments
+/// before.
+fn run(name: &str, pose: bool, limits: Limits, seconds: f64, lag: usize, every: usize) {
     let mut robots = cell(pose, limits);
     let footprint = ball(0.1);
     let segments = (seconds / (SEGMENT as f64 * DT)).round() as usize;
     let mut actions = [0usize; 4];
     let mut collisions = 0;
     let t0 = Instant::now();
+    let mut past: Vec<Vec<Seen>> = Vec::new();
     for seg in 0..segments {
         let t = seg as f64 * SEGMENT as f64 * DT;
-        let states: Vec<(String, Vec<f64>, Vec<f64>)> =
-            robots.iter().enumerate().map(|(k, r)| (format!("r{k}"), r.x.clone(), r.v.clone())).collect();
+        past.push(
+            robots.iter().enumerate().map(|(k, r)| (format!("r{k}"), r.x.clone(), r.v.clone())).collect(),
+        );
+        let states = past[past.len().saturating_sub(1 + lag)].clone();
+        let age = (past.len() - 1).min(lag) as f64 * SEGMENT as f64 * DT;
         for (k, r) in robots.iter_mut().enumerate() {
             let mates = states.iter().enumerate().filter(|(j, _)| *j != k).map(|(_, (id, x, v))| CellMate {
                 id,
                 footprint: &footprint,
                 position: x,
                 velocity: v,
-                age: 0.0,
+                age,
             });
-            r.e.set_cellmates(mates).unwrap();
-            if t >= r.next_goal as f64 * TAU {
+            if seg % every == 0 {
+                r.e.set_cellmates(mates).unwrap();
+            }
+            let delay = STAGGER * k as f64;
+            r.e.set_holding(t < delay);
+            if t >= delay + r.next_goal as f64 * TAU {
                 let g = r.next_goal % 2;
                 if pose {
                     r.e.set_pose_goal(Some(r.goals[g].clone()), Some(r.orientations[g])).unwrap();
@@ -166,9 +182,11 @@ fn run(name: &str, pose: bool, limits: Limits, seconds: f64) {
 }
 
 fn main() {
-    let seconds: f64 = std::env::args().nth(1).map_or(10.0, |s| s.parse().unwrap());
-    run("position, no limits", false, Limits::NONE, seconds);
-    run("position, Panda", false, Limits::PANDA, seconds);
-    run("pose, no limits", true, Limits::NONE, seconds);
-    run("pose, Panda", true, Limits::PANDA, seconds);
+    let arg =
+        |i: usize, default: f64| std::env::args().nth(i).map_or(default, |s| s.parse().expect("a number"));
+    let (seconds, lag, every) = (arg(1, 10.0), arg(2, 0.0) as usize, (arg(3, 1.0) as usize).max(1));
+    run("position, no limits", false, Limits::NONE, seconds, lag, every);
+    run("position, Panda", false, Limits::PANDA, seconds, lag, every);
+    run("pose, no limits", true, Limits::NONE, seconds, lag, every);
+    run("pose, Panda", true, Limits::PANDA, seconds, lag, every);
 }

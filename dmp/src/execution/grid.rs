@@ -70,7 +70,8 @@ impl Execution {
                 diagnosis,
                 self.tool.as_ref(),
                 self.chart.as_ref(),
-            );
+            )
+            .coupled(self.tau_rate);
             let known = self.acc0_current;
             self.integrator.step_from(&self.motion, &mut both, s, h, &mut self.knot0.xdd, known);
             self.cost.steps += 1;
@@ -100,7 +101,8 @@ impl Execution {
             diagnosis,
             self.tool.as_ref(),
             self.chart.as_ref(),
-        );
+        )
+        .coupled(self.tau_rate);
         let s = &mut self.scratch;
         let a = &mut self.knot0.xdd;
         if !self.acc0_current {
@@ -149,7 +151,8 @@ impl Execution {
                 diagnosis,
                 self.tool.as_ref(),
                 self.chart.as_ref(),
-            );
+            )
+            .coupled(self.tau_rate);
             let err = self.integrator.step_dormand_prince(
                 &self.motion,
                 &mut both,

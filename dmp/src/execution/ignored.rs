@@ -89,6 +89,8 @@ pub(super) struct FieldSum<'a> {
     /// A pose run's tool and chart: both fields act on its control points ([`super::tool`]).
     #[cfg_attr(not(feature = "orientation"), allow(dead_code))]
     pub(super) tool: Option<(&'a super::pose::HeldTool, &'a super::pose::Chart)>,
+    /// The relative rate `tau' / tau` of the temporal coupling in force ([`super::limiting`]).
+    pub(super) tau_rate: f64,
 }
 
 impl<'a> FieldSum<'a> {
@@ -100,12 +102,23 @@ impl<'a> FieldSum<'a> {
         tool: Option<&'a super::pose::HeldTool>,
         chart: Option<&'a super::pose::Chart>,
     ) -> Self {
-        Self { field, blend, mates, diagnosis, tool: tool.zip(chart) }
+        Self { field, blend, mates, diagnosis, tool: tool.zip(chart), tau_rate: 0.0 }
+    }
+
+    /// With the temporal coupling's relative rate `tau' / tau` ([`super::limiting`]).
+    pub(super) fn coupled(mut self, tau_rate: f64) -> Self {
+        self.tau_rate = tau_rate;
+        self
     }
 }
 
 impl Perturbation for FieldSum<'_> {
+    /// The obstacles' and cell-mates' terms, and the temporal coupling's: `-tau' v` ([`super::limiting`]).
     fn add(&mut self, t: f64, x: &[f64], v: &[f64], tau: f64, out: &mut [f64]) {
+        if self.tau_rate != 0.0 {
+            let k = self.tau_rate * tau;
+            out.iter_mut().zip(v).for_each(|(o, v)| *o -= k * v);
+        }
         #[cfg(feature = "orientation")]
         if let Some((tool, chart)) = self.tool {
             let diagnosis = self.diagnosis.as_deref_mut();

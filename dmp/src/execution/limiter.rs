@@ -36,6 +36,8 @@ pub(super) struct Group {
 pub(super) struct Verdict {
     /// The largest use of a bound by the proposed point (1 = at a bound), before any change.
     pub(super) usage: f64,
+    /// The same, of the speed bounds only.
+    pub(super) speed_usage: f64,
     /// The proposed deceleration (the acceleration against the velocity) over the acceleration bound, the largest
     /// over the groups.
     pub(super) decel_usage: f64,
@@ -141,6 +143,7 @@ impl Limiter {
             let jerk = jerk2.sqrt();
             let usage = (speed / b.v).max(acc / b.a).max(jerk / b.j);
             verdict.usage = verdict.usage.max(usage);
+            verdict.speed_usage = verdict.speed_usage.max(speed / b.v);
             let s = norm(v);
             if s > 0.0 {
                 let against = -v.iter().zip(want.iter()).map(|(v, a)| v * a).sum::<f64>() / s;

@@ -5,8 +5,21 @@
 //!    `dc/dt = COUPLE_RATE c`; once it uses less than [`RELAX_BELOW`], `c` relaxes back to 1 at
 //!    `dc/dt = -RELAX_RATE c`. The phase slows, so the forcing term and the attractor ask less of the robot, and
 //!    the motion's path is kept. `c` is applied (a change of `tau` from the next output point, continuous in
-//!    position and velocity) whenever it moved by [`COUPLE_STEP`] since it was last applied, at the internal grid's
-//!    next knot (where a new step starts anyway), or at once when it moved by [`COUPLE_STEP_NOW`].
+//!    position and velocity) every [`COUPLE_PERIOD`], at whole multiples of it: the same times on every internal
+//!    grid, and those where the server's segments, and so a new internal step, start.
+//!
+//!    A time scale that changes also scales the velocity. In the DMP's first-order form (Ijspeert et al. 2013,
+//!    Neural Computation 25(2), eq. 2.1: `tau z' = K (g - x) - D z + f`, `tau x' = z`) a growing `tau` slows the
+//!    robot at once, since `x' = z / tau`; temporal coupling works through this (Ijspeert et al. 2013, sec. 3.2;
+//!    Dahlin and Karayiannidis, "Temporal coupling of dynamical movement primitives for constrained velocities and
+//!    accelerations", IEEE RA-L 6(2), 2021). The engine's state is `x'` itself, which stays continuous; its
+//!    acceleration carries the term of `tau' != 0`, `x'' = z' / tau - (tau' / tau) x'`, that is `-tau' v` added to
+//!    `tau v'` (`v = tau x'`), while `c` grows because of a speed bound (`tau' / tau = COUPLE_RATE`). Without it a
+//!    slowed phase leaves the speed as it was, and weakens the damping and the obstacles' terms (both divide by
+//!    `tau`): a robot held at its speed limit coasts on with its time scale stretched tenfold, into what it should
+//!    avoid. A stretch for an acceleration or jerk bound leaves the velocity to the DMP (its accelerations fall as
+//!    `1 / c²` at once, and the term would ask for more deceleration, `COUPLE_RATE |x'|`), and so does the
+//!    relaxation. The rate in force changes with `c`.
 //! 2. **The limiter** ([`super::limiter`]): a point that would still exceed a bound is replaced by the nearest one
 //!    within the bounds, and the DMP is restarted from it ([`LimitAction::Limited`]). On a coarse grid the next
 //!    point is the restarted DMP's probe ([`Execution::probe_step`]): one output step at the acceleration of the
@@ -35,10 +48,8 @@ pub const COUPLE_RATE: f64 = 4.0;
 pub const RELAX_RATE: f64 = 1.0;
 /// Largest time scale factor.
 pub const MAX_TAU_SCALE: f64 = 10.0;
-/// Relative change of the time scale factor that is applied.
-pub const COUPLE_STEP: f64 = 0.01;
-/// Relative change of the time scale factor applied at once; a smaller one waits for the grid's next knot.
-pub const COUPLE_STEP_NOW: f64 = 0.05;
+/// The coupling's time scale and rate are applied every this many seconds (at whole multiples of it).
+pub const COUPLE_PERIOD: f64 = 0.01;
 /// Braking to rest starts when the DMP asks to decelerate at this many times the acceleration bound.
 pub const BRAKE_ABOVE: f64 = 4.0;
 
@@ -156,7 +167,7 @@ impl Execution {
             self.restart_dmp_at(t, s, x, xd);
         }
         if !self.holding {
-            self.couple(verdict.usage);
+            self.couple(verdict.usage, verdict.speed_usage);
         }
         if self.tau_scale > 1.0 && action == LimitAction::None {
             action = LimitAction::Slowed;
@@ -164,8 +175,8 @@ impl Execution {
         action
     }
 
-    /// Temporal coupling after a point that used `usage` of the bounds.
-    fn couple(&mut self, usage: f64) {
+    /// Temporal coupling after a point that used `usage` of the bounds, `speed_usage` of the speed bounds.
+    fn couple(&mut self, usage: f64, speed_usage: f64) {
         let dt = self.stepping.dt;
         let wanted = if usage > COUPLE_ABOVE {
             (self.tau_scale_target * (COUPLE_RATE * dt).exp()).min(MAX_TAU_SCALE)
@@ -174,16 +185,19 @@ impl Execution {
         } else {
             self.tau_scale_target
         };
+        // The relative rate tau' / tau of a stretch for speed: COUPLE_RATE (less where c meets its cap), else 0.
+        let rate = if speed_usage > COUPLE_ABOVE { (wanted / self.tau_scale_target).ln() / dt } else { 0.0 };
         self.tau_scale_target = wanted;
-        let change = (wanted / self.tau_scale - 1.0).abs();
-        let moved = change >= COUPLE_STEP || (wanted == 1.0 && self.tau_scale != 1.0);
-        // At the grid's next knot a new step starts anyway: a change applied there costs no step thrown away.
-        let at_knot = self.knot1.as_ref().is_none_or(|k1| self.out_t >= k1.t - 0.5 * dt);
-        if moved && (at_knot || change >= COUPLE_STEP_NOW) {
+        // Applied on the period's grid of times, the same whatever the internal step (the server's segments start
+        // there, and a new step with them).
+        let period = (COUPLE_PERIOD / dt).round().max(1.0);
+        let on_period = (self.out_t / dt).round() % period == 0.0;
+        if on_period && (wanted != self.tau_scale || rate != self.tau_rate) {
             self.rebase();
             self.anchor_goal(self.holding);
             self.tau_scale = wanted;
             self.motion.tau = self.base_tau * wanted;
+            self.tau_rate = rate;
         }
     }
 

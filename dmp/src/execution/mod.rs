@@ -243,6 +243,8 @@ pub struct Execution {
     base_tau: f64,
     tau_scale: f64,
     tau_scale_target: f64,
+    /// The relative rate `tau' / tau` of the coupling in force: its term in the acceleration ([`limiting`]).
+    tau_rate: f64,
 }
 
 impl Execution {
@@ -304,6 +306,7 @@ impl Execution {
             base_tau: motion.tau,
             tau_scale: 1.0,
             tau_scale_target: 1.0,
+            tau_rate: 0.0,
             integrator,
             motion,
             scene,
