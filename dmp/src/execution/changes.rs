@@ -117,6 +117,10 @@ impl Execution {
         self.knot0.xd.clone_from(&s.xd);
         self.spare = self.knot1.take().or(self.spare.take());
         self.acc0_current = false;
+        // The restored point was handed out by the DMP, not the limiter; the coupling's rate is decided again at
+        // the next period.
+        self.probe = false;
+        self.tau_rate = 0.0;
         self.out_t = s.t;
     }
 

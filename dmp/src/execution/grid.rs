@@ -10,8 +10,9 @@ use crate::dense::Knot;
 use crate::integrate::dormand_prince;
 
 impl Execution {
-    /// Computes the knot after `knot0` (one RK4 step of `step_points` output steps, an adaptive step, or the
-    /// exact holding deceleration), and the accelerations at both knots under the current field and motion.
+    /// Computes the knot after `knot0` (one RK4 step of `step_points` output steps, an adaptive step, the exact
+    /// holding deceleration, or after a limited point on a coarse grid the probe), and the accelerations at both
+    /// knots under the current field and motion (a probe's end knot carries its start's).
     ///
     /// A step that is not finite is redone while each obstacle's term is checked at the states it evaluates; the
     /// obstacles (or cell-mates) whose term is not finite are dropped for the rest of the run and reported, and the
@@ -91,7 +92,8 @@ impl Execution {
     /// acceleration `(a' + a) / 2`, `a'` the one it last handed out (the restart point's velocity is the output's
     /// central difference, `v' + a' h / 2`): the DMP's acceleration at the restart, reached at half the rate. The
     /// step drops the DMP's jerk over one output step (`j h³ / 6`, about a micrometre at the Panda's jerk and
-    /// 1 ms): the limiter judges every point anyway, and the grid's next step starts from the point handed out.
+    /// 1 ms): the limiter judges every point anyway, and the grid's next step starts from the probe's point when
+    /// the limiter keeps it.
     fn probe_step(&mut self, k1: &mut Knot, diagnosis: Option<&mut Diagnosis>) {
         let h = self.stepping.dt;
         let mut both = FieldSum::new(

@@ -5,8 +5,10 @@
 //!    `dc/dt = COUPLE_RATE c`; once it uses less than [`RELAX_BELOW`], `c` relaxes back to 1 at
 //!    `dc/dt = -RELAX_RATE c`. The phase slows, so the forcing term and the attractor ask less of the robot, and
 //!    the motion's path is kept. `c` is applied (a change of `tau` from the next output point, continuous in
-//!    position and velocity) every [`COUPLE_PERIOD`], at whole multiples of it: the same times on every internal
-//!    grid, and those where the server's segments, and so a new internal step, start.
+//!    position and velocity) every [`COUPLE_PERIOD`] rounded to whole output steps (every point when `dt` is
+//!    longer), at the output points whose index is a multiple of it: the same points on every internal grid, and,
+//!    with 10 ms segments (the server's default, the load's), those where a segment, and so a new internal step,
+//!    starts.
 //!
 //!    A time scale that changes also scales the velocity. In the DMP's first-order form (Ijspeert et al. 2013,
 //!    Neural Computation 25(2), eq. 2.1: `tau z' = K (g - x) - D z + f`, `tau x' = z`) a growing `tau` slows the
@@ -17,9 +19,10 @@
 //!    `tau v'` (`v = tau x'`), while `c` grows because of a speed bound (`tau' / tau = COUPLE_RATE`). Without it a
 //!    slowed phase leaves the speed as it was, and weakens the damping and the obstacles' terms (both divide by
 //!    `tau`): a robot held at its speed limit coasts on with its time scale stretched tenfold, into what it should
-//!    avoid. A stretch for an acceleration or jerk bound leaves the velocity to the DMP (its accelerations fall as
-//!    `1 / c²` at once, and the term would ask for more deceleration, `COUPLE_RATE |x'|`), and so does the
-//!    relaxation. The rate in force changes with `c`.
+//!    avoid. A stretch for an acceleration or jerk bound leaves the velocity to the DMP (the attractor's and the
+//!    forcing term's accelerations fall as `1 / c²` at once, the damping's as `1 / c`, and the term would ask for
+//!    more deceleration, `COUPLE_RATE |x'|`), and so does the relaxation. The rate in force changes with `c`; a
+//!    rollback sets it to 0 until the next period.
 //! 2. **The limiter** ([`super::limiter`]): a point that would still exceed a bound is replaced by the nearest one
 //!    within the bounds, and the DMP is restarted from it ([`LimitAction::Limited`]). On a coarse grid the next
 //!    point is the restarted DMP's probe ([`Execution::probe_step`]): one output step at the acceleration of the
@@ -48,7 +51,7 @@ pub const COUPLE_RATE: f64 = 4.0;
 pub const RELAX_RATE: f64 = 1.0;
 /// Largest time scale factor.
 pub const MAX_TAU_SCALE: f64 = 10.0;
-/// The coupling's time scale and rate are applied every this many seconds (at whole multiples of it).
+/// The coupling's time scale and rate are applied every this many seconds (rounded to whole output steps).
 pub const COUPLE_PERIOD: f64 = 0.01;
 /// Braking to rest starts when the DMP asks to decelerate at this many times the acceleration bound.
 pub const BRAKE_ABOVE: f64 = 4.0;
@@ -141,6 +144,10 @@ impl Execution {
         xdd: &mut [f64],
     ) -> LimitAction {
         if self.limiter.is_off() {
+            if self.tau_scale != 1.0 || self.tau_rate != 0.0 {
+                // Limits taken off mid-run: the time scale relaxes back, and the speed coupling's term is off.
+                self.couple(0.0, 0.0);
+            }
             return LimitAction::None;
         }
         let verdict = self.limiter.limit(x, xd, xdd, self.braking);

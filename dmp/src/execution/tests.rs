@@ -197,3 +197,21 @@ fn temporal_coupling_slows_the_robot_as_much_as_its_phase() {
         "stretched {stretch}, needed {needed}"
     );
 }
+
+/// Limits taken off mid-run: the time scale the coupling stretched relaxes back to the run's own, the speed
+/// coupling's term goes, and the run arrives.
+#[test]
+fn limits_taken_off_mid_run_give_the_run_its_own_time_scale_back() {
+    let p =
+        Primitive::straight_line(20, 4.0, vec![100.0; 2], None, 1.0, vec![0.0; 2], vec![1.0, 0.0]).unwrap();
+    let mut e = alone(&p, Scene::empty(), Stepping::rk4(1e-3), 200);
+    e.set_limits(Limits { max_speed: 0.3, ..Limits::NONE }, false).unwrap();
+    e.advance(500).unwrap();
+    assert!(e.tau_scale() > 2.0, "{}", e.tau_scale());
+    e.set_limits(Limits::NONE, false).unwrap();
+    let mut last = Stretch::default();
+    while !last.outcome.is_final() && e.time() < 10.0 {
+        last = e.advance(10).unwrap();
+    }
+    assert_eq!((last.outcome, e.tau_scale()), (Outcome::GoalReached, 1.0));
+}
