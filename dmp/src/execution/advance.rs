@@ -34,8 +34,7 @@ impl Execution {
                     self.knot1 = Some(old);
                     // Its acceleration was evaluated at its exact state (a coarse step) under the field and
                     // motion still in force (a change would have rebased and dropped it).
-                    // A probe's end knot carries its start's acceleration.
-                    self.acc0_current = self.stepping.is_coarse() && !self.holding && !self.knot1_probed;
+                    self.acc0_current = self.knot1_acc && !self.holding;
                 }
                 self.next_knot();
                 let Some(k1) = self.knot1.as_ref() else { unreachable!("next_knot sets knot1") };

@@ -231,3 +231,43 @@ fn a_run_started_at_a_velocity_moves_on_at_it_and_only_before_its_first_point() 
         before = *xd;
     }
 }
+
+/// After a point the limiter changed, at RK4 on every point, the accelerations handed out in the dimensions
+/// without limits are still the DMP's (the grid then hands out its knots' ends, whose accelerations it must
+/// evaluate), as are the points after a change that lands there.
+#[test]
+fn the_accelerations_of_unlimited_dimensions_stay_the_dmps_after_a_limited_point() {
+    let start = vec![0.0; 6];
+    let goal = vec![1.0, 0.5, 0.0, 0.3, -0.2, 0.4];
+    let p = Primitive::straight_line(20, 4.0, vec![400.0; 6], None, 1.0, start, goal).unwrap();
+    let mut e = alone(&p, Scene::empty(), Stepping::rk4(1e-3), 10);
+    e.set_limits(Limits { max_speed: 0.4, ..Limits::NONE }, true).unwrap();
+    let (mut xd, mut xdd) = (Vec::new(), Vec::new());
+    for k in 0..150 {
+        let s = e.advance(10).unwrap();
+        xd.extend(s.xd);
+        xdd.extend(s.xdd);
+        if k % 7 == 3 {
+            // A change between two stretches (the goal is the same: only the grid restarts).
+            e.set_goal(vec![1.0, 0.5, 0.0, 0.3, -0.2, 0.4]).unwrap();
+        }
+    }
+    assert!(e.cost().limited > 100, "{:?}", e.cost());
+    let n = xd.len() / 6;
+    let mut worst = 0.0f64;
+    for k in 1..n - 1 {
+        for i in 3..6 {
+            // The central difference, or one of the one-sided ones (a change of tau from a point changes the
+            // acceleration there).
+            let back = (xd[k * 6 + i] - xd[(k - 1) * 6 + i]) / 1e-3;
+            let ahead = (xd[(k + 1) * 6 + i] - xd[k * 6 + i]) / 1e-3;
+            let a = xdd[k * 6 + i];
+            let err = [back, ahead, 0.5 * (back + ahead)]
+                .iter()
+                .map(|d| (a - d).abs())
+                .fold(f64::INFINITY, f64::min);
+            worst = worst.max(err);
+        }
+    }
+    assert!(worst < 0.1, "an acceleration handed out is {worst} m/s² off the velocities' differences");
+}

@@ -39,7 +39,11 @@ impl Execution {
             self.next_points = proposal;
             self.step(&mut k1, None);
         }
-        self.knot1_probed = self.probe && !self.holding;
+        if self.probe || self.holding || self.stepping.tolerance.is_some() {
+            // A probe's end knot carries its start's acceleration; holding does not reuse it; an adaptive step's
+            // is exact.
+            self.knot1_acc = !self.probe && !self.holding;
+        }
         self.probe = false;
         // Times are whole multiples of dt, not a drifting sum.
         let s = &mut self.scratch;
@@ -74,10 +78,16 @@ impl Execution {
             )
             .coupled(self.tau_rate);
             let known = self.acc0_current;
+            // The end knot's acceleration: for the points interpolated before it on a coarse step, and at RK4 on
+            // every point when the output runs a point ahead of knot0 (after a restart at a point handed out),
+            // so that the point handed out is the end knot itself.
+            let dt = self.stepping.dt;
+            let end_needed = self.stepping.step_points > 1 || self.out_t > self.knot0.t + 0.5 * dt;
             self.integrator.step_from(&self.motion, &mut both, s, h, &mut self.knot0.xdd, known);
             self.cost.steps += 1;
-            self.cost.evaluations += 3 + u64::from(!known) + u64::from(self.stepping.step_points > 1);
-            if self.stepping.step_points > 1 {
+            self.cost.evaluations += 3 + u64::from(!known) + u64::from(end_needed);
+            self.knot1_acc = end_needed;
+            if end_needed {
                 s.t = (s.t / self.stepping.dt).round() * self.stepping.dt;
                 self.integrator.acceleration(&self.motion, &mut both, s.t, s.s, &s.x, &s.xd, &mut k1.xdd);
             }

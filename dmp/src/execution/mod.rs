@@ -183,8 +183,9 @@ pub struct Execution {
     acc0_current: bool,
     /// The next knot is a probe ([`Execution::probe_step`]): the DMP restarted at a point the limiter changed.
     probe: bool,
-    /// `knot1` is a probe's: its acceleration is `knot0`'s, not the one at its own state.
-    knot1_probed: bool,
+    /// `knot1.xdd` is the acceleration at `knot1`'s own state under the field and motion of its step (not a
+    /// probe's, which carries its start's, nor a fine step's that did not evaluate it).
+    knot1_acc: bool,
     /// The interpolant of `knot0` and `knot1`, fitted when `knot1` is computed.
     interpolant: Interpolant,
     /// Scratch acceleration of an interpolated point.
@@ -318,7 +319,7 @@ impl Execution {
             spare: None,
             acc0_current: false,
             probe: false,
-            knot1_probed: false,
+            knot1_acc: false,
             interpolant: Interpolant::default(),
             xdd: vec![0.0; dim],
             scratch: state,
