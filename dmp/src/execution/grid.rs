@@ -9,6 +9,22 @@ use crate::canonical::phase_after;
 use crate::dense::Knot;
 use crate::integrate::dormand_prince;
 
+/// The run's fields and its coupling term at a state, for one step ([`FieldSum`]); a macro, so that the borrow is of
+/// the fields it names, not of the whole run.
+macro_rules! field_sum {
+    ($run:ident, $diagnosis:expr) => {
+        FieldSum::new(
+            &mut $run.field,
+            &mut $run.blend,
+            &mut $run.cellmates,
+            $diagnosis,
+            $run.tool.as_ref(),
+            $run.chart.as_ref(),
+        )
+        .coupled($run.tau_rate)
+    };
+}
+
 impl Execution {
     /// Computes the knot after `knot0` (one RK4 step of `step_points` output steps, an adaptive step, the exact
     /// holding deceleration, or after a limited point on a coarse grid the probe), and the accelerations at both
@@ -68,15 +84,7 @@ impl Execution {
             hold_step(&self.primitive, self.base_tau, s, h, &mut self.knot0.xdd);
             hold_acc(&self.primitive, self.base_tau, &s.xd, &mut k1.xdd);
         } else {
-            let mut both = FieldSum::new(
-                &mut self.field,
-                &mut self.blend,
-                &mut self.cellmates,
-                diagnosis,
-                self.tool.as_ref(),
-                self.chart.as_ref(),
-            )
-            .coupled(self.tau_rate);
+            let mut both = field_sum!(self, diagnosis);
             let known = self.acc0_current;
             // The end knot's acceleration: for the points interpolated before it on a coarse step, and at RK4 on
             // every point when the output runs a point ahead of knot0 (after a restart at a point handed out),
@@ -106,15 +114,7 @@ impl Execution {
     /// the limiter keeps it.
     fn probe_step(&mut self, k1: &mut Knot, diagnosis: Option<&mut Diagnosis>) {
         let h = self.stepping.dt;
-        let mut both = FieldSum::new(
-            &mut self.field,
-            &mut self.blend,
-            &mut self.cellmates,
-            diagnosis,
-            self.tool.as_ref(),
-            self.chart.as_ref(),
-        )
-        .coupled(self.tau_rate);
+        let mut both = field_sum!(self, diagnosis);
         let s = &mut self.scratch;
         let a = &mut self.knot0.xdd;
         if !self.acc0_current {
@@ -156,15 +156,7 @@ impl Execution {
         loop {
             let h = points as f64 * self.stepping.dt;
             let diagnosis = diagnosis.as_deref_mut();
-            let mut both = FieldSum::new(
-                &mut self.field,
-                &mut self.blend,
-                &mut self.cellmates,
-                diagnosis,
-                self.tool.as_ref(),
-                self.chart.as_ref(),
-            )
-            .coupled(self.tau_rate);
+            let mut both = field_sum!(self, diagnosis);
             let err = self.integrator.step_dormand_prince(
                 &self.motion,
                 &mut both,
