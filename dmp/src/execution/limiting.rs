@@ -12,7 +12,7 @@
 //!
 //!    A time scale that changes also scales the velocity. In the DMP's first-order form (Ijspeert et al. 2013,
 //!    Neural Computation 25(2), eq. 2.1: `tau z' = K (g - x) - D z + f`, `tau x' = z`) a growing `tau` slows the
-//!    robot at once, since `x' = z / tau`; temporal coupling works through this (Ijspeert et al. 2013, sec. 3.2;
+//!    robot at once, since `x' = z / tau`; temporal coupling works through this (Ijspeert et al. 2013, on temporal coupling;
 //!    Dahlin and Karayiannidis, "Temporal coupling of dynamical movement primitives for constrained velocities and
 //!    accelerations", IEEE RA-L 6(2), 2021). The engine's state is `x'` itself, which stays continuous; its
 //!    acceleration carries the term of `tau' != 0`, `x'' = z' / tau - (tau' / tau) x'`, that is `-tau' v` added to
