@@ -207,7 +207,8 @@ impl ResumableSession {
         }
         let cell = motion.cell.clone();
         let mut request = request;
-        let (server, session) = attempts(zenoh, &cell, &mut request, None, &options).await?;
+        let opener = Opener { zenoh, cell: &cell, options: &options };
+        let (server, session) = opener.attempts(&mut request, None).await?;
         Ok(Self {
             zenoh: zenoh.clone(),
             options,
@@ -304,7 +305,8 @@ impl ResumableSession {
             velocity: p.velocity.clone(),
             ..Default::default()
         });
-        let (server, session) = attempts(&self.zenoh, &self.cell, &mut request, state, &self.options).await?;
+        let opener = Opener { zenoh: &self.zenoh, cell: &self.cell, options: &self.options };
+        let (server, session) = opener.attempts(&mut request, state).await?;
         self.server = server;
         self.session = session;
         self.timeline.resumed();
@@ -380,73 +382,82 @@ impl ResumableSession {
     }
 }
 
-/// Resolves the cell and opens the session, retrying within the bounds; sends `state` first when given. A request
-/// for the latest version of the primitive is pinned to the version that is the latest then, so that every
-/// resumption runs the same primitive (a server that comes back may not have caught up yet, or one may be learned
-/// meanwhile).
-async fn attempts(
-    zenoh: &zenoh::Session,
-    cell: &str,
-    request: &mut v1::ExecuteRequest,
-    state: Option<v1::RobotState>,
-    options: &ResumeOptions,
-) -> Result<(v1::PlantServer, Session), ClientError> {
-    let began = Instant::now();
-    let mut delay = options.retry_delay;
-    let mut attempt = 0;
-    loop {
-        attempt += 1;
-        let left = options.max_total.saturating_sub(began.elapsed());
-        let tried = tokio::time::timeout(left, once(zenoh, cell, request, state.clone(), options)).await;
-        let failure = match tried {
-            Ok(Ok(opened)) => return Ok(opened),
-            Ok(Err(e)) if !retryable(&e) => return Err(e),
-            Ok(Err(e)) => e.to_string(),
-            Err(_) => format!("no answer within {:?}", options.max_total),
-        };
-        let elapsed = began.elapsed();
-        if attempt >= options.max_attempts.max(1) || elapsed + delay >= options.max_total {
-            return Err(ClientError::Resume {
-                cell: cell.to_owned(),
-                attempts: attempt,
-                elapsed,
-                last: failure,
-            });
-        }
-        tokio::time::sleep(delay).await;
-        delay = (delay * 2).min(options.retry_delay * 16);
-    }
+/// Where and how a session is opened: the cell, resolved through `zenoh`, within `options`.
+struct Opener<'a> {
+    zenoh: &'a zenoh::Session,
+    cell: &'a str,
+    options: &'a ResumeOptions,
 }
 
-async fn once(
-    zenoh: &zenoh::Session,
-    cell: &str,
-    request: &mut v1::ExecuteRequest,
-    state: Option<v1::RobotState>,
-    options: &ResumeOptions,
-) -> Result<(v1::PlantServer, Session), ClientError> {
-    let server = resolve_cell(zenoh, cell, options.resolve_timeout).await?;
-    let client = DmpClient::connect_with(&server.grpc_address, &options.connect).await?.with_cell(cell);
-    if let Some(m) = request.motion.as_mut()
-        && m.version == 0
-    {
-        m.version = client.get(&m.robot_id, &m.primitive, 0).await?.version;
-    }
-    let mut session = client.session(request.clone()).await?;
-    if let Some(s) = state {
-        session.state(s).await?;
-    }
-    // The server refuses a bad start with the first item of the stream: peek it, so that a refusal counts as a
-    // failed attempt and a good segment is kept.
-    let first = session.next_segment().await;
-    match first {
-        Some(Ok(seg)) => {
-            let (sender, rest) = session.into_parts();
-            let segments: SegmentStream = Box::pin(tokio_stream::once(Ok(seg)).chain(rest));
-            Ok((server, Session { sender, segments }))
+impl Opener<'_> {
+    /// Resolves the cell and opens the session, retrying within the bounds; sends `state` first when given. A
+    /// request for the latest version of the primitive is pinned to the version that is the latest then, so that
+    /// every resumption runs the same primitive (a server that comes back may not have caught up yet, or one may
+    /// be learned meanwhile).
+    async fn attempts(
+        &self,
+        request: &mut v1::ExecuteRequest,
+        state: Option<v1::RobotState>,
+    ) -> Result<(v1::PlantServer, Session), ClientError> {
+        let Opener { cell, options, .. } = *self;
+        let began = Instant::now();
+        let mut delay = options.retry_delay;
+        let mut attempt = 0;
+        loop {
+            attempt += 1;
+            let left = options.max_total.saturating_sub(began.elapsed());
+            let tried = tokio::time::timeout(left, self.once(request, state.clone())).await;
+            let failure = match tried {
+                Ok(Ok(opened)) => return Ok(opened),
+                Ok(Err(e)) if !retryable(&e) => return Err(e),
+                Ok(Err(e)) => e.to_string(),
+                Err(_) => format!("no answer within {:?}", options.max_total),
+            };
+            let elapsed = began.elapsed();
+            if attempt >= options.max_attempts.max(1) || elapsed + delay >= options.max_total {
+                return Err(ClientError::Resume {
+                    cell: cell.to_owned(),
+                    attempts: attempt,
+                    elapsed,
+                    last: failure,
+                });
+            }
+            tokio::time::sleep(delay).await;
+            delay = (delay * 2).min(options.retry_delay * 16);
         }
-        Some(Err(e)) => Err(e),
-        None => Err(ClientError::Closed(format!("the session on server `{}`", server.server_id))),
+    }
+
+    /// One attempt: resolves the cell, connects, pins the primitive's version, opens the session and reads its
+    /// first segment.
+    async fn once(
+        &self,
+        request: &mut v1::ExecuteRequest,
+        state: Option<v1::RobotState>,
+    ) -> Result<(v1::PlantServer, Session), ClientError> {
+        let Opener { zenoh, cell, options } = *self;
+        let server = resolve_cell(zenoh, cell, options.resolve_timeout).await?;
+        let client = DmpClient::connect_with(&server.grpc_address, &options.connect).await?.with_cell(cell);
+        if let Some(m) = request.motion.as_mut()
+            && m.version == 0
+        {
+            m.version = client.get(&m.robot_id, &m.primitive, 0).await?.version;
+        }
+        let mut session = client.session(request.clone()).await?;
+        if let Some(s) = state {
+            session.state(s).await?;
+        }
+        // The server refuses a bad start with the first item of the stream: peek it, so that a refusal counts as a
+        // failed attempt and a good segment is kept.
+        let first = session.next_segment().await;
+        match first {
+            Some(Ok(seg)) => {
+                let (sender, rest) = session.into_parts();
+                let segments: SegmentStream = Box::pin(tokio_stream::once(Ok(seg)).chain(rest));
+                Ok((server, Session { sender, segments }))
+            }
+            Some(Err(e)) => Err(e),
+            None => Err(ClientError::Closed(format!("the session on server `{}`", server.server_id))),
+        }
     }
 }
 

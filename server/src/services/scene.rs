@@ -212,6 +212,19 @@ mod tests {
         }
     }
 
+    /// A watch of `scene` on the system clock, holding one of `permits`, ending on `shutdown` or, when given,
+    /// when the cell goes back.
+    fn watch(
+        scene: &Cell,
+        buffer: usize,
+        shutdown: &CancellationToken,
+        permits: &Arc<Semaphore>,
+        given_back: Option<GivenBack>,
+    ) -> ReceiverStream<Result<v1::SceneEvent, Status>> {
+        let permit = permits.clone().try_acquire_owned().unwrap();
+        watch_stream(scene, Clock::system(), buffer, shutdown.clone(), permit, None, given_back)
+    }
+
     fn ids(e: &v1::SceneEvent) -> Vec<&str> {
         e.snapshot.as_ref().unwrap().obstacles.iter().map(|o| o.id.as_str()).collect()
     }
@@ -233,8 +246,7 @@ mod tests {
         scene.put(moving("a"), system_unix_s()).unwrap();
         let permits = Arc::new(Semaphore::new(1));
         let shutdown = CancellationToken::new();
-        let permit = permits.clone().try_acquire_owned().unwrap();
-        let mut stream = watch_stream(&scene, Clock::system(), 2, shutdown.clone(), permit, None, None);
+        let mut stream = watch(&scene, 2, &shutdown, &permits, None);
         let first = within("first", stream.next()).await.unwrap().unwrap();
         assert_eq!(ids(&first), ["a"]);
         scene.put(moving("b"), system_unix_s()).unwrap();
@@ -256,15 +268,7 @@ mod tests {
         let taken = crate::plant::taken::TakenCells::default();
         assert!(taken.take("c"));
         let permits = Arc::new(Semaphore::new(1));
-        let mut stream = watch_stream(
-            &scene,
-            Clock::system(),
-            2,
-            CancellationToken::new(),
-            permits.clone().try_acquire_owned().unwrap(),
-            None,
-            taken.until_given_back("c"),
-        );
+        let mut stream = watch(&scene, 2, &CancellationToken::new(), &permits, taken.until_given_back("c"));
         assert!(ids(&within("first", stream.next()).await.unwrap().unwrap()).is_empty());
         assert!(taken.give_back("c", "`s1` at http://h:1"));
         let last = within("the end", stream.next()).await.unwrap().unwrap_err();
@@ -279,15 +283,7 @@ mod tests {
         let scene = Cell::new("c", 10);
         let permits = Arc::new(Semaphore::new(1));
         let shutdown = CancellationToken::new();
-        let mut stream = watch_stream(
-            &scene,
-            Clock::system(),
-            1,
-            shutdown.clone(),
-            permits.clone().try_acquire_owned().unwrap(),
-            None,
-            None,
-        );
+        let mut stream = watch(&scene, 1, &shutdown, &permits, None);
         assert!(ids(&within("first", stream.next()).await.unwrap().unwrap()).is_empty());
         shutdown.cancel();
         let last = within("last", stream.next()).await.unwrap().unwrap_err();
@@ -300,15 +296,7 @@ mod tests {
     async fn a_slow_reader_gets_the_latest_snapshot() {
         let scene = Cell::new("c", 100);
         let permits = Arc::new(Semaphore::new(1));
-        let mut stream = watch_stream(
-            &scene,
-            Clock::system(),
-            1,
-            CancellationToken::new(),
-            permits.clone().try_acquire_owned().unwrap(),
-            None,
-            None,
-        );
+        let mut stream = watch(&scene, 1, &CancellationToken::new(), &permits, None);
         for i in 0..50 {
             scene.put(moving(&format!("o{i:02}")), system_unix_s()).unwrap();
         }

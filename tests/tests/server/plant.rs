@@ -50,6 +50,21 @@ pub(crate) async fn until_all_known(servers: &[&ServerHandle]) {
     .await;
 }
 
+/// A router on loopback, its endpoints, and `n` store directories (kept as long as the plant runs).
+pub(crate) struct Loopback {
+    pub(crate) zenohd: zenoh::Session,
+    pub(crate) endpoint: Vec<String>,
+    pub(crate) dirs: Vec<tempfile::TempDir>,
+}
+
+/// A [`Loopback`] plant with `n` store directories.
+pub(crate) async fn loopback(n: usize) -> Loopback {
+    let zenohd = router("tcp/127.0.0.1:0").await;
+    let endpoint = locators(&zenohd).await;
+    let dirs = (0..n).map(|_| tempfile::tempdir().unwrap()).collect();
+    Loopback { zenohd, endpoint, dirs }
+}
+
 /// Servers s1, s2 and s3 of cells a, b and c, stores in `dirs[0..3]`, once each knows the others.
 pub(crate) async fn three_servers(
     endpoint: &[String],
@@ -77,9 +92,7 @@ fn holds(h: &ServerHandle, robot: &str, name: &str, version: u64) -> bool {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn primitives_replicate_and_a_cell_resolves_to_its_server() {
-    let zenohd = router("tcp/127.0.0.1:0").await;
-    let endpoint = locators(&zenohd).await;
-    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    let Loopback { zenohd, endpoint, dirs } = loopback(3).await;
     let (s1, s2, s3) = three_servers(&endpoint, &dirs).await;
     let (c1, c2) = (client_of(&s1).await, client_of(&s2).await);
 
@@ -179,9 +192,7 @@ async fn a_server_that_starts_late_or_comes_back_catches_up() {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn a_delete_reaches_a_server_that_was_down_and_a_newer_relearn_wins_everywhere() {
-    let zenohd = router("tcp/127.0.0.1:0").await;
-    let endpoint = locators(&zenohd).await;
-    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    let Loopback { zenohd, endpoint, dirs } = loopback(3).await;
     let (s1, s2, s3) = three_servers(&endpoint, &dirs).await;
     let (c1, c3) = (client_of(&s1).await, client_of(&s3).await);
     let gone =
@@ -228,9 +239,7 @@ async fn a_delete_reaches_a_server_that_was_down_and_a_newer_relearn_wins_everyw
 
 #[tokio::test(flavor = "multi_thread")]
 async fn a_load_via_zenoh_discovery_spreads_its_robots_over_the_plant() {
-    let zenohd = router("tcp/127.0.0.1:0").await;
-    let endpoint = locators(&zenohd).await;
-    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    let Loopback { zenohd, endpoint, dirs } = loopback(3).await;
     let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a", "d"], &[]).await;
     let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[]).await;
     let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
@@ -301,9 +310,7 @@ fn closest(seg: &v1::Segment, point: [f64; 2]) -> f64 {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn robots_of_neighbouring_cells_on_two_servers_avoid_each_other() {
-    let zenohd = router("tcp/127.0.0.1:0").await;
-    let endpoint = locators(&zenohd).await;
-    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    let Loopback { zenohd, endpoint, dirs } = loopback(3).await;
     let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[("a", &["b"])]).await;
     let s2 = plant_server(dirs[1].path(), &endpoint, "s2", &["b"], &[("b", &["a"])]).await;
     let s3 = plant_server(dirs[2].path(), &endpoint, "s3", &["c"], &[]).await;
@@ -389,9 +396,7 @@ fn sees_obstacle(h: &ServerHandle, cell: &str, id: &str) -> bool {
 #[tokio::test(flavor = "multi_thread")]
 async fn a_cell_is_taken_while_its_server_is_away_and_given_back_when_it_returns() {
     use dmp_server::plant::failover::rendezvous;
-    let zenohd = router("tcp/127.0.0.1:0").await;
-    let endpoint = locators(&zenohd).await;
-    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    let Loopback { zenohd, endpoint, dirs } = loopback(3).await;
     let (s1, s2, s3) = three_servers(&endpoint, &dirs).await;
     // A perception node keeping cell a's latest obstacle: what a taker asks for the cell's scene.
     let mut perception =

@@ -2,19 +2,15 @@
 //! announcement and takes part in the fail-over's choice like the others, so that the cell is never left without
 //! a server when the newcomer wins it.
 
-use dmp_proto::zenoh_session::locators;
 use dmp_server::plant::failover::{rendezvous, weight};
 use dmp_tests::within;
 
-use crate::plant::{plant_server, shut_down, three_servers, until_all_known};
-use crate::stale_scene::router;
+use crate::plant::{Loopback, loopback, plant_server, shut_down, three_servers, until_all_known};
 use crate::until;
 
 #[tokio::test(flavor = "multi_thread")]
 async fn a_server_joining_during_an_outage_takes_the_cell_it_wins() {
-    let zenohd = router("tcp/127.0.0.1:0").await;
-    let endpoint = locators(&zenohd).await;
-    let dirs: Vec<_> = (0..4).map(|_| tempfile::tempdir().unwrap()).collect();
+    let Loopback { zenohd, endpoint, dirs } = loopback(4).await;
     let (s1, s2, s3) = three_servers(&endpoint, &dirs).await;
     within("s1 down", s1.shutdown()).await.unwrap();
     let taker = match rendezvous("a", ["s2", "s3"]).unwrap() {
