@@ -21,8 +21,9 @@
 //!    `tau`): a robot held at its speed limit coasts on with its time scale stretched tenfold, into what it should
 //!    avoid. A stretch for an acceleration or jerk bound leaves the velocity to the DMP (the attractor's and the
 //!    forcing term's accelerations fall as `1 / c²` at once, the damping's as `1 / c`, and the term would ask for
-//!    more deceleration, `COUPLE_RATE |x'|`), and so does the relaxation. The rate in force changes with `c`; a
-//!    rollback sets it to 0 until the next period.
+//!    more deceleration, `COUPLE_RATE |x'|`), and so does the relaxation. The rate in force changes with `c`, by
+//!    at most `COUPLE_RATE` / [`COUPLE_RATE_PERIODS`] a period, so that the term never jumps the acceleration by
+//!    more than a quarter of `COUPLE_RATE |x'|`; a rollback sets it to 0.
 //! 2. **The limiter** ([`super::limiter`]): a point that would still exceed a bound is replaced by the nearest one
 //!    within the bounds, and the DMP is restarted from it ([`LimitAction::Limited`]). On a coarse grid the next
 //!    point is the restarted DMP's probe ([`Execution::probe_step`]): one output step at the acceleration of the
@@ -53,6 +54,8 @@ pub const RELAX_RATE: f64 = 1.0;
 pub const MAX_TAU_SCALE: f64 = 10.0;
 /// The coupling's time scale and rate are applied every this many seconds (rounded to whole output steps).
 pub const COUPLE_PERIOD: f64 = 0.01;
+/// The speed coupling's term reaches its rate, or leaves it, over this many periods ([`COUPLE_PERIOD`]).
+pub const COUPLE_RATE_PERIODS: f64 = 4.0;
 /// Braking to rest starts when the DMP asks to decelerate at this many times the acceleration bound.
 pub const BRAKE_ABOVE: f64 = 4.0;
 
@@ -199,12 +202,16 @@ impl Execution {
         // there, and a new step with them).
         let period = (COUPLE_PERIOD / dt).round().max(1.0);
         let on_period = (self.out_t / dt).round() % period == 0.0;
-        if on_period && (wanted != self.tau_scale || rate != self.tau_rate) {
+        // The term's rate moves towards `rate` by a step a period: switched at once, it would jump the
+        // acceleration by COUPLE_RATE |x'| each time the speed crosses the threshold.
+        let step = COUPLE_RATE / COUPLE_RATE_PERIODS;
+        let applied = self.tau_rate + (rate - self.tau_rate).clamp(-step, step);
+        if on_period && (wanted != self.tau_scale || applied != self.tau_rate) {
             self.rebase();
             self.anchor_goal(self.holding);
             self.tau_scale = wanted;
             self.motion.tau = self.base_tau * wanted;
-            self.tau_rate = rate;
+            self.tau_rate = applied;
         }
     }
 

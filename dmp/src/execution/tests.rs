@@ -215,3 +215,25 @@ fn limits_taken_off_mid_run_give_the_run_its_own_time_scale_back() {
     e.set_limits(Limits::NONE, false).unwrap();
     assert_eq!((advance_until_final(&mut e, 1000), e.tau_scale()), (Outcome::GoalReached, 1.0));
 }
+
+/// The speed coupling's term comes and goes by steps of a quarter of its rate (`COUPLE_RATE_PERIODS`): held at
+/// its speed limit, the run's acceleration never jumps by much more than a quarter of `COUPLE_RATE |x'|` from one
+/// point to the next (switched whole, it jumped by about `COUPLE_RATE |x'|` each time the speed crossed the
+/// coupling's threshold).
+#[test]
+fn the_speed_coupling_term_comes_and_goes_without_jumps() {
+    use super::limiting::{COUPLE_RATE, COUPLE_RATE_PERIODS};
+    let speed = 0.3;
+    let mut e = held_to_speed(speed);
+    let mut a = Vec::new();
+    for _ in 0..300 {
+        a.extend(e.advance(10).unwrap().xdd);
+    }
+    assert!(e.cost().limited > 100, "not held at its limit: {:?}", e.cost());
+    // From 0.1 s on: the DMP's start asks for a jump of its own.
+    let jump = (100..a.len() / 2)
+        .map(|k| (a[k * 2] - a[(k - 1) * 2]).hypot(a[k * 2 + 1] - a[(k - 1) * 2 + 1]))
+        .fold(0.0, f64::max);
+    let step = COUPLE_RATE * speed / COUPLE_RATE_PERIODS;
+    assert!(jump < 1.5 * step, "the acceleration jumps by {jump} m/s², the term's step is {step}");
+}
