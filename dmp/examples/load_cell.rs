@@ -182,9 +182,18 @@ fn run(name: &str, pose: bool, limits: Limits, seconds: f64, lag: usize, every: 
 }
 
 fn main() {
-    let arg =
-        |i: usize, default: f64| std::env::args().nth(i).map_or(default, |s| s.parse().expect("a number"));
-    let (seconds, lag, every) = (arg(1, 10.0), arg(2, 0.0) as usize, (arg(3, 1.0) as usize).max(1));
+    let arg = |i: usize, name: &str, default: f64| match std::env::args().nth(i) {
+        None => default,
+        Some(s) => match s.parse::<f64>() {
+            Ok(v) if v.is_finite() && v >= 0.0 => v,
+            _ => {
+                eprintln!("load_cell: {name} must be a number of at least 0, not `{s}`");
+                std::process::exit(2);
+            }
+        },
+    };
+    let (seconds, lag, every) =
+        (arg(1, "seconds", 10.0), arg(2, "lag", 0.0) as usize, (arg(3, "every", 1.0) as usize).max(1));
     run("position, no limits", false, Limits::NONE, seconds, lag, every);
     run("position, Panda", false, Limits::PANDA, seconds, lag, every);
     run("pose, no limits", true, Limits::NONE, seconds, lag, every);
