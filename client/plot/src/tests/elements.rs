@@ -7,7 +7,8 @@ use dmp::{Obstacle, Trajectory};
 use super::{
     aspect, bump, check_common, count_text, dump, ellipse, groups, in_class, parse, points, texts, traj,
 };
-use crate::{Event, PlotInput, SCALE, Series, Solid, SolidShape, render_svg};
+use crate::draw::backend::SCALE;
+use crate::{Event, PlotInput, Series, Solid, SolidShape, render_svg};
 
 fn input<'a>(free: &'a Trajectory, adapted: &'a Trajectory, obstacles: &'a [Obstacle]) -> PlotInput<'a> {
     PlotInput {

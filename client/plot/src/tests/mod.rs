@@ -3,14 +3,16 @@
 
 use dmp::{Agent, Obstacle, Shape, Superquadric, Trajectory};
 
-use super::bounds::fit_equal_aspect;
-use super::decimate::decimated;
-use super::projection::convex_hull;
-use super::style::{fmt_num, fmt_tick};
+use crate::data::bounds::fit_equal_aspect;
+use crate::data::decimate::{MAX_POINTS, decimated};
+use crate::data::geometry::convex_hull;
+use crate::data::outline::OUTLINE_SAMPLES_2D;
+use crate::draw::style::{fmt_num, fmt_tick};
+use crate::figures::time::MAX_TIME_PANELS;
 
 mod elements;
 mod pose;
-use super::{MAX_POINTS, MAX_TIME_PANELS, OUTLINE_SAMPLES_2D, PlotError, PlotInput, render_svg};
+use super::{PlotError, PlotInput, render_svg};
 
 pub(super) fn ellipse(id: &str, center: Vec<f64>, axes: Vec<f64>, velocity: Option<Vec<f64>>) -> Obstacle {
     let n = axes.len();

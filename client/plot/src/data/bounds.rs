@@ -1,12 +1,12 @@
 //! Data ranges of a panel: bounds of what is drawn, margins, and the equal aspect ratio of robot-space panels.
 
-use super::{P2, finite};
+use super::geometry::{P2, finite};
 
 /// Margin around the data in geometric panels, as a fraction of the larger data span.
 const MARGIN_FRAC: f64 = 0.06;
 
 /// A data range `lo..hi` with nonzero width.
-pub(super) fn padded(lo: f64, hi: f64, frac: f64) -> (f64, f64) {
+pub(crate) fn padded(lo: f64, hi: f64, frac: f64) -> (f64, f64) {
     if !(lo.is_finite() && hi.is_finite()) || lo > hi {
         return (-1.0, 1.0);
     }
@@ -17,19 +17,19 @@ pub(super) fn padded(lo: f64, hi: f64, frac: f64) -> (f64, f64) {
 
 /// The bounding box of the finite points added.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct Bounds {
-    pub(super) x0: f64,
-    pub(super) x1: f64,
-    pub(super) y0: f64,
-    pub(super) y1: f64,
+pub(crate) struct Bounds {
+    pub(crate) x0: f64,
+    pub(crate) x1: f64,
+    pub(crate) y0: f64,
+    pub(crate) y1: f64,
 }
 
 impl Bounds {
-    pub(super) fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self { x0: f64::INFINITY, x1: f64::NEG_INFINITY, y0: f64::INFINITY, y1: f64::NEG_INFINITY }
     }
 
-    pub(super) fn add(&mut self, p: P2) {
+    pub(crate) fn add(&mut self, p: P2) {
         if finite(&p) {
             self.x0 = self.x0.min(p.0);
             self.x1 = self.x1.max(p.0);
@@ -38,16 +38,16 @@ impl Bounds {
         }
     }
 
-    pub(super) fn add_all(&mut self, pts: &[P2]) {
+    pub(crate) fn add_all(&mut self, pts: &[P2]) {
         pts.iter().for_each(|p| self.add(*p));
     }
 
-    pub(super) fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.x0 > self.x1
     }
 
     /// The bounds grown by a margin of [`MARGIN_FRAC`] of the larger span on every side: `(x range, y range)`.
-    pub(super) fn with_margin(&self) -> ((f64, f64), (f64, f64)) {
+    pub(crate) fn with_margin(&self) -> ((f64, f64), (f64, f64)) {
         if self.is_empty() {
             return ((-1.0, 1.0), (-1.0, 1.0));
         }
@@ -60,7 +60,7 @@ impl Bounds {
 
 /// Grows the narrower of the two ranges (about its centre) so that one data unit has the same length in pixels on
 /// both axes of a `px_w` x `px_h` plotting area.
-pub(super) fn fit_equal_aspect(
+pub(crate) fn fit_equal_aspect(
     x: (f64, f64),
     y: (f64, f64),
     px_w: f64,

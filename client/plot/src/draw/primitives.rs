@@ -1,20 +1,26 @@
-//! Drawing primitives on a chart: curves broken at non-finite points, filled outlines clipped to the chart, text,
-//! axes and grid.
+//! Drawing primitives on a chart: curves broken at non-finite points and thinned to what shows on screen, filled
+//! outlines clipped to the chart, text, axes and grid.
 
 use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::backend::{FineSvg, dashed, px};
-use super::decimate::thinned;
+use super::backend::{FineSvg, SCALE, dashed, px};
 use super::style::{FONT, Stroke, fmt_tick};
-use super::{P2, PlotError, finite};
+use crate::data::geometry::{P2, clip_polygon, finite};
+use crate::error::PlotError;
 
-pub(super) type Area = DrawingArea<FineSvg, Shift>;
-pub(super) type Chart<'c> = ChartContext<'c, FineSvg, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+/// Smallest distance on screen, in device units (a pixel and a half), between consecutive drawn points of a curve.
+const MIN_PIXEL_STEP: i64 = 3 * SCALE as i64 / 2;
 
-pub(super) fn drawing_err(e: impl std::fmt::Display) -> PlotError {
+/// A drawing area of the figure (device units).
+pub(crate) type Area = DrawingArea<FineSvg, Shift>;
+/// A chart with data coordinates on both axes.
+pub(crate) type Chart<'c> = ChartContext<'c, FineSvg, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// A drawing error of plotters, as the figure's error.
+pub(crate) fn drawing_err(e: impl std::fmt::Display) -> PlotError {
     PlotError::Drawing(e.to_string())
 }
 
@@ -25,7 +31,7 @@ fn ranges(chart: &Chart<'_>) -> ((f64, f64), (f64, f64)) {
 }
 
 /// Draws `pts` as polylines, broken where a point is not finite.
-pub(super) fn draw_curve(chart: &mut Chart<'_>, pts: &[P2], stroke: Stroke) -> Result<(), PlotError> {
+pub(crate) fn draw_curve(chart: &mut Chart<'_>, pts: &[P2], stroke: Stroke) -> Result<(), PlotError> {
     for seg in pts.split(|p| !finite(p)).filter(|s| s.len() >= 2) {
         let seg = thinned(chart, seg);
         let mut draw = || chart.draw_series(LineSeries::new(seg.iter().copied(), stroke.style())).map(|_| ());
@@ -38,8 +44,27 @@ pub(super) fn draw_curve(chart: &mut Chart<'_>, pts: &[P2], stroke: Stroke) -> R
     Ok(())
 }
 
+/// The points of `seg` at least [`MIN_PIXEL_STEP`] apart on screen (and the last one): denser points only make the
+/// file bigger.
+fn thinned(chart: &Chart<'_>, seg: &[P2]) -> Vec<P2> {
+    let mut out = Vec::with_capacity(seg.len());
+    let mut last: Option<(i32, i32)> = None;
+    for (k, p) in seg.iter().enumerate() {
+        let q = chart.backend_coord(p);
+        let far = last.is_none_or(|l| {
+            let (dx, dy) = ((q.0 - l.0) as i64, (q.1 - l.1) as i64);
+            dx * dx + dy * dy >= MIN_PIXEL_STEP * MIN_PIXEL_STEP
+        });
+        if far || k + 1 == seg.len() {
+            out.push(*p);
+            last = Some(q);
+        }
+    }
+    out
+}
+
 /// A filled polygon with an outline (closed), clipped to the chart; non-finite vertices are dropped.
-pub(super) fn draw_patch(
+pub(crate) fn draw_patch(
     chart: &mut Chart<'_>,
     poly: &[P2],
     fill: RGBAColor,
@@ -59,7 +84,7 @@ pub(super) fn draw_patch(
 }
 
 /// An outline (closed, not filled), clipped to the chart.
-pub(super) fn draw_outline(chart: &mut Chart<'_>, poly: &[P2], edge: Stroke) -> Result<(), PlotError> {
+pub(crate) fn draw_outline(chart: &mut Chart<'_>, poly: &[P2], edge: Stroke) -> Result<(), PlotError> {
     let poly: Vec<P2> = poly.iter().copied().filter(finite).collect();
     let poly = clip_polygon(&poly, ranges(chart));
     if poly.len() < 3 {
@@ -69,56 +94,23 @@ pub(super) fn draw_outline(chart: &mut Chart<'_>, poly: &[P2], edge: Stroke) -> 
 }
 
 /// `poly` with its first vertex repeated at the end.
-pub(super) fn closed(mut poly: Vec<P2>) -> Vec<P2> {
+fn closed(mut poly: Vec<P2>) -> Vec<P2> {
     if let Some(&first) = poly.first() {
         poly.push(first);
     }
     poly
 }
 
-/// The part of the polygon `poly` inside the rectangle `((x0, x1), (y0, y1))` (Sutherland-Hodgman).
-pub(super) fn clip_polygon(poly: &[P2], ((x0, x1), (y0, y1)): ((f64, f64), (f64, f64))) -> Vec<P2> {
-    let (x0, x1) = (x0.min(x1), x0.max(x1));
-    let (y0, y1) = (y0.min(y1), y0.max(y1));
-    let mut out: Vec<P2> = poly.to_vec();
-    let edges: [(usize, f64, bool); 4] = [(0, x0, true), (0, x1, false), (1, y0, true), (1, y1, false)];
-    for (axis, bound, keep_above) in edges {
-        let inside = |p: &P2| {
-            let v = if axis == 0 { p.0 } else { p.1 };
-            if keep_above { v >= bound } else { v <= bound }
-        };
-        let cross = |a: &P2, b: &P2| {
-            let (va, vb) = if axis == 0 { (a.0, b.0) } else { (a.1, b.1) };
-            let s = (bound - va) / (vb - va);
-            (a.0 + s * (b.0 - a.0), a.1 + s * (b.1 - a.1))
-        };
-        let input = std::mem::take(&mut out);
-        for (k, b) in input.iter().enumerate() {
-            let a = &input[(k + input.len() - 1) % input.len()];
-            match (inside(a), inside(b)) {
-                (true, true) => out.push(*b),
-                (true, false) => out.push(cross(a, b)),
-                (false, true) => {
-                    out.push(cross(a, b));
-                    out.push(*b);
-                }
-                (false, false) => {}
-            }
-        }
-    }
-    out
-}
-
 /// Text that may fail to draw is dropped: a figure without a label beats no figure. `size` and `pos` in pixels
 /// and device units respectively.
-pub(super) fn put_text(area: &Area, text: &str, pos: (i32, i32), size: u32, h: HPos) {
+pub(crate) fn put_text(area: &Area, text: &str, pos: (i32, i32), size: u32, h: HPos) {
     let style = TextStyle::from((FONT, px(size)).into_font()).color(&BLACK).pos(Pos::new(h, VPos::Center));
     let _ = area.draw(&Text::new(text.to_string(), pos, style));
 }
 
 /// Axes, grid, tick labels (no `-0`) and axis names with their units; without the text if the text cannot be
 /// drawn.
-pub(super) fn draw_mesh(
+pub(crate) fn draw_mesh(
     chart: &mut Chart<'_>,
     x_desc: &str,
     y_desc: &str,

@@ -2,10 +2,10 @@
 //! strip) and the held tool's outline along the path, at the marked times.
 
 use super::decimate::decimated;
-use super::projection::convex_hull;
-use super::{P2, PlotError};
+use super::geometry::{P2, convex_hull, finite};
+use crate::error::PlotError;
 
-/// The orientations of a pose run and the tool it holds.
+/// The orientations of a pose run and the tool it holds: what a figure needs to show a pose run.
 #[derive(Debug, Clone, Copy)]
 pub struct PoseTrace<'a> {
     /// The orientation `[x, y, z, w]` (a unit quaternion) at each row of the adapted trajectory.
@@ -18,7 +18,7 @@ pub struct PoseTrace<'a> {
 
 impl PoseTrace<'_> {
     /// Checks the orientations against the trajectories' rows.
-    pub(super) fn validate(&self, adapted_rows: usize, free_rows: usize) -> Result<(), PlotError> {
+    pub(crate) fn validate(&self, adapted_rows: usize, free_rows: usize) -> Result<(), PlotError> {
         for (what, q, rows) in [
             ("the adapted run's orientations", self.orientations, adapted_rows),
             ("the obstacle-free run's orientations", self.free_orientations, free_rows),
@@ -32,7 +32,7 @@ impl PoseTrace<'_> {
 
     /// The rotation away from the start orientation (the adapted run's first), degrees, against time: `(adapted,
     /// free)`, thinned like the other curves.
-    pub(super) fn turn_curves(&self, adapted_t: &[f64], free_t: &[f64]) -> (Vec<P2>, Vec<P2>) {
+    pub(crate) fn turn_curves(&self, adapted_t: &[f64], free_t: &[f64]) -> (Vec<P2>, Vec<P2>) {
         let Some(start) = self.orientations.first() else { return (Vec::new(), Vec::new()) };
         let curve = |t: &[f64], q: &[[f64; 4]]| -> Vec<P2> {
             decimated(t.len().min(q.len())).into_iter().map(|k| (t[k], angle_deg(start, &q[k]))).collect()
@@ -42,7 +42,7 @@ impl PoseTrace<'_> {
 
     /// The tool's outline on the axes `(i, j)` with its frame at `position` turned by `q`: the convex hull of its
     /// projected surface samples. Empty without a tool.
-    pub(super) fn tool_outline(&self, position: &[f64], q: &[f64; 4], (i, j): (usize, usize)) -> Vec<P2> {
+    pub(crate) fn tool_outline(&self, position: &[f64], q: &[f64; 4], (i, j): (usize, usize)) -> Vec<P2> {
         if self.tool_surface.is_empty() || position.len() < 3 {
             return Vec::new();
         }
@@ -54,7 +54,7 @@ impl PoseTrace<'_> {
                 let p = [position[0] + w[0], position[1] + w[1], position[2] + w[2]];
                 (p[i], p[j])
             })
-            .filter(super::finite)
+            .filter(finite)
             .collect();
         convex_hull(points)
     }

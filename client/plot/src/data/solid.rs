@@ -3,7 +3,7 @@
 
 use dmp::Obstacle;
 
-use super::P2;
+use super::outline::OUTLINE_SAMPLES_ND;
 
 /// The kind and size of a true shape. Sizes in metres; a 2-D robot uses the first two coordinates of a 3-D size.
 #[derive(Debug, Clone, PartialEq)]
@@ -63,11 +63,11 @@ impl Solid {
     }
 
     /// Present at `t`.
-    pub fn present_at(&self, t: f64) -> bool {
+    pub(crate) fn present_at(&self, t: f64) -> bool {
         t >= self.from && t < self.until
     }
 
-    fn moving(&self) -> bool {
+    pub(crate) fn moving(&self) -> bool {
         match &self.shape {
             SolidShape::Superquadric(o) => o.velocity().iter().any(|v| *v != 0.0),
             _ => self.velocity.iter().any(|v| *v != 0.0),
@@ -83,7 +83,7 @@ impl Solid {
     }
 
     /// Signed distance from `x` to the surface at time `t` (negative inside).
-    pub fn signed_distance(&self, x: &[f64], t: f64) -> f64 {
+    pub(crate) fn signed_distance(&self, x: &[f64], t: f64) -> f64 {
         let c = self.center_at(t);
         let y: Vec<f64> = x.iter().zip(&c).map(|(a, b)| a - b).collect();
         let d = y.len();
@@ -107,7 +107,7 @@ impl Solid {
     }
 
     /// Surface samples at time `t`, absolute positions; for a point cloud its points.
-    fn samples(&self, t: f64) -> Vec<Vec<f64>> {
+    pub(crate) fn samples(&self, t: f64) -> Vec<Vec<f64>> {
         let c = self.center_at(t);
         let d = c.len();
         let circle = |r: f64, z: Option<f64>| -> Vec<Vec<f64>> {
@@ -153,7 +153,7 @@ impl Solid {
             SolidShape::Superquadric(o) => {
                 let mut oc = vec![0.0; o.dim()];
                 o.center_at(t, &mut oc);
-                let n = super::OUTLINE_SAMPLES_ND;
+                let n = OUTLINE_SAMPLES_ND;
                 return o
                     .boundary_offsets(n)
                     .chunks(o.dim())
@@ -172,62 +172,4 @@ fn box_sdf(y: &[f64], half: &[f64]) -> f64 {
     let outside = q.iter().map(|v| v.max(0.0).powi(2)).sum::<f64>().sqrt();
     let inside = q.iter().copied().fold(f64::NEG_INFINITY, f64::max).min(0.0);
     outside + inside
-}
-
-/// A true shape: one given, or an obstacle that is its own true shape.
-#[derive(Debug, Clone, Copy)]
-pub(super) enum Truth<'a> {
-    Solid(&'a Solid),
-    Obstacle(&'a Obstacle),
-}
-
-impl Truth<'_> {
-    pub(super) fn present_at(&self, t: f64) -> bool {
-        match self {
-            Truth::Solid(s) => s.present_at(t),
-            Truth::Obstacle(_) => true,
-        }
-    }
-
-    pub(super) fn moving(&self) -> bool {
-        match self {
-            Truth::Solid(s) => s.moving(),
-            Truth::Obstacle(o) => o.velocity().iter().any(|v| *v != 0.0),
-        }
-    }
-
-    pub(super) fn is_cloud(&self) -> bool {
-        matches!(self, Truth::Solid(Solid { shape: SolidShape::Points(_), .. }))
-    }
-
-    pub(super) fn signed_distance(&self, x: &[f64], t: f64) -> f64 {
-        match self {
-            Truth::Solid(s) => s.signed_distance(x, t),
-            Truth::Obstacle(o) => dmp::distance::signed_distance_world(o, x, t),
-        }
-    }
-
-    /// The outline on the local axes `(i, j)` at time `t`: the convex hull of the projected surface samples (the
-    /// samples in order for a 2-D superquadric), or the points of a cloud.
-    pub(super) fn outline(&self, t: f64, (i, j): (usize, usize), samples: usize) -> Vec<P2> {
-        match self {
-            Truth::Solid(Solid { shape: SolidShape::Superquadric(o), .. }) => {
-                super::space::obstacle_outline(o, t, (i, j), samples)
-            }
-            Truth::Solid(s) => {
-                let p: Vec<P2> = s.samples(t).iter().map(|p| (p[i], p[j])).collect();
-                if self.is_cloud() { p } else { super::projection::convex_hull(p) }
-            }
-            Truth::Obstacle(o) => super::space::obstacle_outline(o, t, (i, j), samples),
-        }
-    }
-}
-
-/// The true shapes of `solids`, or the obstacles themselves when none is given.
-pub(super) fn truths<'a>(solids: &'a [Solid], obstacles: &'a [Obstacle]) -> Vec<Truth<'a>> {
-    if solids.is_empty() {
-        obstacles.iter().map(Truth::Obstacle).collect()
-    } else {
-        solids.iter().map(Truth::Solid).collect()
-    }
 }

@@ -19,7 +19,7 @@ use plotters_backend::{
 };
 
 /// Device units per pixel of the figure.
-pub const SCALE: u32 = 8;
+pub(crate) const SCALE: u32 = 8;
 
 thread_local! {
     /// The dash pattern of the lines being drawn (device units), set by [`dashed`]: one polyline with a
@@ -28,7 +28,7 @@ thread_local! {
 }
 
 /// Runs `f` with lines drawn dashed `(on, off)` (device units). Figures are drawn on one thread, start to end.
-pub(super) fn dashed<T>(dash: (u32, u32), f: impl FnOnce() -> T) -> T {
+pub(crate) fn dashed<T>(dash: (u32, u32), f: impl FnOnce() -> T) -> T {
     let before = DASH.with(|d| d.replace(Some(dash)));
     let out = f();
     DASH.with(|d| d.set(before));
@@ -42,27 +42,27 @@ fn dasharray() -> String {
 }
 
 /// `v` pixels in device units.
-pub(super) const fn px(v: u32) -> u32 {
+pub(crate) const fn px(v: u32) -> u32 {
     v * SCALE
 }
 
 /// The SVG being written, shared by the backend and the figure code (which opens and closes groups).
 #[derive(Debug, Default)]
-pub(super) struct Doc {
+pub(crate) struct Doc {
     body: String,
     open: usize,
 }
 
 /// A handle on the document.
-pub(super) type SharedDoc = Rc<RefCell<Doc>>;
+pub(crate) type SharedDoc = Rc<RefCell<Doc>>;
 
 impl Doc {
-    pub(super) fn shared() -> SharedDoc {
+    pub(crate) fn shared() -> SharedDoc {
         Rc::new(RefCell::new(Doc::default()))
     }
 
     /// Opens `<g>` with these attributes (`class`, `id`, ...); [`Doc::end`] closes it.
-    pub(super) fn begin(doc: &SharedDoc, attrs: &[(&str, &str)]) {
+    pub(crate) fn begin(doc: &SharedDoc, attrs: &[(&str, &str)]) {
         let mut d = doc.borrow_mut();
         d.body.push_str("<g");
         for (k, v) in attrs {
@@ -73,7 +73,7 @@ impl Doc {
     }
 
     /// Closes the innermost group.
-    pub(super) fn end(doc: &SharedDoc) {
+    pub(crate) fn end(doc: &SharedDoc) {
         let mut d = doc.borrow_mut();
         if d.open > 0 {
             d.body.push_str("</g>\n");
@@ -82,7 +82,7 @@ impl Doc {
     }
 
     /// Runs `f` inside `<g class="class">`.
-    pub(super) fn group<T>(doc: &SharedDoc, class: &str, f: impl FnOnce() -> T) -> T {
+    pub(crate) fn group<T>(doc: &SharedDoc, class: &str, f: impl FnOnce() -> T) -> T {
         Doc::begin(doc, &[("class", class)]);
         let out = f();
         Doc::end(doc);
@@ -90,7 +90,7 @@ impl Doc {
     }
 
     /// The complete document, `size` in device units.
-    pub(super) fn finish(doc: &SharedDoc, size: (u32, u32)) -> String {
+    pub(crate) fn finish(doc: &SharedDoc, size: (u32, u32)) -> String {
         let mut d = doc.borrow_mut();
         while d.open > 0 {
             d.body.push_str("</g>\n");
@@ -139,13 +139,13 @@ fn points(path: impl IntoIterator<Item = BackendCoord>) -> String {
 
 /// The backend: a canvas of `size` device units writing into a [`Doc`].
 #[derive(Debug)]
-pub(super) struct FineSvg {
+pub(crate) struct FineSvg {
     doc: SharedDoc,
     size: (u32, u32),
 }
 
 impl FineSvg {
-    pub(super) fn new(doc: SharedDoc, size: (u32, u32)) -> Self {
+    pub(crate) fn new(doc: SharedDoc, size: (u32, u32)) -> Self {
         Self { doc, size }
     }
 

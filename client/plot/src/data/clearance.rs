@@ -2,9 +2,9 @@
 
 use dmp::Trajectory;
 
-use super::Series;
-use super::run::Curve;
-use super::solid::Truth;
+use super::curve::Curve;
+use super::input::Series;
+use super::truth::Truth;
 
 /// Most rows measured for a clearance computed here; longer trajectories are measured every k-th row (and the last).
 const MAX_MEASURED: usize = 20_000;
@@ -13,7 +13,7 @@ const MARKS: usize = 5;
 
 /// Distance from the robot's point (dimensions `dims` of each row of `tr`) to the nearest true shape present, along
 /// `tr`; infinite where no shape is present.
-pub(super) fn measured(tr: &Trajectory, dims: &[usize], truths: &[Truth<'_>]) -> Series {
+pub(crate) fn measured(tr: &Trajectory, dims: &[usize], truths: &[Truth<'_>]) -> Series {
     let n = tr.len();
     let stride = n.div_ceil(MAX_MEASURED).max(1);
     let mut rows: Vec<usize> = (0..n).step_by(stride).collect();
@@ -44,7 +44,7 @@ pub(super) fn measured(tr: &Trajectory, dims: &[usize], truths: &[Truth<'_>]) ->
 
 /// The stretches of `tr` where the clearance `s` is at most zero: a curve each, from the row at the start of the
 /// contact to the row at its end.
-pub(super) fn contacts(tr: &Trajectory, s: &Series) -> Vec<Curve> {
+pub(crate) fn contacts(tr: &Trajectory, s: &Series) -> Vec<Curve> {
     let mut out = Vec::new();
     if tr.is_empty() {
         return out;
@@ -67,7 +67,7 @@ pub(super) fn contacts(tr: &Trajectory, s: &Series) -> Vec<Curve> {
 }
 
 /// [`MARKS`] times evenly spaced over `[t0, t1]`, and `extra` if it is finite and not near one of them.
-pub(super) fn marked_times(t0: f64, t1: f64, extra: f64) -> Vec<f64> {
+pub(crate) fn marked_times(t0: f64, t1: f64, extra: f64) -> Vec<f64> {
     let span = t1 - t0;
     if !(span.is_finite() && span > 0.0) {
         return vec![t0];

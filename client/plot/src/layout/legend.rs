@@ -5,11 +5,11 @@ use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::HPos;
 
-use super::PlotError;
-use super::backend::{Doc, SharedDoc, px};
-use super::draw::{Area, drawing_err, put_text};
-use super::run::Run;
-use super::style::{MARKER, Stroke, demo_stroke};
+use crate::data::run::Run;
+use crate::draw::backend::{Doc, SharedDoc, px};
+use crate::draw::primitives::{Area, drawing_err, put_text};
+use crate::draw::style::{MARKER, Stroke, adapted_stroke, demo_stroke, free_stroke};
+use crate::error::PlotError;
 
 const LEGEND_ROW: i32 = px(24) as i32;
 /// Longest legend text, in characters (longer ones are shortened with an ellipsis).
@@ -17,7 +17,7 @@ const MAX_CHARS: usize = 36;
 
 /// The symbol of a legend entry.
 #[derive(Debug, Clone, Copy)]
-pub(super) enum Mark {
+pub(crate) enum Mark {
     Line(Stroke),
     Patch(RGBAColor, Stroke),
     Dot,
@@ -26,14 +26,14 @@ pub(super) enum Mark {
 
 /// A legend entry: a symbol, its text, and the class of its group.
 #[derive(Debug, Clone)]
-pub(super) struct Entry {
+pub(crate) struct Entry {
     mark: Mark,
     text: String,
     class: &'static str,
 }
 
 impl Entry {
-    pub(super) fn new(mark: Mark, text: impl Into<String>) -> Self {
+    pub(crate) fn new(mark: Mark, text: impl Into<String>) -> Self {
         let text: String = text.into();
         let text = if text.chars().count() > MAX_CHARS {
             format!("{}…", text.chars().take(MAX_CHARS - 1).collect::<String>())
@@ -43,14 +43,14 @@ impl Entry {
         Self { mark, text, class: "legend-entry" }
     }
 
-    pub(super) fn class(mut self, class: &'static str) -> Self {
+    pub(crate) fn class(mut self, class: &'static str) -> Self {
         self.class = class;
         self
     }
 }
 
 /// What the method's run is called: a run with method `none` has no avoidance.
-pub(super) fn adapted_text(method: &str) -> String {
+fn adapted_text(method: &str) -> String {
     match method {
         "none" => "run without avoidance (none)".into(),
         "" => "run with avoidance".into(),
@@ -60,26 +60,26 @@ pub(super) fn adapted_text(method: &str) -> String {
 
 /// Entries of the curves: the demonstration (with the text `demo`, if drawn), then the obstacle-free and the
 /// adapted paths, a pair per robot when there are several.
-pub(super) fn path_entries(run: &Run<'_>, demo: Option<&str>, method: &str) -> Vec<Entry> {
+pub(crate) fn path_entries(run: &Run<'_>, demo: Option<&str>, method: &str) -> Vec<Entry> {
     let mut entries = Vec::new();
     if let Some(text) = demo {
         entries.push(Entry::new(Mark::Line(demo_stroke()), text).class("legend-demonstration"));
     }
     if run.single() {
         let g = &run.groups[0];
-        entries.push(Entry::new(Mark::Line(run.free_stroke(g)), "obstacle-free DMP").class("legend-free"));
+        entries.push(Entry::new(Mark::Line(free_stroke(run, g)), "obstacle-free DMP").class("legend-free"));
         entries.push(
-            Entry::new(Mark::Line(run.adapted_stroke(g)), adapted_text(method)).class("legend-adapted"),
+            Entry::new(Mark::Line(adapted_stroke(run, g)), adapted_text(method)).class("legend-adapted"),
         );
     } else {
         let short = if method == "none" { "no avoidance" } else { "with avoidance" };
         for g in &run.groups {
             entries.push(
-                Entry::new(Mark::Line(run.adapted_stroke(g)), format!("{}, {short}", g.label))
+                Entry::new(Mark::Line(adapted_stroke(run, g)), format!("{}, {short}", g.label))
                     .class("legend-adapted"),
             );
             entries.push(
-                Entry::new(Mark::Line(run.free_stroke(g)), format!("{}, obstacle-free", g.label))
+                Entry::new(Mark::Line(free_stroke(run, g)), format!("{}, obstacle-free", g.label))
                     .class("legend-free"),
             );
         }
@@ -93,12 +93,13 @@ pub(super) fn path_entries(run: &Run<'_>, demo: Option<&str>, method: &str) -> V
     entries
 }
 
-pub(super) fn legend_height(entries: &[Entry], notes: &[String]) -> u32 {
+/// Height of the legend of `entries` and `notes`.
+pub(crate) fn legend_height(entries: &[Entry], notes: &[String]) -> u32 {
     (px(24) as i32 + LEGEND_ROW * (entries.len() + notes.len()) as i32 + px(12) as i32) as u32
 }
 
 /// The legend in a frame: a row per entry, then a row per note.
-pub(super) fn draw_legend(
+pub(crate) fn draw_legend(
     doc: &SharedDoc,
     area: &Area,
     entries: &[Entry],

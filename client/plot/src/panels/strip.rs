@@ -5,14 +5,16 @@
 use plotters::prelude::*;
 use plotters::style::text_anchor::HPos;
 
-use super::backend::{Doc, SharedDoc, px};
-use super::bounds::{Bounds, padded};
-use super::decimate::decimated;
-use super::draw::{Area, Chart, draw_curve, draw_mesh, drawing_err, put_text};
-use super::layout::{PANEL_MARGIN, X_LABEL_AREA, chart_on};
-use super::run::Run;
-use super::style::{CONTACT, EVENT, Stroke, fmt_num};
-use super::{P2, PlotError, PlotInput};
+use crate::data::bounds::{Bounds, padded};
+use crate::data::decimate::decimated;
+use crate::data::geometry::P2;
+use crate::data::input::PlotInput;
+use crate::data::run::Run;
+use crate::draw::backend::{Doc, SharedDoc, px};
+use crate::draw::primitives::{Area, Chart, draw_curve, draw_mesh, drawing_err, put_text};
+use crate::draw::style::{CONTACT, EVENT, FONT, Stroke, adapted_stroke, fmt_num, free_stroke};
+use crate::error::PlotError;
+use crate::layout::chart::{PANEL_MARGIN, X_LABEL_AREA, chart_on};
 
 /// Height of one panel's plotting area, pixels.
 const PANEL_H: u32 = 96;
@@ -37,7 +39,7 @@ fn panel_h(last: bool) -> u32 {
 }
 
 /// Height of the strip of `input`.
-pub(super) fn height(input: &PlotInput<'_>) -> u32 {
+pub(crate) fn height(input: &PlotInput<'_>) -> u32 {
     let n = quantities(input);
     (0..n).map(|q| panel_h(q + 1 == n)).sum()
 }
@@ -79,7 +81,7 @@ fn curves(input: &PlotInput<'_>, run: &Run<'_>, q: usize) -> Vec<(Vec<P2>, Vec<P
 }
 
 /// Draws the strip on `area`.
-pub(super) fn draw(
+pub(crate) fn draw(
     doc: &SharedDoc,
     area: &Area,
     input: &PlotInput<'_>,
@@ -117,8 +119,8 @@ pub(super) fn draw(
         }
         for (gi, g) in run.groups.iter().enumerate() {
             let (adapted, free) = &data[gi];
-            Doc::group(doc, "path-free", || draw_curve(&mut chart, free, run.free_stroke(g)))?;
-            Doc::group(doc, "path-adapted", || draw_curve(&mut chart, adapted, run.adapted_stroke(g)))?;
+            Doc::group(doc, "path-free", || draw_curve(&mut chart, free, free_stroke(run, g)))?;
+            Doc::group(doc, "path-adapted", || draw_curve(&mut chart, adapted, adapted_stroke(run, g)))?;
         }
         draw_events(doc, &mut chart, input, y, q == 0)?;
         Doc::end(doc);
@@ -142,7 +144,7 @@ fn draw_events(
             Stroke { color: EVENT.to_rgba(), width: 1.2, dash: Some((6, 3)) },
         )?;
         if labelled {
-            let style = (super::style::FONT, px(12)).into_font().color(&EVENT);
+            let style = (FONT, px(12)).into_font().color(&EVENT);
             let label = format!("{} ({} s)", e.label, fmt_num(e.t));
             chart
                 .draw_series(std::iter::once(
