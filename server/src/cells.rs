@@ -4,18 +4,26 @@
 //! Cells are created on first use, up to `limits.max_cells`, and reclaimed when nothing uses them any more (no
 //! obstacle, no robot, no stream, no watch): a delete never creates one.
 
+pub mod cell;
+pub mod directory;
+pub mod rendezvous;
+pub(crate) mod robot_bus;
+pub mod staleness;
+pub(crate) mod state_admission;
+pub(crate) mod taken;
+
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::sync::{Arc, Mutex};
 
 use dmp_proto::keys::check_name;
 
-use crate::cell::Cell;
-use crate::config::Limits;
+use crate::cells::cell::Cell;
+use crate::cells::directory::Directory;
+use crate::cells::taken::{GivenBack, TakenCells};
+use crate::config::scene::SceneConfig;
+use crate::config::{Config, RequestLimits};
 use crate::error::ServerError;
 use crate::memory::MemoryBudget;
-use crate::plant::directory::Directory;
-use crate::plant::taken::{GivenBack, TakenCells};
-use crate::staleness::SceneConfig;
 
 /// Every cell's scene, by name. Cheap to clone.
 #[derive(Debug, Clone)]
@@ -45,7 +53,12 @@ impl Cells {
     /// The cells of a server whose default cell is `default` (created now); each scene holds at most
     /// `max_obstacles`, and there are at most `max_cells`.
     pub fn new(default: &str, max_cells: usize, max_obstacles: usize) -> Result<Self, ServerError> {
-        let limits = Limits { max_cells, max_obstacles, max_scene_bytes: usize::MAX, ..Limits::default() };
+        let limits = RequestLimits {
+            max_cells,
+            max_obstacles,
+            max_scene_bytes: usize::MAX,
+            ..RequestLimits::default()
+        };
         Self::with_limits(default, &limits, MemoryBudget::new(usize::MAX), SceneConfig::default())
     }
 
@@ -54,7 +67,7 @@ impl Cells {
     /// `scene` (`[scene]` of the configuration).
     pub fn with_limits(
         default: &str,
-        limits: &Limits,
+        limits: &RequestLimits,
         memory: MemoryBudget,
         scene: SceneConfig,
     ) -> Result<Self, ServerError> {
@@ -75,6 +88,21 @@ impl Cells {
         };
         cells.get("")?;
         Ok(cells)
+    }
+
+    /// The cells `config` describes (its default cell, the cells it serves, their neighbours, `[scene]`), each
+    /// scene reserving from `memory`, naming the plant's server of a cell they do not serve from `directory`.
+    pub fn from_config(
+        config: &Config,
+        memory: MemoryBudget,
+        directory: Directory,
+    ) -> Result<Self, ServerError> {
+        config.scene.check()?;
+        config.check_plant()?;
+        Ok(Self::with_limits(config.default_cell(), &config.limits, memory, config.scene.clone())?
+            .serving(&config.cells)
+            .with_neighbours(&config.plant.neighbours)
+            .with_directory(directory))
     }
 
     /// The same cells, serving only `cells` (empty: any cell); the default cell must be one of them.
@@ -370,7 +398,8 @@ mod tests {
 
     #[test]
     fn scenes_are_bounded_in_bytes_per_cell_and_across_cells() {
-        let limits = Limits { max_scene_bytes: 3_000, max_server_bytes: 5_000, ..Limits::default() };
+        let limits =
+            RequestLimits { max_scene_bytes: 3_000, max_server_bytes: 5_000, ..RequestLimits::default() };
         let memory = MemoryBudget::new(limits.max_server_bytes);
         let cells = Cells::with_limits("home", &limits, memory.clone(), Default::default()).unwrap();
         let o = |id: &str| dmp_proto::v1::Obstacle {
@@ -382,7 +411,7 @@ mod tests {
             center: vec![0.0; 16],
             ..Default::default()
         };
-        let bytes = crate::cell::obstacle_bytes(&o("a1"));
+        let bytes = crate::cells::cell::obstacle_bytes(&o("a1"));
         assert!(bytes > 1_000 && bytes < 1_500, "{bytes}");
         let a = cells.get("a").unwrap();
         a.put(o("a1"), 0.0).unwrap();

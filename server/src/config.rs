@@ -1,11 +1,15 @@
 //! The server's configuration: a TOML file, then flags on top (see `bin/dmp-server.rs`).
 
+pub mod command_line;
+pub mod ros2;
+pub mod scene;
+
 use std::net::SocketAddr;
 use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-use crate::staleness::SceneConfig;
+use crate::config::scene::SceneConfig;
 
 /// Everything the server needs to start.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -32,15 +36,15 @@ pub struct Config {
     /// Defaults applied when a request names no avoidance method.
     pub defaults: Defaults,
     /// Bounds on requests and resources.
-    pub limits: Limits,
+    pub limits: RequestLimits,
     /// The compute threads and what they may be asked to do.
     pub compute: ComputeConfig,
-    /// Obstacles that nobody updates any more ([`crate::staleness`]).
+    /// Obstacles that nobody updates any more ([`crate::cells::staleness`]).
     pub scene: SceneConfig,
-    /// TLS, the access file, and what may listen beyond loopback ([`crate::exposure`]).
+    /// TLS, the access file, and what may listen beyond loopback ([`crate::access::exposure`]).
     pub security: SecurityConfig,
     /// ROS 2 over rmw_zenoh ([`crate::ros2`]); off unless its domain is set.
-    pub ros2: crate::ros2::config::Ros2Config,
+    pub ros2: crate::config::ros2::Ros2Config,
 }
 
 /// Several servers on one Zenoh network: discovery, replicated primitives, neighbouring cells.
@@ -115,7 +119,7 @@ impl Default for Config {
             otlp_endpoint: None,
             zenoh: ZenohConfig::default(),
             defaults: Defaults::default(),
-            limits: Limits::default(),
+            limits: RequestLimits::default(),
             compute: ComputeConfig::default(),
             scene: SceneConfig::default(),
             security: SecurityConfig::default(),
@@ -223,7 +227,7 @@ impl Default for Defaults {
 /// Bounds: every request is checked against them.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-pub struct Limits {
+pub struct RequestLimits {
     /// Largest gRPC message, bytes.
     pub max_message_bytes: usize,
     /// Most samples in a demonstration.
@@ -284,7 +288,7 @@ pub struct Limits {
     pub max_state_speed_m_s: f64,
 }
 
-impl Default for Limits {
+impl Default for RequestLimits {
     fn default() -> Self {
         Self {
             max_message_bytes: 16 * 1024 * 1024,

@@ -44,13 +44,13 @@ impl MemoryBudget {
     }
 
     /// An empty reservation, to grow later.
-    pub fn empty(&self) -> Reservation {
-        Reservation { budget: self.clone(), bytes: 0 }
+    pub fn empty(&self) -> MemoryReservation {
+        MemoryReservation { budget: self.clone(), bytes: 0 }
     }
 
     /// Reserves `bytes` for `what` (named in the refusal), or ResourceExhausted when the server's budget cannot
     /// hold them.
-    pub fn reserve(&self, what: &str, bytes: usize) -> Result<Reservation, ServerError> {
+    pub fn reserve(&self, what: &str, bytes: usize) -> Result<MemoryReservation, ServerError> {
         let mut r = self.empty();
         r.grow(what, bytes)?;
         Ok(r)
@@ -81,12 +81,12 @@ impl MemoryBudget {
 
 /// Bytes reserved from a [`MemoryBudget`]; released when dropped.
 #[derive(Debug)]
-pub struct Reservation {
+pub struct MemoryReservation {
     budget: MemoryBudget,
     bytes: usize,
 }
 
-impl Reservation {
+impl MemoryReservation {
     /// Bytes held.
     pub fn bytes(&self) -> usize {
         self.bytes
@@ -107,7 +107,7 @@ impl Reservation {
     }
 }
 
-impl Drop for Reservation {
+impl Drop for MemoryReservation {
     fn drop(&mut self) {
         self.budget.give_back(self.bytes);
     }

@@ -10,7 +10,7 @@
 //! | out: `/dmp/<cell>/markers` | `visualization_msgs/msg/MarkerArray` | each cell's obstacles (true shape and isopotential) and robots' paths for RViz ([`markers`], [`marker_shapes`]) |
 //! | out: `/dmp/<robot>/trajectory` | `trajectory_msgs/msg/MultiDOFJointTrajectory` | each segment sent to a robot ([`trajectory`], [`trajectories`]) |
 //!
-//! The streams hand their segments over through [`outbox`] without ever waiting (a full channel drops and counts);
+//! The streams hand their segments over through [`crate::runs::outbox`] without ever waiting (a full channel drops and counts);
 //! the server is one node of ROS 2's graph ([`graph`]).
 //!
 //! A message whose `header.frame_id` is neither the cell's frame (`ros2.frame`, `world`) nor a frame of
@@ -19,12 +19,11 @@
 //! metrics) and in [`Ros2Counters`].
 
 pub mod collision;
-pub mod config;
 pub mod graph;
 pub mod marker_shapes;
 pub mod markers;
 pub mod obstacle_array;
-pub mod outbox;
+
 pub mod paths;
 pub mod shapes;
 pub mod trajectories;
@@ -43,8 +42,10 @@ use zenoh::{Session, Wait};
 
 use crate::cells::Cells;
 use crate::clock::Clock;
+use crate::config::ros2::{Ros2Config, Ros2Topic, TopicKind};
 use crate::error::ServerError;
-use config::{Ros2Config, Ros2Topic, TopicKind};
+use crate::runs::outbox::Ros2Out;
+use crate::zenoh_bridge::ZenohSide;
 
 /// What the ROS 2 bridge took and refused.
 #[derive(Debug, Default)]
@@ -58,7 +59,7 @@ pub struct Ros2Counters {
     /// Trajectories published (one per segment sent to a robot).
     pub trajectories_published: AtomicU64,
     /// Segments not published as trajectories: the publisher was behind and the streams do not wait for it.
-    pub trajectories_dropped: AtomicU64,
+    pub trajectories_dropped: Arc<AtomicU64>,
 }
 
 impl Ros2Counters {
@@ -153,13 +154,30 @@ impl Inbox {
 pub struct Ros2Bridge {
     subscribers: Vec<Subscriber<()>>,
     counters: Arc<Ros2Counters>,
-    outbox: outbox::Ros2Out,
+    outbox: Ros2Out,
     markers: tokio::task::JoinHandle<()>,
     trajectories: tokio::task::JoinHandle<()>,
     stop: tokio_util::sync::CancellationToken,
 }
 
 impl Ros2Bridge {
+    /// The bridge `config` asks for (none without `ros2.domain`), on the session of `zenoh`, into `cells`; its
+    /// refusals also count in the Zenoh bridge's malformed payloads.
+    pub async fn start_configured(
+        zenoh: &ZenohSide,
+        config: &Ros2Config,
+        cells: &Cells,
+        clock: Clock,
+    ) -> Result<Option<Self>, ServerError> {
+        if config.domain.is_none() {
+            return Ok(None);
+        }
+        let (Some(session), Some(bridge)) = (&zenoh.session, &zenoh.bridge) else {
+            return Err(ServerError::FailedPrecondition("ros2.domain needs Zenoh (not --no-zenoh)".into()));
+        };
+        Ok(Some(Self::start(session, config, cells.clone(), clock, bridge.malformed_counter()).await?))
+    }
+
     /// Subscribes to every topic of `config` in its domain on `session`. Refusals are also added to `malformed`
     /// (the Zenoh bridge's counter).
     pub async fn start(
@@ -202,7 +220,7 @@ impl Ros2Bridge {
         let stop = tokio_util::sync::CancellationToken::new();
         let graph = Arc::new(graph::Graph::declare(session.clone(), domain).await);
         let paths = paths::Paths::default();
-        let (outbox, rx) = outbox::Ros2Out::channel(counters.clone());
+        let (outbox, rx) = Ros2Out::channel(counters.trajectories_dropped.clone());
         let trajectories = trajectories::Trajectories {
             graph: graph.clone(),
             frame: config.frame.clone(),
@@ -216,7 +234,7 @@ impl Ros2Bridge {
     }
 
     /// Where the streams hand their segments over.
-    pub fn outbox(&self) -> outbox::Ros2Out {
+    pub fn outbox(&self) -> Ros2Out {
         self.outbox.clone()
     }
 

@@ -30,6 +30,7 @@ use dmp_proto::v1;
 use prost::Message;
 use redb::{Database, Durability, ReadableDatabase, ReadableTable, TableDefinition, TableHandle};
 
+use crate::config::Config;
 use crate::error::ServerError;
 
 /// Version of the store's layout. A file of another version is refused on open (never silently reset).
@@ -82,6 +83,15 @@ fn storage(what: impl fmt::Display, e: impl Into<redb::Error>) -> ServerError {
 }
 
 impl Store {
+    /// Opens the store of `config` (`data_dir`, keeping `limits.max_versions` per primitive) on a blocking thread.
+    pub async fn open_configured(config: &Config) -> Result<Store, ServerError> {
+        let dir = config.data_dir.clone();
+        let max_versions = config.limits.max_versions;
+        tokio::task::spawn_blocking(move || Store::open(&dir).map(|s| s.keep_versions(max_versions)))
+            .await
+            .map_err(|e| ServerError::Internal(e.to_string()))?
+    }
+
     /// Opens the store in `dir` (created if missing): a new file gets the current schema version, an existing one
     /// must have it.
     pub fn open(dir: impl AsRef<Path>) -> Result<Store, ServerError> {

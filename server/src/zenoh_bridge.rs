@@ -12,7 +12,7 @@
 //!
 //! A robot state whose stamp is too far from the server's clock, or whose position or velocity is out of bounds
 //! ([`StateAdmission`]), is dropped and counted (`ServerStats.robot_states_dropped`). Whoever publishes robot states
-//! declares the robot's liveliness token (`dmp_proto::keys::robot_alive_key`; the server's [`crate::robots`] does):
+//! declares the robot's liveliness token (`dmp_proto::keys::robot_alive_key`; the server's [`crate::cells::robot_bus`] does):
 //! when it goes (the robot retired, or its publisher's session closed or lost), the robot vanishes from its cell. The
 //! bridge subscribes to the tokens with history, so it also learns those declared before it started. A state from a
 //! publisher without a token is still taken: a stream uses a cell-mate's state only while it is fresh (0.5 s), so
@@ -25,6 +25,8 @@
 //! be decoded or validated is logged at warn with its key and the reason, counted
 //! ([`ZenohBridge::malformed_payloads`]) and changes nothing else. Samples are handled in Zenoh's callbacks: decoding
 //! and validating one obstacle or robot state takes microseconds and never awaits.
+
+pub mod threads;
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -40,11 +42,13 @@ use zenoh::pubsub::Subscriber;
 use zenoh::sample::{Locality, Sample, SampleKind};
 use zenoh::{Session, Wait};
 
+use crate::access::AccessControl;
 use crate::cells::Cells;
+use crate::cells::robot_bus::RobotBus;
+use crate::cells::state_admission::StateAdmission;
 use crate::clock::Clock;
-use crate::config::ZenohConfig;
+use crate::config::{Config, ZenohConfig};
 use crate::error::ServerError;
-use crate::state_admission::StateAdmission;
 
 /// Period of the reaper that removes obstacles whose time to live has passed.
 pub const REAP_PERIOD: Duration = Duration::from_millis(100);
@@ -257,7 +261,7 @@ impl SceneUpdater {
     /// The scenes a robot of `cell` counts in: its cell's when this server serves it, and those of the cells that
     /// list it as a neighbour (`plant.neighbours`). `create`: created if need be (a put), else only those that
     /// exist (a delete never creates a cell).
-    fn robot_cells(&self, cell: &str, create: bool) -> Result<Vec<crate::cell::Cell>, ServerError> {
+    fn robot_cells(&self, cell: &str, create: bool) -> Result<Vec<crate::cells::cell::Cell>, ServerError> {
         check_name("cell", cell)?;
         let names = std::iter::once(cell)
             .filter(|c| self.cells.serves(c))
@@ -279,6 +283,66 @@ impl SceneUpdater {
     }
 }
 
+/// The server's side of Zenoh: the session (none with `zenoh.disabled`), the bridge that feeds the scenes, the
+/// robots' state bus, and the locators the session listens on.
+#[derive(Debug)]
+pub struct ZenohSide {
+    /// The session; none without Zenoh.
+    pub session: Option<Session>,
+    /// The bridge; none without Zenoh.
+    pub bridge: Option<ZenohBridge>,
+    /// Publishes the executing robots' states (locally only, without Zenoh).
+    pub robots: RobotBus,
+    /// What the session listens on (empty without Zenoh).
+    pub locators: Vec<String>,
+}
+
+impl ZenohSide {
+    /// Opens the session `config.zenoh` describes, secured by `config.security` and `access`, and starts the bridge
+    /// into `cells` (robot states taken as `admission` says) and the robot bus. Without Zenoh, only the reaper that
+    /// expires obstacles put over gRPC with a time to live.
+    pub async fn start(
+        config: &Config,
+        access: &AccessControl,
+        cells: &Cells,
+        clock: Clock,
+        admission: &StateAdmission,
+        shutdown: &CancellationToken,
+    ) -> Result<Self, ServerError> {
+        if config.zenoh.disabled {
+            spawn_reaper(cells.clone(), clock, shutdown.clone());
+            return Ok(Self {
+                session: None,
+                bridge: None,
+                robots: RobotBus::new(None),
+                locators: Vec::new(),
+            });
+        }
+        let access = access.current();
+        let security = Security { config: &config.security, access: access.as_deref() };
+        let session = open_secured_session(&config.zenoh, &security).await?;
+        let bridge =
+            ZenohBridge::start(session.clone(), cells.clone(), clock, admission.clone(), shutdown.clone())
+                .await?;
+        let locators = locators(&session).await;
+        let robots = RobotBus::new(Some((session.clone(), config.defaults.robot_state_period_s)))
+            .mirroring(cells.clone());
+        Ok(Self { session: Some(session), bridge: Some(bridge), robots, locators })
+    }
+
+    /// Closes the bridge, then the session.
+    pub async fn close(self) {
+        if let Some(b) = self.bridge {
+            b.close().await;
+        }
+        if let Some(s) = self.session
+            && let Err(e) = s.close().await
+        {
+            warn!(error = %e, "closing the Zenoh session");
+        }
+    }
+}
+
 /// The subscribers that feed the scene from Zenoh, the catch-up querier, and the time-to-live reaper.
 #[derive(Debug)]
 pub struct ZenohBridge {
@@ -297,7 +361,7 @@ pub struct ZenohBridge {
 
 impl ZenohBridge {
     /// Subscribes to the obstacles and robot states of every cell on `session` and starts the reaper, which stops
-    /// on `shutdown` or [`ZenohBridge::close`]. The robot states this session publishes itself ([`crate::robots`])
+    /// on `shutdown` or [`ZenohBridge::close`]. The robot states this session publishes itself ([`crate::cells::robot_bus`])
     /// are not received back: the publisher records them locally. Robot states from elsewhere are taken as
     /// `admission` says.
     pub async fn start(

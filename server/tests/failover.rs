@@ -20,8 +20,8 @@ use dmp_client::setpoints::Setpoints;
 use dmp_proto::keys::{cell_server_key, server_key};
 use dmp_proto::zenoh_session::{SessionOptions, locators, session_config};
 use dmp_proto::{codec, v1};
+use dmp_server::cells::rendezvous::rendezvous;
 use dmp_server::config::Config;
-use dmp_server::plant::failover::rendezvous;
 
 /// The longest any single await may take.
 const T: Duration = Duration::from_secs(60);

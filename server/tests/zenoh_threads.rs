@@ -7,7 +7,7 @@ use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use dmp_server::zenoh_threads::{LAYOUT, ZENOH_RUNTIME};
+use dmp_server::zenoh_bridge::threads::{LAYOUT, ZENOH_RUNTIME};
 
 /// Longest wait for the server to open its Zenoh session.
 const STARTUP: Duration = Duration::from_secs(60);

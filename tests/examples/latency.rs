@@ -96,7 +96,7 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut version = stream.next().await.ok_or("stream ended")??.scene_version;
     let mut update_ms = Vec::with_capacity(repeats);
     let mut scene_ms = Vec::with_capacity(repeats);
-    let scene = handle.state().cells.get("")?;
+    let scene = handle.cells().get("")?;
     for k in 0..repeats {
         let obstacle = serde_json::json!({"center": [50.0, 1.0 + k as f64 * 1e-3], "semi_axes": [0.2, 0.2]});
         let started = Instant::now();

@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use dmp_client::DmpClient;
 use dmp_server::config::Config;
-use dmp_server::run::ServerHandle;
+use dmp_server::server::ServerHandle;
 
 pub mod scrape;
 
@@ -66,7 +66,7 @@ impl TestServer {
         let dir = tempfile::tempdir().expect("a temporary directory");
         let mut c = config(dir.path());
         adjust(&mut c);
-        let handle = within("server start", dmp_server::run::start(c)).await.expect("server starts");
+        let handle = within("server start", dmp_server::server::start(c)).await.expect("server starts");
         Self { handle, _dir: dir }
     }
 

@@ -126,7 +126,7 @@ async fn attackers_do_not_delay_a_real_time_robot_or_health() {
         attacks.push(tokio::spawn(reader_attack(c, robot)));
     }
     // Let them start.
-    let pool = &server.handle().state().compute.batch;
+    let pool = &server.handle().compute().batch;
     within("attacks running", async {
         while pool.counters().running.load(std::sync::atomic::Ordering::Acquire) == 0 {
             tokio::time::sleep(Duration::from_millis(5)).await;

@@ -386,7 +386,7 @@ async fn dmpctl_sim_acts_in_the_servers_cell_without_flags() {
     assert!(said.contains("collision: false"), "{said}");
     // One youBot, several runs: the summary counts them apart.
     assert!(said.starts_with("youbot-perception: 1 robot, ") && !said.contains(" 1 run,"), "{said}");
-    let bar = server.handle().state().cells.find("bar").unwrap().expect("cell bar");
+    let bar = server.handle().cells().find("bar").unwrap().expect("cell bar");
     assert!(bar.snapshot().version > 0, "the perception node's boxes went elsewhere");
     server.stop().await;
 }

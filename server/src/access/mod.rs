@@ -8,9 +8,9 @@
 //! listens on loopback only, unless told `--insecure`).
 
 pub mod credential;
+pub mod exposure;
 pub mod file;
 pub mod init;
-pub mod layer;
 pub mod role;
 pub mod zenoh_acl;
 
@@ -23,6 +23,7 @@ use tracing::{error, info};
 pub use file::{Access, AccessError, AccessFile, Identity, IdentityEntry};
 pub use role::{Action, Role, Scope};
 
+use crate::config::SecurityConfig;
 use crate::error::ServerError;
 use credential::TokenDigest;
 
@@ -113,6 +114,14 @@ impl AccessControl {
         let access = Access::load(path)?;
         info!(file = %path.display(), identities = access.identities().len(), "access file loaded");
         Ok(Self { path: Some(path.to_owned()), current: watch::Sender::new(Some(Arc::new(access))) })
+    }
+
+    /// The access control `security` configures: its access file, checked, or an open server without one.
+    pub fn from_config(security: &SecurityConfig) -> Result<Self, ServerError> {
+        match &security.access {
+            Some(path) => Self::load(path).map_err(|e| ServerError::FailedPrecondition(e.to_string())),
+            None => Ok(Self::open()),
+        }
     }
 
     /// Whether an access file is in force.

@@ -7,8 +7,8 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use dmp_server::access::init::{InitOptions, init};
-use dmp_server::cli::{AccessCommand, Args, Command, load_config};
-use dmp_server::zenoh_threads::{self, ZENOH_RUNTIME};
+use dmp_server::config::command_line::{AccessCommand, Args, Command, load_config};
+use dmp_server::zenoh_bridge::threads::{self, ZENOH_RUNTIME};
 use tokio::signal::unix::{SignalKind, signal};
 use tracing::{error, info, warn};
 use tracing_subscriber::EnvFilter;
@@ -66,10 +66,10 @@ fn main() -> ExitCode {
             }
         }
     }
-    // Zenoh's threads (`dmp_server::zenoh_threads`): the server's layout unless the operator chose one. Zenoh reads
+    // Zenoh's threads (`dmp_server::zenoh_bridge::threads`): the server's layout unless the operator chose one. Zenoh reads
     // the variable at its first use, later.
     if let Some(layout) =
-        zenoh_threads::layout_to_set(std::env::var_os(ZENOH_RUNTIME).as_deref(), !config.zenoh.disabled)
+        threads::layout_to_set(std::env::var_os(ZENOH_RUNTIME).as_deref(), !config.zenoh.disabled)
     {
         // SAFETY: `set_var` is unsound only while another thread may read or write the environment. This process
         // has one thread here: Rust starts none before `main`, and everything above (clap's parsing, reading and
@@ -133,7 +133,7 @@ fn main() -> ExitCode {
         let hangups =
             signal(SignalKind::hangup()).map_err(|e| format!("cannot install the SIGHUP handler: {e}"))?;
         let hangups = tokio_stream::wrappers::SignalStream::new(hangups);
-        dmp_server::run::run(config, shutdown, hangups).await.map_err(|e| e.to_string())
+        dmp_server::server::run(config, shutdown, hangups).await.map_err(|e| e.to_string())
     });
     // What is pending goes to the collector before the process exits.
     if let Some(traces) = traces

@@ -10,20 +10,20 @@ use prometheus_client::metrics::MetricType;
 use prometheus_client::metrics::counter::ConstCounter;
 use prometheus_client::metrics::gauge::ConstGauge;
 
-use crate::services::server::ServerServiceImpl;
-use crate::state::AppState;
+use crate::grpc::server::ServerServiceImpl;
+use crate::grpc::shared::ServiceState;
 
 /// Renders the server's metrics at each scrape.
 #[derive(Debug)]
 pub struct ServerCollector {
-    state: Arc<AppState>,
+    state: Arc<ServiceState>,
     /// The Zenoh bridge's count of refused payloads (none without Zenoh).
     malformed: Option<Arc<AtomicU64>>,
 }
 
 impl ServerCollector {
     /// The metrics of `state`, and of the Zenoh bridge's `malformed` counter.
-    pub fn new(state: Arc<AppState>, malformed: Option<Arc<AtomicU64>>) -> Self {
+    pub fn new(state: Arc<ServiceState>, malformed: Option<Arc<AtomicU64>>) -> Self {
         Self { state, malformed }
     }
 }
@@ -90,7 +90,7 @@ impl Collector for ServerCollector {
         let stats = ServerServiceImpl::new(s.clone()).stats();
         let cells = s.cells.all();
         let mut f = Family { encoder: &mut encoder };
-        let per_cell = |value: &dyn Fn(&crate::cell::Cell) -> usize| {
+        let per_cell = |value: &dyn Fn(&crate::cells::cell::Cell) -> usize| {
             cells.iter().map(|c| ([("cell", c.name().to_owned())], value(c) as f64)).collect::<Vec<_>>()
         };
         f.gauges(
@@ -122,16 +122,16 @@ impl Collector for ServerCollector {
             "dmp_segment_lateness_seconds",
             "Real-time streams: how late the first point of a segment was when the server handed the segment to its \
              gRPC stream, seconds (0 when it was handed over before it was due). Not the lateness at the robot.",
-            &s.histograms.segment_lateness,
+            &s.runs.histograms.segment_lateness,
         )?;
         f.histogram(
             "dmp_obstacle_update_to_segment_seconds",
             "Real-time streams: from an obstacle update received by the server (a Zenoh or gRPC put or delete, an \
              expiry) to the first segment of each stream of the cell computed with it, handed to its gRPC stream, \
              seconds. The publisher's put time is not known to the server.",
-            &s.histograms.obstacle_update_to_segment,
+            &s.runs.histograms.obstacle_update_to_segment,
         )?;
-        let refusals = s.compute.admission.refusals().into_iter().chain(s.streams.refusals());
+        let refusals = s.runs.compute.admission.refusals().into_iter().chain(s.runs.streams.refusals());
         let refusals = refusals.chain([("limits.max_server_bytes", s.memory.refusals())]);
         f.counters(
             "dmp_admissions_refused",

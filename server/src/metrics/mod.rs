@@ -4,7 +4,7 @@
 //!
 //! One source of truth: nothing is counted twice. Each counter lives where its event happens (the stream, the
 //! store, the admission budgets, the Zenoh bridge) and is read at scrape time ([`collector`]); only the histograms
-//! ([`Histograms`]) exist for the metrics alone. Observations are made on the streams' async tasks, never on the
+//! ([`crate::runs::histograms::Histograms`]) exist for the metrics alone. Observations are made on the streams' async tasks, never on the
 //! real-time compute threads, and a scrape reads atomics and each cell's current snapshot.
 //!
 //! | metric | type | labels | what |
@@ -35,70 +35,23 @@
 mod collector;
 pub mod endpoint;
 
-use prometheus_client::metrics::histogram::Histogram;
+use std::net::SocketAddr;
+use std::sync::Arc;
+use std::sync::atomic::AtomicU64;
 
 pub use collector::ServerCollector;
 
-/// The histograms that only the streams can measure (every other metric is read from counters kept elsewhere).
-#[derive(Debug)]
-pub struct Histograms {
-    /// `dmp_segment_lateness_seconds`.
-    pub segment_lateness: Histogram,
-    /// `dmp_obstacle_update_to_segment_seconds`.
-    pub obstacle_update_to_segment: Histogram,
-}
+use crate::error::ServerError;
+use crate::grpc::shared::ServiceState;
 
-impl Default for Histograms {
-    fn default() -> Self {
-        Self {
-            // The first bucket (0) holds the segments handed over before their first point was due.
-            segment_lateness: Histogram::new([0.0, 0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.25, 1.0]),
-            obstacle_update_to_segment: Histogram::new([
-                0.0005, 0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.25, 0.5, 1.0,
-            ]),
-        }
-    }
-}
-
-impl Histograms {
-    /// A real-time stream handed a segment to its gRPC stream at `now_unix_s`: its first point was due at
-    /// `first_point_unix_s`, and it is the first computed with an obstacle update received at `update_unix_s`.
-    pub fn handed_over(&self, now_unix_s: f64, first_point_unix_s: Option<f64>, update_unix_s: Option<f64>) {
-        if let Some(due) = first_point_unix_s {
-            self.segment_lateness.observe((now_unix_s - due).max(0.0));
-        }
-        if let Some(received) = update_unix_s {
-            self.obstacle_update_to_segment.observe((now_unix_s - received).max(0.0));
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn an_early_segment_is_on_time_and_an_update_is_measured_once() {
-        let h = Histograms::default();
-        // 50 ms ahead: on time (0, the first bucket), not -0.05.
-        h.handed_over(100.0, Some(100.05), None);
-        // 10 ms late, the first segment computed with an update received 2 ms before.
-        h.handed_over(100.0, Some(99.99), Some(99.998));
-        let mut registry = prometheus_client::registry::Registry::default();
-        registry.register("lateness", "", h.segment_lateness.clone());
-        registry.register("update", "", h.obstacle_update_to_segment.clone());
-        let mut text = String::new();
-        prometheus_client::encoding::text::encode(&mut text, &registry).unwrap();
-        for line in [
-            "lateness_count 2",
-            "lateness_bucket{le=\"0.0\"} 1",
-            "lateness_bucket{le=\"0.005\"} 1",
-            "lateness_bucket{le=\"0.02\"} 2",
-            "update_count 1",
-            "update_bucket{le=\"0.001\"} 0",
-            "update_bucket{le=\"0.005\"} 1",
-        ] {
-            assert!(text.lines().any(|l| l == line), "no `{line}` in\n{text}");
-        }
-    }
+/// Serves the metrics of `state` (and of the Zenoh bridge's `malformed` counter) on `metrics_addr` when the
+/// configuration sets it, until the server shuts down; returns the address bound.
+pub async fn serve_configured(
+    state: &Arc<ServiceState>,
+    malformed: Option<Arc<AtomicU64>>,
+) -> Result<Option<SocketAddr>, ServerError> {
+    let Some(addr) = state.config.metrics_addr else { return Ok(None) };
+    let mut registry = prometheus_client::registry::Registry::default();
+    registry.register_collector(Box::new(ServerCollector::new(state.clone(), malformed)));
+    Ok(Some(endpoint::serve(addr, registry, state.runs.shutdown.clone()).await?.0))
 }

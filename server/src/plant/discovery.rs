@@ -17,7 +17,7 @@ use zenoh::query::Queryable;
 use zenoh::sample::SampleKind;
 use zenoh::{Session, Wait};
 
-use super::directory::Directory;
+use crate::cells::directory::Directory;
 use crate::error::ServerError;
 
 /// How long the directory waits for a server's answer.

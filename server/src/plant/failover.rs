@@ -26,7 +26,6 @@ use std::time::Duration;
 
 use dmp_proto::keys::{cell_server_key, obstacles_of};
 use dmp_proto::{codec, v1};
-use sha2::{Digest, Sha256};
 use tokio::task::JoinHandle;
 use tokio_util::sync::CancellationToken;
 use tracing::{debug, info, warn};
@@ -35,28 +34,16 @@ use zenoh::query::{ConsolidationMode, QueryTarget, Queryable};
 use zenoh::sample::Sample;
 use zenoh::{Session, Wait};
 
-use super::directory::Directory;
-use super::taken::TakenCells;
 use crate::cells::Cells;
+use crate::cells::directory::Directory;
+use crate::cells::rendezvous::rendezvous;
+use crate::cells::taken::TakenCells;
 
 /// What applies an obstacle sample (the bridge's, [`crate::zenoh_bridge::ZenohBridge::obstacle_sink`]).
 pub type ObstacleSink = Arc<dyn Fn(&Sample) + Send + Sync>;
 
 /// How long the query for a taken cell's scene waits for replies.
 const SCENE_QUERY_TIMEOUT: Duration = Duration::from_secs(5);
-
-/// The rendezvous weight of `server` for `cell`.
-pub fn weight(cell: &str, server: &str) -> u64 {
-    let digest = Sha256::new().chain_update(cell).chain_update([0]).chain_update(server).finalize();
-    let mut first = [0u8; 8];
-    first.copy_from_slice(&digest[..8]);
-    u64::from_be_bytes(first)
-}
-
-/// The server of `live` that serves `cell` while its home is gone: the highest weight, ties to the smaller id.
-pub fn rendezvous<'a>(cell: &str, live: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
-    live.into_iter().max_by(|a, b| weight(cell, a).cmp(&weight(cell, b)).then_with(|| b.cmp(a)))
-}
 
 /// The fail-over task of one server.
 #[derive(Debug)]
@@ -242,39 +229,5 @@ impl State {
         for (_, q) in std::mem::take(&mut self.announced) {
             let _ = q.undeclare().await;
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn rendezvous_is_stable_and_moves_only_the_cells_of_the_server_gone() {
-        let all = ["s1", "s2", "s3", "s4"];
-        let cells: Vec<String> = (0..200).map(|i| format!("cell-{i}")).collect();
-        let pick = |live: &[&'static str]| -> Vec<&'static str> {
-            cells.iter().map(|c| rendezvous(c, live.iter().copied()).unwrap()).collect()
-        };
-        let before = pick(&all);
-        // The same on every call and in any order of the live set (no per-process random state).
-        assert_eq!(before, pick(&["s4", "s2", "s3", "s1"]));
-        assert_eq!(weight("a", "s1"), weight("a", "s1"));
-        assert_ne!(weight("a", "s1"), weight("a", "s2"));
-        // Spread over every server.
-        for s in all {
-            let n = before.iter().filter(|p| **p == s).count();
-            assert!(n > 20, "{s} wins {n} of 200");
-        }
-        // Without s2: only s2's cells move.
-        let after = pick(&["s1", "s3", "s4"]);
-        for (b, a) in before.iter().zip(&after) {
-            if *b != "s2" {
-                assert_eq!(b, a);
-            } else {
-                assert_ne!(*a, "s2");
-            }
-        }
-        assert_eq!(rendezvous("a", std::iter::empty()), None);
     }
 }

@@ -27,11 +27,9 @@
 //!
 //! Robot records (`RobotService`) are not replicated: each server keeps its own.
 
-pub mod directory;
 pub mod discovery;
 pub mod failover;
 pub mod replication;
-pub mod taken;
 
 use std::sync::Arc;
 
@@ -41,14 +39,14 @@ use tracing::info;
 use zenoh::Session;
 
 use crate::cells::Cells;
-use crate::config::Limits;
+use crate::config::{Config, RequestLimits};
 use crate::error::ServerError;
 use crate::store::{Store, VersionClock};
 
-use self::directory::Directory;
 use self::discovery::Discovery;
 use self::failover::{Failover, ObstacleSink};
 use self::replication::Replication;
+use crate::cells::directory::Directory;
 
 /// This server's part in the plant: its announcement and the replication of its store. Closed with
 /// [`Plant::close`] before the session.
@@ -67,6 +65,43 @@ pub fn version_clock(session: &Session) -> VersionClock {
 }
 
 impl Plant {
+    /// Joins the plant when `config` names this server (`plant.server_id`), announcing it at `advertised` (its gRPC
+    /// address) with the cells it serves: returns `store` stamped with the plant's version clock, and the plant.
+    /// Without a server id the store is returned as it is, and there is no plant. A taken cell's scene is applied
+    /// through `sink` (the Zenoh bridge's).
+    pub async fn join(
+        config: &Config,
+        zenoh: (Option<&Session>, Option<ObstacleSink>),
+        advertised: String,
+        (directory, cells): (Directory, &Cells),
+        store: Store,
+        shutdown: &CancellationToken,
+    ) -> Result<(Store, Option<Self>), ServerError> {
+        let Some(id) = &config.plant.server_id else { return Ok((store, None)) };
+        let (Some(session), Some(sink)) = zenoh else {
+            return Err(ServerError::FailedPrecondition(
+                "plant.server_id needs Zenoh (not --no-zenoh)".into(),
+            ));
+        };
+        let store = store.stamped(id, version_clock(session));
+        let server = v1::PlantServer {
+            server_id: id.clone(),
+            grpc_address: advertised,
+            cells: announced_cells(cells),
+            ..Default::default()
+        };
+        let plant = Self::start(
+            session,
+            server,
+            (directory, cells.clone(), sink),
+            store.clone(),
+            config.limits.clone(),
+            shutdown.clone(),
+        )
+        .await?;
+        Ok((store, Some(plant)))
+    }
+
     /// Announces `server` (its token and queryables), fills `directory` with the plant's live servers, and
     /// replicates `store` (stamped by [`version_clock`]) with the other servers, catching up with them now and
     /// whenever one (re)appears. Incoming primitives are checked against `limits`. Takes the cells of dead servers
@@ -76,7 +111,7 @@ impl Plant {
         server: v1::PlantServer,
         (directory, cells, scene): (Directory, Cells, ObstacleSink),
         store: Store,
-        limits: Limits,
+        limits: RequestLimits,
         shutdown: CancellationToken,
     ) -> Result<Self, ServerError> {
         let discovery = Discovery::start(session, &server, directory.clone(), shutdown.clone()).await?;

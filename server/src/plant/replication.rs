@@ -29,10 +29,10 @@ use zenoh::pubsub::Subscriber;
 use zenoh::query::{ConsolidationMode, Query, QueryTarget, Queryable};
 use zenoh::sample::{Locality, Sample, SampleKind};
 
-use crate::config::Limits;
-use crate::convert::primitive_from_proto;
+use crate::config::RequestLimits;
 use crate::error::ServerError;
 use crate::store::{Store, Tombstone};
+use crate::wire::primitive_from_proto;
 
 /// How long a catch-up query waits for replies.
 const QUERY_TIMEOUT: Duration = Duration::from_secs(5);
@@ -58,7 +58,7 @@ impl Replication {
     pub(super) async fn start(
         session: &Session,
         store: Store,
-        limits: Limits,
+        limits: RequestLimits,
         shutdown: CancellationToken,
     ) -> Result<Self, ServerError> {
         let zenoh_err = |e: zenoh::Error| ServerError::Internal(format!("zenoh: primitive replication: {e}"));
@@ -204,7 +204,7 @@ async fn catch_up(
 /// Stores (or deletes) what one sample says, after checking it.
 async fn apply(
     store: &Store,
-    limits: &Limits,
+    limits: &RequestLimits,
     sample: &Sample,
     (stored, refused): &(Arc<AtomicU64>, Arc<AtomicU64>),
 ) {
@@ -237,7 +237,7 @@ enum Incoming {
 }
 
 /// Checks a sample as a Put is checked: the key, the names, the record matching its key, the primitive's ranges.
-fn check(limits: &Limits, sample: &Sample) -> Result<Incoming, ServerError> {
+fn check(limits: &RequestLimits, sample: &Sample) -> Result<Incoming, ServerError> {
     let key = sample.key_expr().as_str();
     let names = parse_primitive_key(key)
         .ok_or_else(|| ServerError::invalid("key", "is not dmp/@primitives/<robot-id>/<name>[/<version>]"))?;

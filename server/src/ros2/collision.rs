@@ -13,7 +13,7 @@ use dmp_ros2::pose::Rigid;
 use tracing::{info, warn};
 
 use super::shapes::{self, Placed};
-use crate::cell::Cell;
+use crate::cells::cell::Cell;
 use crate::error::ServerError;
 
 /// One shape of an object: its obstacle id, its shape, and its centre's pose relative to the object.

@@ -25,8 +25,8 @@ use super::graph::{Graph, RosPublisher};
 use super::marker_shapes::{isopotential, path, true_shape};
 use super::paths::Paths;
 use super::trajectory::topic_token;
-use crate::cell::ObstacleSet;
 use crate::cells::Cells;
+use crate::cells::cell::ObstacleSet;
 use crate::clock::Clock;
 
 /// How often the cells' versions are looked at.

@@ -9,7 +9,7 @@ use dmp_ros2::msgs::nav2_dynamic_msgs::ObstacleArray;
 use dmp_ros2::pose::Rigid;
 use tracing::debug;
 
-use crate::cell::Cell;
+use crate::cells::cell::Cell;
 use crate::error::ServerError;
 
 /// The obstacles of each (cell, topic) from its last array.

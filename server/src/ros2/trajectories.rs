@@ -16,10 +16,10 @@ use tracing::{debug, warn};
 
 use super::Ros2Counters;
 use super::graph::{Graph, RosPublisher};
-use super::outbox::Event;
 use super::paths::Paths;
 use super::trajectory::{trajectory_message, trajectory_topic};
 use crate::clock::Clock;
+use crate::runs::outbox::Event;
 
 /// What the task needs.
 #[derive(Debug)]

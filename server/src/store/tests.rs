@@ -4,8 +4,8 @@ use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 
 use super::*;
-use crate::config::Limits;
-use crate::convert::primitive_from_proto;
+use crate::config::RequestLimits;
+use crate::wire::primitive_from_proto;
 
 fn primitive(seed: f64) -> dmp::Primitive {
     let mut p = dmp::Primitive::straight_line(
@@ -210,7 +210,7 @@ fn store_round_trips_a_primitive_bit_for_bit() {
         (rec.robot_id.as_str(), rec.name.as_str(), rec.version, rec.created_unix_ms),
         ("r1", "a", 1, 7)
     );
-    let back = primitive_from_proto(rec.primitive.as_ref().unwrap(), &Limits::default()).unwrap();
+    let back = primitive_from_proto(rec.primitive.as_ref().unwrap(), &RequestLimits::default()).unwrap();
     assert_eq!(back, p);
     let bits = |p: &dmp::Primitive| p.weights.iter().flatten().map(|w| w.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&back), bits(&p));
@@ -293,7 +293,7 @@ fn store_survives_kill_9() {
         assert!(names.contains(name), "{name} was acknowledged but is missing after kill -9");
         let rec = store.get("robot", name, 1).unwrap();
         assert_eq!(
-            primitive_from_proto(rec.primitive.as_ref().unwrap(), &Limits::default()).unwrap(),
+            primitive_from_proto(rec.primitive.as_ref().unwrap(), &RequestLimits::default()).unwrap(),
             primitive(1.0)
         );
     }

@@ -10,9 +10,10 @@
 use std::net::SocketAddr;
 use std::time::Duration;
 
-use dmp_proto::v1::scene_service_server::SceneServiceServer;
+use dmp_proto::v1::scene_service_server::SERVICE_NAME;
 use tokio::task::JoinHandle;
 use tokio_util::sync::CancellationToken;
+use tonic_health::ServingStatus;
 use tonic_health::server::HealthReporter;
 use tracing::{debug, info, warn};
 use zenoh::Session;
@@ -20,7 +21,6 @@ use zenoh::config::{EndPoint, ZenohId};
 use zenoh::sample::SampleKind;
 
 use crate::error::ServerError;
-use crate::services::scene::SceneServiceImpl;
 
 /// How often reachability is checked between events.
 pub const RECHECK_PERIOD: Duration = Duration::from_secs(1);
@@ -147,10 +147,10 @@ async fn update(
     let serving = targets.serving(&missing);
     if was != Some(serving) {
         if serving {
-            health.set_serving::<SceneServiceServer<SceneServiceImpl>>().await;
+            health.set_service_status(SERVICE_NAME, ServingStatus::Serving).await;
             info!(connect = ?targets.addresses, "zenoh: the configured endpoints are reachable: scene SERVING");
         } else {
-            health.set_not_serving::<SceneServiceServer<SceneServiceImpl>>().await;
+            health.set_service_status(SERVICE_NAME, ServingStatus::NotServing).await;
             warn!(unreachable = ?missing, "zenoh: configured endpoints unreachable: scene NOT_SERVING");
         }
     }

@@ -31,7 +31,7 @@ fn loopback(connect: Vec<String>) -> ZenohConfig {
 struct Pair {
     server: Session,
     client: Session,
-    scene: crate::cell::Cell,
+    scene: crate::cells::cell::Cell,
     bridge: ZenohBridge,
     shutdown: CancellationToken,
 }
@@ -47,7 +47,7 @@ async fn pair(cell: &str) -> Pair {
             server.clone(),
             cells,
             crate::clock::Clock::system(),
-            crate::state_admission::StateAdmission::new(&Default::default()),
+            crate::cells::state_admission::StateAdmission::new(&Default::default()),
             shutdown.clone(),
         ),
     )
@@ -77,7 +77,9 @@ async fn matched_publisher(session: &Session, key: String) -> Publisher<'static>
 }
 
 /// Waits for the next scene version.
-async fn next(rx: &mut watch::Receiver<Arc<crate::cell::ObstacleSet>>) -> Arc<crate::cell::ObstacleSet> {
+async fn next(
+    rx: &mut watch::Receiver<Arc<crate::cells::cell::ObstacleSet>>,
+) -> Arc<crate::cells::cell::ObstacleSet> {
     within("scene change", rx.changed()).await.unwrap();
     rx.borrow_and_update().clone()
 }

@@ -196,7 +196,7 @@ async fn every_command_acts_in_its_one_cell() {
 
     let info: serde_json::Value = serde_json::from_str(&run_at(&url, &["info"]).await.unwrap()).unwrap();
     assert_eq!(info["cell"], "bar");
-    let limits = &server.handle().state().config.limits;
+    let limits = &server.handle().config().limits;
     assert_eq!(info["limits"]["max_obstacles"], limits.max_obstacles as u64);
     assert_eq!(info["zenoh_locators"], serde_json::json!([]), "no Zenoh here");
     let stats: serde_json::Value = serde_json::from_str(&run_at(&url, &["stats"]).await.unwrap()).unwrap();
@@ -213,14 +213,14 @@ async fn every_command_acts_in_its_one_cell() {
     // Without --cell, the server's default cell (bar), which is empty.
     let default = run_at(&url, &["scene", "list"]).await.unwrap();
     assert!(!default.contains("crate"), "{default}");
-    let bar = server.handle().state().cells.find("bar").unwrap().unwrap();
+    let bar = server.handle().cells().find("bar").unwrap().unwrap();
     assert!(bar.snapshot().obstacles.is_empty());
 
     // A bad name is refused before anything is sent, with the rule.
     let e = run_at(&url, &["--cell", "bad cell!", "scene", "put", file]).await.unwrap_err();
     assert!(e.is_bad_input(), "{e}");
     assert!(e.to_string().contains("--cell") && e.to_string().contains("only letters, digits"), "{e}");
-    assert!(!matches!(server.handle().state().cells.find("bad cell!"), Ok(Some(_))));
+    assert!(!matches!(server.handle().cells().find("bad cell!"), Ok(Some(_))));
 
     // Motions go to the command's cell: the box in lab2 bends a plan there, not one in the default cell.
     let csv: String = std::iter::once("t,x1,x2".to_string())

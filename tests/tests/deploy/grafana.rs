@@ -2,7 +2,7 @@
 
 use std::collections::BTreeSet;
 
-use dmp_server::run::start;
+use dmp_server::server::start;
 use dmp_tests::scrape::get;
 use dmp_tests::{config, within};
 use serde_json::Value;

@@ -82,8 +82,8 @@ fn strings(v: &Value, what: &str) -> Vec<String> {
 }
 
 /// dmp-server's own parse of `args` (as the binary parses its command line).
-fn dmp_server_args(args: &[String], what: &str) -> dmp_server::cli::Args {
-    dmp_server::cli::Args::try_parse_from(
+fn dmp_server_args(args: &[String], what: &str) -> dmp_server::config::command_line::Args {
+    dmp_server::config::command_line::Args::try_parse_from(
         std::iter::once("dmp-server".to_owned()).chain(args.iter().cloned()),
     )
     .unwrap_or_else(|e| panic!("{what}: dmp-server does not take {args:?}:\n{e}"))

@@ -5,7 +5,7 @@
 
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::zenoh_session::{SessionOptions, locators, session_config};
-use dmp_server::run::{ServerHandle, start};
+use dmp_server::server::{ServerHandle, start};
 use dmp_tests::{config, within};
 
 use crate::stale_scene::{has_obstacle, router, start_connected};

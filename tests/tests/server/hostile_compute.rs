@@ -31,7 +31,7 @@ async fn channel(server: &TestServer) -> tonic::transport::Channel {
 }
 
 fn idle(server: &TestServer) -> bool {
-    let c = &server.handle().state().compute;
+    let c = &server.handle().compute();
     c.batch.counters().running.load(Ordering::Acquire) == 0 && c.admission.batch_in_use() == 0
 }
 
@@ -89,7 +89,7 @@ async fn a_learn_whose_client_left_is_not_stored() {
     let plan = v1::PlanRequest { motion: Some(motion), duration: 30.0, dt: 1e-3 };
     let mut motion_client = MotionServiceClient::new(channel(&server).await);
     let busy = tokio::spawn(async move { motion_client.plan(plan).await });
-    let batch = server.handle().state().compute.batch.clone();
+    let batch = server.handle().compute().batch.clone();
     until("the plan runs", || batch.counters().running.load(Ordering::Acquire) == 1).await;
     let samples = 5_000;
     let t: Vec<f64> = (0..samples).map(|i| i as f64 * 1e-3).collect();
@@ -157,7 +157,7 @@ async fn a_learn_cancelled_while_it_runs_is_not_stored() {
     };
     let mut primitives = PrimitiveServiceClient::new(channel(&server).await);
     let learn = tokio::spawn(async move { primitives.learn(request).await });
-    let running = || server.handle().state().compute.batch.counters().running.load(Ordering::Acquire);
+    let running = || server.handle().compute().batch.counters().running.load(Ordering::Acquire);
     until("the learn runs", || running() == 1).await;
     // The client goes away mid-computation (its request future is dropped: HTTP/2 resets the stream).
     learn.abort();
@@ -215,7 +215,7 @@ async fn requests_beyond_the_budgets_are_refused_with_their_cost_and_others_go_o
     }
     assert_eq!(last.unwrap().status, v1::SegmentStatus::GoalReached as i32);
     // Its reservation came back.
-    until("budget returned", || server.handle().state().compute.admission.realtime_in_use() == 0).await;
+    until("budget returned", || server.handle().compute().admission.realtime_in_use() == 0).await;
     server.stop().await;
 }
 
@@ -228,7 +228,7 @@ async fn a_scene_that_grows_under_a_running_stream_is_counted_against_new_ones()
     })
     .await;
     let client = server.client().await;
-    let admission = || &server.handle().state().compute.admission;
+    let admission = || &server.handle().compute().admission;
     within("put", client.put_primitive("r", "line", &line(vec![0.0, 0.0], vec![1.0, 0.0], 10.0)))
         .await
         .unwrap();

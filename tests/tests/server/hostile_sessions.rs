@@ -12,7 +12,7 @@ use dmp_proto::v1::motion_service_client::MotionServiceClient;
 use dmp_proto::v1::session_request::Message;
 use dmp_proto::v1::warning::Kind;
 use dmp_proto::{codec, v1};
-use dmp_server::run::ServerHandle;
+use dmp_server::server::ServerHandle;
 use tokio::sync::mpsc;
 use tokio_stream::StreamExt;
 use tokio_stream::wrappers::ReceiverStream;
@@ -142,7 +142,7 @@ async fn robot_state_session(handle: &ServerHandle) -> ObstaclePublisher {
 }
 
 fn robots_in_default_cell(handle: &ServerHandle) -> usize {
-    handle.state().cells.get("default").unwrap().robot_count()
+    handle.cells().get("default").unwrap().robot_count()
 }
 
 #[tokio::test(flavor = "multi_thread")]

@@ -7,8 +7,8 @@ use dmp::Stepping;
 use dmp_client::DmpClient;
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
-use dmp_server::executor::stream::StreamConfig;
-use dmp_server::executor::stream_memory::StreamBytes;
+use dmp_server::runs::pacing::StreamConfig;
+use dmp_server::runs::stream_memory::StreamBytes;
 use dmp_tests::{T, TestServer, within};
 use tokio_stream::StreamExt;
 use tonic::Code;
@@ -61,7 +61,7 @@ async fn streams_are_bounded_in_memory_and_a_cancelled_unread_one_gives_it_back(
     for robot in ["r", "a", "b", "c"] {
         slow_line(&client, robot).await;
     }
-    let memory = &server.handle().state().memory;
+    let memory = &server.handle().memory();
 
     // 10 s segments: one segment alone is over its limit.
     let request = v1::ExecuteRequest { segment_s: 10.0, ..long_execute("r") };
@@ -101,7 +101,7 @@ async fn streams_are_bounded_in_memory_and_a_cancelled_unread_one_gives_it_back(
 #[tokio::test(flavor = "multi_thread")]
 async fn scenes_are_bounded_per_cell_and_across_cells() {
     let obstacle = |id: &str| ellipse(id, vec![5.0, 5.0], vec![0.1, 0.1]);
-    let one = dmp_server::cell::obstacle_bytes(&obstacle("o00"));
+    let one = dmp_server::cells::cell::obstacle_bytes(&obstacle("o00"));
     let server = TestServer::start_with(|c| {
         c.zenoh.disabled = true;
         c.limits.max_scene_bytes = 3 * one;
@@ -138,7 +138,7 @@ async fn scenes_are_bounded_per_cell_and_across_cells() {
     // A delete in one cell makes room in the other.
     assert!(within("delete in a", a.delete_obstacle("o01")).await.unwrap().changed);
     within("the 3rd in b", b.put_obstacle(obstacle("o02"))).await.unwrap();
-    assert_eq!(server.handle().state().memory.used(), 5 * one);
+    assert_eq!(server.handle().memory().used(), 5 * one);
     server.stop().await;
 }
 
@@ -286,7 +286,7 @@ async fn watches_never_starve_executions_and_streams_are_bounded_per_connection_
         segments += 1;
     }
     assert!(segments >= 5, "50 ms in 10 ms segments, to the end: {segments}");
-    let executions = || server.handle().state().streams.open_executions();
+    let executions = || server.handle().open_executions();
     until("the execution's permit is back", || executions() == 0).await;
 
     // Per connection: the watcher's connection holds 3 watches; one execution more and it is full.
@@ -303,7 +303,7 @@ async fn watches_never_starve_executions_and_streams_are_bounded_per_connection_
     assert!(msg.contains("client 127.0.0.1") && msg.contains("max_streams_per_client = 6"), "{msg}");
     // Streams that end give their places back.
     drop(watches);
-    until("the watches are gone", || server.handle().state().streams.open_watches() == 0).await;
+    until("the watches are gone", || server.handle().open_watches() == 0).await;
     let r3 = within("execute after the watches left", robot.execute(long_execute("x4"))).await.unwrap();
     drop((on_watcher, r1, r2, r3));
     until("every stream is gone", || server.handle().open_streams() == 0).await;
@@ -314,7 +314,7 @@ async fn watches_never_starve_executions_and_streams_are_bounded_per_connection_
 async fn empty_cells_are_reclaimed_and_deletes_never_create_one() {
     let server = TestServer::start_with(|c| c.limits.max_cells = 3).await;
     let handle = server.handle();
-    let cells = &handle.state().cells;
+    let cells = &handle.cells();
     let client = server.client().await;
 
     // Deletes of junk cells over Zenoh and gRPC create nothing.

@@ -35,7 +35,7 @@ use std::time::Duration;
 use dmp::Primitive;
 use dmp_client::grpc::DmpClient;
 use dmp_proto::v1;
-use dmp_server::run::{ServerHandle, start};
+use dmp_server::server::{ServerHandle, start};
 use dmp_tests::{config, within};
 
 async fn serve(dir: &Path) -> (ServerHandle, DmpClient) {

@@ -4,7 +4,7 @@
 
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
-use dmp_server::run::start;
+use dmp_server::server::start;
 use dmp_tests::scrape::{families, get, scrape, value};
 use dmp_tests::{T, config, within};
 use tokio_stream::StreamExt;

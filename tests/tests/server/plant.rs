@@ -11,7 +11,7 @@ use dmp_client::grpc::DmpClient;
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
 use dmp_proto::zenoh_session::locators;
-use dmp_server::run::{ServerHandle, start};
+use dmp_server::server::{ServerHandle, start};
 use dmp_tests::{config, within};
 use tokio_stream::StreamExt;
 
@@ -45,7 +45,7 @@ async fn client_of(h: &ServerHandle) -> DmpClient {
 pub(crate) async fn until_all_known(servers: &[&ServerHandle]) {
     let n = servers.len();
     until("every server knows the plant", || {
-        servers.iter().all(|h| h.state().cells.directory().server_ids().len() == n)
+        servers.iter().all(|h| h.cells().directory().server_ids().len() == n)
     })
     .await;
 }
@@ -87,7 +87,7 @@ pub(crate) async fn shut_down(servers: impl IntoIterator<Item = ServerHandle>, z
 
 /// Whether `h` holds version `version` of `(robot, name)`.
 fn holds(h: &ServerHandle, robot: &str, name: &str, version: u64) -> bool {
-    h.state().store.get(robot, name, version).is_ok()
+    h.store().get(robot, name, version).is_ok()
 }
 
 #[tokio::test(flavor = "multi_thread")]
@@ -121,8 +121,7 @@ async fn primitives_replicate_and_a_cell_resolves_to_its_server() {
         servers.iter().all(|h| holds(h, "r1", "dup", v1) && holds(h, "r1", "dup", v2))
     })
     .await;
-    let latest: Vec<u64> =
-        servers.iter().map(|h| h.state().store.get("r1", "dup", 0).unwrap().version).collect();
+    let latest: Vec<u64> = servers.iter().map(|h| h.store().get("r1", "dup", 0).unwrap().version).collect();
     assert_eq!(latest, vec![v1.max(v2); 3], "every server agrees on the latest");
 
     // A cell resolves to its server, over Zenoh, from a client of the router.
@@ -185,7 +184,7 @@ async fn a_server_that_starts_late_or_comes_back_catches_up() {
     let s2 = plant_server(d2.path(), &endpoint, "s2", &["b"], &[]).await;
     until("the restarted server gets what it missed", || holds(&s2, "r", "missed", missed.version)).await;
     assert!(holds(&s2, "r", "early", early.version), "kept in its store");
-    assert_eq!(s2.state().store.get("r", "missed", 0).unwrap().primitive, missed.primitive);
+    assert_eq!(s2.store().get("r", "missed", 0).unwrap().primitive, missed.primitive);
 
     shut_down([s1, s2], zenohd).await;
 }
@@ -210,10 +209,10 @@ async fn a_delete_reaches_a_server_that_was_down_and_a_newer_relearn_wins_everyw
     until("the restarted server applies the delete it missed", || !holds(&s2, "r", "gone", gone.version))
         .await;
     assert!(holds(&s2, "r", "kept", kept.version), "the other primitive stays");
-    assert!(s2.state().store.tombstone("r", "gone").unwrap().is_some_and(|n| n >= gone.version));
+    assert!(s2.store().tombstone("r", "gone").unwrap().is_some_and(|n| n >= gone.version));
     // s2 came back holding `gone` and the others asked it for its versions: the tombstone keeps it deleted.
     for h in [&s1, &s2, &s3] {
-        assert!(h.state().store.get("r", "gone", 0).is_err(), "deleted everywhere");
+        assert!(h.store().get("r", "gone", 0).is_err(), "deleted everywhere");
     }
 
     // Deleted on s1, learned again on s3 after the delete: the new version is kept everywhere and is the latest.
@@ -229,7 +228,7 @@ async fn a_delete_reaches_a_server_that_was_down_and_a_newer_relearn_wins_everyw
     })
     .await;
     for h in servers {
-        let latest = h.state().store.get("r", "kept", 0).unwrap();
+        let latest = h.store().get("r", "kept", 0).unwrap();
         assert_eq!((latest.version, &latest.primitive), (again.version, &again.primitive));
         assert!(!holds(h, "r", "kept", kept.version));
     }
@@ -288,10 +287,10 @@ async fn a_load_via_zenoh_discovery_spreads_its_robots_over_the_plant() {
     // Each server streamed (its part's segments are its own count), and the clean-up removed the primitives
     // everywhere.
     for h in [&s1, &s2, &s3] {
-        assert!(h.state().counters.segments_sent.load(std::sync::atomic::Ordering::Relaxed) > 0);
+        assert!(h.segments_sent() > 0);
     }
     until("the load's primitives deleted on every server", || {
-        [&s1, &s2, &s3].iter().all(|h| h.state().store.list("load.c0.r0").unwrap().is_empty())
+        [&s1, &s2, &s3].iter().all(|h| h.store().list("load.c0.r0").unwrap().is_empty())
     })
     .await;
     // A cell no server serves is refused, naming it.
@@ -332,7 +331,7 @@ async fn robots_of_neighbouring_cells_on_two_servers_avoid_each_other() {
     let mut r1 = within("execute r1", c1.execute(request)).await.unwrap();
     let reader = tokio::spawn(async move { while let Some(Ok(_)) = r1.next().await {} });
     let sees_r1 = |h: &ServerHandle, cell: &str| {
-        h.state().cells.find(cell).unwrap().is_some_and(|c| {
+        h.cells().find(cell).unwrap().is_some_and(|c| {
             c.other_robots("", dmp_server::clock::system_unix_s(), 0.5)
                 .iter()
                 .any(|r| r.state.robot_id == "r1")
@@ -358,11 +357,8 @@ async fn robots_of_neighbouring_cells_on_two_servers_avoid_each_other() {
     };
     let neighbour = plan(&s2, "b").await;
     // Where s2 saw r1 (it creeps 0.33 mm/s: a plan's time moves it by less than a millimetre).
-    let seen = s2.state().cells.find("b").unwrap().unwrap().other_robots(
-        "",
-        dmp_server::clock::system_unix_s(),
-        0.5,
-    );
+    let seen =
+        s2.cells().find("b").unwrap().unwrap().other_robots("", dmp_server::clock::system_unix_s(), 0.5);
     let r1_at =
         seen.iter().find(|r| r.state.robot_id == "r1").expect("r1 still executing").state.position.clone();
     let stranger = plan(&s3, "c").await;
@@ -390,12 +386,12 @@ async fn last_status<T>(
 }
 
 fn sees_obstacle(h: &ServerHandle, cell: &str, id: &str) -> bool {
-    h.state().cells.find(cell).ok().flatten().is_some_and(|c| c.snapshot().obstacles.contains_key(id))
+    h.cells().find(cell).ok().flatten().is_some_and(|c| c.snapshot().obstacles.contains_key(id))
 }
 
 #[tokio::test(flavor = "multi_thread")]
 async fn a_cell_is_taken_while_its_server_is_away_and_given_back_when_it_returns() {
-    use dmp_server::plant::failover::rendezvous;
+    use dmp_server::cells::rendezvous::rendezvous;
     let Loopback { zenohd, endpoint, dirs } = loopback(3).await;
     let (s1, s2, s3) = three_servers(&endpoint, &dirs).await;
     // A perception node keeping cell a's latest obstacle: what a taker asks for the cell's scene.
@@ -414,9 +410,9 @@ async fn a_cell_is_taken_while_its_server_is_away_and_given_back_when_it_returns
         "s2" => (&s2, &s3),
         _ => (&s3, &s2),
     };
-    until("the taker serves cell a", || taker.state().cells.serves("a")).await;
+    until("the taker serves cell a", || taker.cells().serves("a")).await;
     until("with cell a's scene", || sees_obstacle(taker, "a", "box")).await;
-    assert!(!other.state().cells.serves("a"), "one server takes the cell");
+    assert!(!other.cells().serves("a"), "one server takes the cell");
     let found = within(
         "resolve a",
         dmp_client::discovery::resolve_cell_via(&endpoint, None, "a", Duration::from_secs(5)),
@@ -461,7 +457,7 @@ async fn a_cell_is_taken_while_its_server_is_away_and_given_back_when_it_returns
     let watch_ended = within("the watch ends", last_status(&mut watch)).await;
     assert_eq!(watch_ended.code(), Some(tonic::Code::Unavailable), "{watch_ended}");
     assert!(watch_ended.to_string().contains("`s1`"), "{watch_ended}");
-    assert!(!taker.state().cells.serves("a") && !sees_obstacle(taker, "a", "box"), "the taker let it go");
+    assert!(!taker.cells().serves("a") && !sees_obstacle(taker, "a", "box"), "the taker let it go");
 
     within("perception close", perception.close()).await.unwrap();
     shut_down([s1, s2, s3], zenohd).await;

@@ -2,7 +2,7 @@
 //! announcement and takes part in the fail-over's choice like the others, so that the cell is never left without
 //! a server when the newcomer wins it.
 
-use dmp_server::plant::failover::{rendezvous, weight};
+use dmp_server::cells::rendezvous::{rendezvous, weight};
 use dmp_tests::within;
 
 use crate::plant::{Loopback, loopback, plant_server, shut_down, three_servers, until_all_known};
@@ -17,7 +17,7 @@ async fn a_server_joining_during_an_outage_takes_the_cell_it_wins() {
         "s2" => &s2,
         _ => &s3,
     };
-    until("the taker serves cell a", || taker.state().cells.serves("a")).await;
+    until("the taker serves cell a", || taker.cells().serves("a")).await;
 
     // A newcomer whose id outweighs both survivors for cell a: it never heard s1, yet it must take cell a.
     let id = (4..)
@@ -26,9 +26,9 @@ async fn a_server_joining_during_an_outage_takes_the_cell_it_wins() {
         .unwrap();
     let s4 = plant_server(dirs[3].path(), &endpoint, &id, &["d"], &[]).await;
     until_all_known(&[&s2, &s3, &s4]).await;
-    until("the newcomer serves cell a", || s4.state().cells.serves("a")).await;
-    until("the taker let it go", || !taker.state().cells.serves("a")).await;
-    assert_eq!(s4.state().cells.directory().homes().get("a").map(String::as_str), Some("s1"));
+    until("the newcomer serves cell a", || s4.cells().serves("a")).await;
+    until("the taker let it go", || !taker.cells().serves("a")).await;
+    assert_eq!(s4.cells().directory().homes().get("a").map(String::as_str), Some("s1"));
     let found = within(
         "resolve a",
         dmp_client::discovery::resolve_cell_via(&endpoint, None, "a", std::time::Duration::from_secs(5)),
@@ -39,6 +39,6 @@ async fn a_server_joining_during_an_outage_takes_the_cell_it_wins() {
 
     // s1 comes back: the newcomer gives cell a back to it.
     let s1 = plant_server(dirs[0].path(), &endpoint, "s1", &["a"], &[]).await;
-    until("the newcomer gave cell a back", || !s4.state().cells.serves("a")).await;
+    until("the newcomer gave cell a back", || !s4.cells().serves("a")).await;
     shut_down([s1, s2, s3, s4], zenohd).await;
 }

@@ -11,7 +11,7 @@ use std::time::Duration;
 use dmp_client::DmpClient;
 use dmp_client::connect::{ConnectOptions, TlsOptions};
 use dmp_server::access::init::{InitOptions, init};
-use dmp_server::run::ServerHandle;
+use dmp_server::server::ServerHandle;
 use dmp_tests::within;
 
 use crate::{line, secured_cell_a, until};
@@ -34,7 +34,7 @@ pub(crate) fn python() -> PathBuf {
 }
 
 fn in_scene(h: &ServerHandle, cell: &str, id: &str) -> bool {
-    h.state().cells.find(cell).unwrap().is_some_and(|c| c.snapshot().obstacles.contains_key(id))
+    h.cells().find(cell).unwrap().is_some_and(|c| c.snapshot().obstacles.contains_key(id))
 }
 
 #[tokio::test(flavor = "multi_thread")]
@@ -101,7 +101,7 @@ async fn stock_python_clients_work_as_a_robot_and_as_perception() {
     until("the perception node's obstacle arrives", || in_scene(&h, "cell-a", "py-seen")).await;
     assert!(!in_scene(&h, "cell-a", "py-gone"), "a delete over Zenoh was lost");
     assert!(!in_scene(&h, "cell-b", "py-elsewhere"), "perception of cell-a changed cell-b");
-    let cell = h.state().cells.find("cell-a").unwrap().unwrap();
+    let cell = h.cells().find("cell-a").unwrap().unwrap();
     let robots = cell.other_robots("", f64::MAX / 4.0, f64::MAX);
     assert!(
         robots.iter().all(|r| r.state.robot_id != "py-ghost"),

@@ -15,7 +15,7 @@ use dmp_ros2::attachment::Attachment;
 use dmp_ros2::keys::{MARKER_ARRAY, topic_key};
 use dmp_ros2::msgs::visualization_msgs::{Marker, MarkerArray};
 use dmp_server::ros2::Ros2Counters;
-use dmp_server::run::{ServerHandle, start};
+use dmp_server::server::{ServerHandle, start};
 use dmp_tests::{config, within};
 
 use super::python_clients::{python, workspace};
@@ -87,7 +87,7 @@ async fn a_ros2_collision_object_enters_and_leaves_the_scene() {
     c.ros2.domain = Some(7);
     let h = within("server start", start(c)).await.expect("server starts");
     let locator = h.zenoh_locators.iter().find(|l| l.starts_with("tcp/")).unwrap().clone();
-    let cell = h.state().cells.get("").unwrap();
+    let cell = h.cells().get("").unwrap();
     // A ROS 2 tool's view: a Zenoh peer on the server, subscribed to the default cell's markers.
     let tool = session_config(&SessionOptions::loopback_peer(h.zenoh_locators.clone())).unwrap();
     let tool = within("tool open", zenoh::open(tool).into_future()).await.unwrap();

@@ -15,7 +15,7 @@ use dmp_ros2::msgs::builtin_interfaces::Time;
 use dmp_ros2::msgs::trajectory_msgs::MultiDOFJointTrajectory;
 use dmp_ros2::msgs::visualization_msgs::{Marker, MarkerArray};
 use dmp_server::ros2::Ros2Counters;
-use dmp_server::run::start;
+use dmp_server::server::start;
 use dmp_tests::{config, within};
 use tokio_stream::StreamExt;
 

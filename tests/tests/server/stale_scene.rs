@@ -10,8 +10,8 @@ use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
 use dmp_proto::zenoh_session::locators;
 use dmp_server::config::Config;
-use dmp_server::run::{ServerHandle, start};
-use dmp_server::staleness::{CellSceneConfig, StalePolicy};
+use dmp_server::config::scene::{CellSceneConfig, StalePolicy};
+use dmp_server::server::{ServerHandle, start};
 use dmp_tests::{T, config, within};
 use tokio_stream::StreamExt;
 use tonic_health::pb::HealthCheckRequest;
@@ -21,7 +21,7 @@ use tonic_health::pb::health_client::HealthClient;
 use crate::{ellipse, line, spec, until};
 
 pub(crate) fn has_obstacle(handle: &ServerHandle, cell: &str, id: &str) -> bool {
-    handle.state().cells.get(cell).unwrap().snapshot().obstacles.contains_key(id)
+    handle.cells().get(cell).unwrap().snapshot().obstacles.contains_key(id)
 }
 
 pub(crate) async fn start_connected(dir: &Path, connect: Vec<String>) -> ServerHandle {
@@ -108,7 +108,7 @@ async fn stale_obstacles_are_kept_and_flagged_or_dropped() {
     within("put drop", perception.put_proto_in("drop", &moving)).await.unwrap();
     until("put", || has_obstacle(&handle, "keep", "o") && has_obstacle(&handle, "drop", "o")).await;
 
-    let keep = handle.state().cells.get("keep").unwrap();
+    let keep = handle.cells().get("keep").unwrap();
     until("flagged stale", || keep.snapshot().stale_ids().any(|id| id == "o")).await;
     assert!(has_obstacle(&handle, "keep", "o"), "kept");
     // Frozen: a moving obstacle without a ttl does not drift on.

@@ -98,10 +98,10 @@ async fn exposure_without_protection_is_refused_unless_insecure_and_then_repeate
     let mut config = dmp_tests::config(dir.path());
     config.zenoh.disabled = true;
     config.grpc_addr = "0.0.0.0:0".parse().unwrap();
-    let e = within("start", dmp_server::run::start(config.clone())).await.unwrap_err().to_string();
+    let e = within("start", dmp_server::server::start(config.clone())).await.unwrap_err().to_string();
     assert!(e.contains("refusing to start") && e.contains("--insecure"), "{e}");
     config.security.insecure = true;
-    let handle = within("start", dmp_server::run::start(config)).await.unwrap();
+    let handle = within("start", dmp_server::server::start(config)).await.unwrap();
     let client =
         within("connect", DmpClient::connect(format!("http://127.0.0.1:{}", handle.grpc_addr.port())))
             .await

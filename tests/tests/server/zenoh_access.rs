@@ -8,7 +8,7 @@ use std::path::Path;
 use dmp_proto::keys::{obstacle_key, robot_state_key};
 use dmp_proto::zenoh_session::{SessionOptions, ZenohTls, session_config};
 use dmp_proto::{codec, v1};
-use dmp_server::run::ServerHandle;
+use dmp_server::server::ServerHandle;
 use dmp_tests::within;
 
 use crate::{secured_cell_a, until};
@@ -40,7 +40,7 @@ fn obstacle(id: &str) -> String {
 }
 
 fn in_scene(h: &ServerHandle, cell: &str, id: &str) -> bool {
-    h.state().cells.find(cell).unwrap().is_some_and(|c| c.snapshot().obstacles.contains_key(id))
+    h.cells().find(cell).unwrap().is_some_and(|c| c.snapshot().obstacles.contains_key(id))
 }
 
 fn now_unix_s() -> f64 {
@@ -104,7 +104,7 @@ async fn each_zenoh_peer_does_only_what_its_role_may() {
         !in_scene(&h, "cell-a", "from-robot") && !in_scene(&h, "cell-a", "marker"),
         "a robot changed the scene"
     );
-    let cell = h.state().cells.find("cell-a").unwrap().unwrap();
+    let cell = h.cells().find("cell-a").unwrap().unwrap();
     assert_eq!(cell.robot_count(), 0, "a robot state was taken from a perception node or a robot");
 
     // A server of the plant (the router's certificate, role `server`) may publish robot states.
@@ -184,7 +184,7 @@ async fn the_zenoh_denial_matrix_holds_for_every_key_class_and_role() {
             assert!(!in_scene(&h, "cell-b", &far), "{role} put an obstacle in another cell");
         }
         let ghost = format!("ghost-{role}");
-        let cell = h.state().cells.find("cell-a").unwrap().unwrap();
+        let cell = h.cells().find("cell-a").unwrap().unwrap();
         let seen =
             || cell.other_robots("", f64::MAX / 4.0, f64::MAX).iter().any(|r| r.state.robot_id == ghost);
         if states {
@@ -241,7 +241,7 @@ async fn the_zenoh_denial_matrix_holds_for_every_key_class_and_role() {
     }
     // The denials once more, a robot's whole run later: the observer's and the robot's were first checked after a
     // marker on another link, which does not order them.
-    let cell = h.state().cells.find("cell-a").unwrap().unwrap();
+    let cell = h.cells().find("cell-a").unwrap().unwrap();
     for (role, (obstacles, elsewhere, states, _)) in matrix {
         if !obstacles {
             assert!(!in_scene(&h, "cell-a", &format!("by-{role}")), "{role} put an obstacle");

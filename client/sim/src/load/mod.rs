@@ -32,8 +32,6 @@
 //! times are the server's wall clock (`start_unix_s`), arrivals this machine's: run both on one machine (or with
 //! synchronised clocks).
 
-#[cfg(test)]
-mod accuracy;
 pub mod args;
 pub mod layout;
 pub mod monitor;
