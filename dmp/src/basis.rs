@@ -14,14 +14,14 @@ const CUTOFF: f64 = 39.0;
 /// `i < N` and `h_N = h_{N-1}`. The centres are the paper's with `T = tau` (ERRATA.md): the basis spans the phase of
 /// exactly one demonstration, whatever its duration.
 #[derive(Debug, Clone, PartialEq)]
-pub struct GaussianBasis {
+pub(crate) struct GaussianBasis {
     centers: Vec<f64>,
     widths: Vec<f64>,
 }
 
 impl GaussianBasis {
     /// The basis for the paper's `N` (so `N + 1` functions) and the canonical decay `alpha`.
-    pub fn new(n: usize, alpha: f64) -> Result<Self> {
+    pub(crate) fn new(n: usize, alpha: f64) -> Result<Self> {
         if n < 1 {
             return Err(InvalidInput::new("N", "must be at least 1 (the basis has N + 1 functions)").into());
         }
@@ -34,29 +34,26 @@ impl GaussianBasis {
     }
 
     /// Number of functions, `N + 1`.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.centers.len()
     }
 
-    /// Always false: a basis has at least two functions.
-    pub fn is_empty(&self) -> bool {
-        false
-    }
-
     /// The centres `c_i`.
-    pub fn centers(&self) -> &[f64] {
+    #[cfg(test)]
+    pub(crate) fn centers(&self) -> &[f64] {
         &self.centers
     }
 
     /// The widths `h_i`.
-    pub fn widths(&self) -> &[f64] {
+    #[cfg(test)]
+    pub(crate) fn widths(&self) -> &[f64] {
         &self.widths
     }
 
     /// Normalised activations `psi_i(s) / sum_j psi_j(s)` written into `out` (length `N + 1`); returns the range
     /// of indices that are not negligible. Computed with the largest exponent factored out, so the sum never
     /// underflows even for a phase far below the last centre.
-    pub fn normalized(&self, s: f64, out: &mut [f64]) -> std::ops::Range<usize> {
+    pub(crate) fn normalized(&self, s: f64, out: &mut [f64]) -> std::ops::Range<usize> {
         let mut max = f64::NEG_INFINITY;
         for ((o, &c), &h) in out.iter_mut().zip(&self.centers).zip(&self.widths) {
             let e = -h * (s - c) * (s - c);
@@ -90,7 +87,7 @@ impl GaussianBasis {
 /// # Formula
 /// `f_p(s) = s * sum_i w_{p,i} psi_i(s) / sum_i psi_i(s)`.
 #[derive(Debug, Clone, PartialEq)]
-pub struct ForcingTerm {
+pub(crate) struct ForcingTerm {
     basis: GaussianBasis,
     /// Row-major `d x (N + 1)`.
     weights: Vec<f64>,
@@ -102,7 +99,7 @@ pub struct ForcingTerm {
 
 impl ForcingTerm {
     /// Builds the term from its basis and the weights of each dimension (`weights[p][i]`).
-    pub fn new(basis: GaussianBasis, weights: &[Vec<f64>]) -> Self {
+    pub(crate) fn new(basis: GaussianBasis, weights: &[Vec<f64>]) -> Self {
         let n1 = basis.len();
         let flat = weights.iter().flat_map(|row| row.iter().copied()).collect::<Vec<_>>();
         debug_assert_eq!(flat.len(), weights.len() * n1);
@@ -110,13 +107,8 @@ impl ForcingTerm {
         Self { scratch: vec![0.0; n1], basis, weights: flat, dim: weights.len(), null }
     }
 
-    /// The basis.
-    pub fn basis(&self) -> &GaussianBasis {
-        &self.basis
-    }
-
     /// Writes `f(s)` into `out` (length `d`).
-    pub fn eval(&mut self, s: f64, out: &mut [f64]) {
+    pub(crate) fn eval(&mut self, s: f64, out: &mut [f64]) {
         if self.null {
             // The sum below is of zeros: the same result, without the N + 1 exponentials.
             out[..self.dim].fill(0.0);

@@ -15,8 +15,10 @@ pub fn phase_after(s: f64, alpha: f64, tau: f64, dt: f64) -> f64 {
     s * (-alpha * dt / tau).exp()
 }
 
-/// The phase at time `t` of a run that started at `s = 1` with a constant `tau`.
-pub fn phase_at(alpha: f64, tau: f64, t: f64) -> f64 {
+/// The phase at time `t` of a run that started at `s = 1` with a constant `tau` (learning fits the forcing term at
+/// these phases).
+#[cfg(any(test, feature = "learn"))]
+pub(crate) fn phase_at(alpha: f64, tau: f64, t: f64) -> f64 {
     (-alpha * t / tau).exp()
 }
 

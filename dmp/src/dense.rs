@@ -19,22 +19,22 @@
 
 /// A point of the internal grid: time, phase, and position, velocity `dx/dt` and acceleration `d²x/dt²`.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Knot {
+pub(crate) struct Knot {
     /// Time.
-    pub t: f64,
+    pub(crate) t: f64,
     /// Phase.
-    pub s: f64,
+    pub(crate) s: f64,
     /// Position.
-    pub x: Vec<f64>,
+    pub(crate) x: Vec<f64>,
     /// Velocity `dx/dt`.
-    pub xd: Vec<f64>,
+    pub(crate) xd: Vec<f64>,
     /// Acceleration.
-    pub xdd: Vec<f64>,
+    pub(crate) xdd: Vec<f64>,
 }
 
 impl Knot {
     /// A knot of dimension `dim`, all zero, at time 0 and phase 1.
-    pub fn zeros(dim: usize) -> Self {
+    pub(crate) fn zeros(dim: usize) -> Self {
         Self { t: 0.0, s: 1.0, x: vec![0.0; dim], xd: vec![0.0; dim], xdd: vec![0.0; dim] }
     }
 }
@@ -43,7 +43,7 @@ impl Knot {
 /// interpolant of `a` and `b` into `x`, `xd` and `xdd`; returns the phase at `t`. At `t = a.t` (or `b.t`) the
 /// knot's values are returned exactly. For many points between the same knots, [`Interpolant`] computes the
 /// coefficients once.
-pub fn interpolate(a: &Knot, b: &Knot, t: f64, x: &mut [f64], xd: &mut [f64], xdd: &mut [f64]) -> f64 {
+pub(crate) fn interpolate(a: &Knot, b: &Knot, t: f64, x: &mut [f64], xd: &mut [f64], xdd: &mut [f64]) -> f64 {
     let h = b.t - a.t;
     if t == a.t || h <= 0.0 {
         return copy_knot(a, x, xd, xdd);
@@ -62,7 +62,7 @@ pub fn interpolate(a: &Knot, b: &Knot, t: f64, x: &mut [f64], xd: &mut [f64], xd
 /// The quintic Hermite interpolant of two knots with its coefficients computed once, for the many output points
 /// between them: the same polynomial as [`interpolate`]. The knots' values are returned exactly at their times.
 #[derive(Debug, Clone, Default)]
-pub struct Interpolant {
+pub(crate) struct Interpolant {
     t0: f64,
     t1: f64,
     inv_h: f64,
@@ -74,7 +74,7 @@ pub struct Interpolant {
 
 impl Interpolant {
     /// Computes the coefficients between `a` and `b` (in place: no allocation once the dimension is known).
-    pub fn fit(&mut self, a: &Knot, b: &Knot) {
+    pub(crate) fn fit(&mut self, a: &Knot, b: &Knot) {
         let h = b.t - a.t;
         self.t0 = a.t;
         self.t1 = b.t;
@@ -87,7 +87,15 @@ impl Interpolant {
     }
 
     /// As [`interpolate`], for the knots `a` and `b` it was fitted to.
-    pub fn eval(&self, a: &Knot, b: &Knot, t: f64, x: &mut [f64], xd: &mut [f64], xdd: &mut [f64]) -> f64 {
+    pub(crate) fn eval(
+        &self,
+        a: &Knot,
+        b: &Knot,
+        t: f64,
+        x: &mut [f64],
+        xd: &mut [f64],
+        xdd: &mut [f64],
+    ) -> f64 {
         debug_assert!(a.t == self.t0 && b.t == self.t1, "fitted to other knots");
         if t == a.t || self.inv_h == 0.0 {
             return copy_knot(a, x, xd, xdd);

@@ -7,7 +7,7 @@
 /// # Formula
 /// Inside, with `h1 = t_i - t_{i-1}`, `h2 = t_{i+1} - t_i`:
 /// `f'_i = -h2 / (h1 (h1 + h2)) f_{i-1} + (h2 - h1) / (h1 h2) f_i + h1 / (h2 (h1 + h2)) f_{i+1}`.
-pub fn gradient(f: &[f64], t: &[f64]) -> Vec<f64> {
+pub(crate) fn gradient(f: &[f64], t: &[f64]) -> Vec<f64> {
     let n = f.len();
     assert!(n >= 3 && t.len() == n, "gradient needs at least 3 samples");
     let mut out = vec![0.0; n];

@@ -4,7 +4,7 @@ use std::f64::consts::PI;
 
 /// `n` unit vectors of dimension `d`: in 2-D the SPEC's `theta_k = 2 pi k / n`; in 3-D a Fibonacci sphere; in 1-D
 /// alternately `+1` and `-1`; above 3-D a Halton sequence pushed through the Gaussian map and normalised.
-pub fn unit_directions(d: usize, n: usize) -> Vec<Vec<f64>> {
+pub(crate) fn unit_directions(d: usize, n: usize) -> Vec<Vec<f64>> {
     match d {
         0 => Vec::new(),
         1 => (0..n).map(|k| vec![if k % 2 == 0 { 1.0 } else { -1.0 }]).collect(),

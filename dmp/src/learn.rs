@@ -112,7 +112,8 @@ impl LearnConfig {
 }
 
 /// Expands a per-dimension parameter given as one value or `d` values.
-pub fn per_dimension(name: &str, v: &[f64], dim: usize) -> Result<Vec<f64>, InvalidInput> {
+#[cfg(feature = "learn")]
+pub(crate) fn per_dimension(name: &str, v: &[f64], dim: usize) -> Result<Vec<f64>, InvalidInput> {
     match v.len() {
         1 => Ok(vec![v[0]; dim]),
         n if n == dim => Ok(v.to_vec()),

@@ -3,16 +3,16 @@
 //!
 //! Pure math: no I/O, no clock, no async. Time and `dt` are arguments.
 //!
-//! | concept | module |
+//! | concept | module or file |
 //! | --- | --- |
 //! | canonical system (phase in closed form) | [`canonical`] |
-//! | Gaussian basis and forcing term | [`basis`] |
-//! | learning from one demonstration | [`mod@learn`], [`derivatives`] |
+//! | Gaussian basis and forcing term | `basis.rs` |
+//! | learning from one demonstration | [`Demonstration`], `learn.rs`, `derivatives.rs` |
 //! | the stored primitive | [`primitive`] |
 //! | RK4 integration, step by step | [`integrate`] |
 //! | one run of one robot or a group: stepping, changes, rollbacks, outcomes | [`execution`] |
 //! | isopotentials (superquadrics) | [`isopotential`] |
-//! | obstacles (pose, motion, boundary samples) | [`obstacle`] |
+//! | obstacles (pose, motion, boundary samples) | [`Obstacle`], `obstacle.rs` |
 //! | the five repulsive terms | [`avoidance`] |
 //! | a whole scene, robots as moving obstacles | [`field`] |
 //! | rollouts, stalls | [`mod@rollout`], [`stall`] |
@@ -20,22 +20,26 @@
 //! | orientation DMPs on unit quaternions (feature `orientation`) | [`orientation`] |
 //! | a held tool: repulsive terms on its control points drive position and orientation | [`tool`] |
 
+#![warn(missing_docs)]
+#![warn(unreachable_pub)]
+
 pub mod avoidance;
-pub mod basis;
+pub(crate) mod basis;
 pub mod canonical;
-pub mod dense;
-pub mod derivatives;
-pub mod directions;
+pub(crate) mod dense;
+#[cfg(feature = "learn")]
+pub(crate) mod derivatives;
+pub(crate) mod directions;
 pub mod distance;
-pub mod error;
+pub(crate) mod error;
 pub mod execution;
 pub mod field;
 pub mod integrate;
 pub mod isopotential;
-pub mod learn;
+pub(crate) mod learn;
 #[cfg(all(feature = "learn", feature = "orientation"))]
 pub mod metrics;
-pub mod obstacle;
+pub(crate) mod obstacle;
 #[cfg(feature = "orientation")]
 pub mod orientation;
 pub mod primitive;

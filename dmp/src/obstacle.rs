@@ -99,13 +99,13 @@ impl Obstacle {
     }
 
     /// The same obstacle whose centre at time zero is moved to `center` (the rest unchanged).
-    pub fn with_center(&self, center: Vec<f64>) -> Self {
+    pub(crate) fn with_center(&self, center: Vec<f64>) -> Self {
         Self { center, ..self.clone() }
     }
 
     /// Moves the obstacle in place: centre at time zero and constant velocity (same dimension; a value that is
     /// not finite or of another length leaves it unchanged and returns false). Allocates nothing.
-    pub fn set_motion(&mut self, center: &[f64], velocity: &[f64]) -> bool {
+    pub(crate) fn set_motion(&mut self, center: &[f64], velocity: &[f64]) -> bool {
         let d = self.dim();
         if center.len() != d || velocity.len() != d || !center.iter().chain(velocity).all(|v| v.is_finite()) {
             return false;
@@ -132,25 +132,27 @@ impl Obstacle {
 /// Scratch and result of an evaluation of an isopotential placed in the world: `C`, its derivatives in the
 /// obstacle's own frame (`y = R^T (x - c)`), and the world-frame gradient on request.
 #[derive(Debug, Clone)]
-pub struct WorldEval {
+pub(crate) struct WorldEval {
     /// `C`.
-    pub c: f64,
+    pub(crate) c: f64,
     /// `grad_x C` (after [`WorldEval::eval`]).
-    pub grad: Vec<f64>,
+    pub(crate) grad: Vec<f64>,
     /// The point in the obstacle's frame.
-    pub y: Vec<f64>,
+    pub(crate) y: Vec<f64>,
     /// `grad_y C`.
-    pub gy: Vec<f64>,
+    pub(crate) gy: Vec<f64>,
     /// Row-major `H_y`, the Hessian in the obstacle's frame.
-    pub hy: Vec<f64>,
+    pub(crate) hy: Vec<f64>,
     tmp: Vec<f64>,
+    #[cfg(test)]
     tmp2: Vec<f64>,
+    #[cfg(test)]
     hess: Vec<f64>,
 }
 
 impl WorldEval {
     /// Buffers for dimension `d`.
-    pub fn new(d: usize) -> Self {
+    pub(crate) fn new(d: usize) -> Self {
         Self {
             c: 0.0,
             grad: vec![0.0; d],
@@ -158,13 +160,21 @@ impl WorldEval {
             gy: vec![0.0; d],
             hy: vec![0.0; d * d],
             tmp: vec![0.0; d],
+            #[cfg(test)]
             tmp2: vec![0.0; d],
+            #[cfg(test)]
             hess: vec![0.0; d * d],
         }
     }
 
     /// `C`, `grad_y C` and `H_y` of `shape` centred at `center` with `rotation`, at `x`.
-    pub fn eval_local(&mut self, shape: &Shape, rotation: Option<&[f64]>, center: &[f64], x: &[f64]) -> f64 {
+    pub(crate) fn eval_local(
+        &mut self,
+        shape: &Shape,
+        rotation: Option<&[f64]>,
+        center: &[f64],
+        x: &[f64],
+    ) -> f64 {
         let d = x.len();
         for i in 0..d {
             self.tmp[i] = x[i] - center[i];
@@ -178,21 +188,23 @@ impl WorldEval {
     ///
     /// # Formula
     /// `y = R^T (x - c)`, `grad_x C = R grad_y C`, `H_x = R H_y R^T`.
-    pub fn eval(&mut self, shape: &Shape, rotation: Option<&[f64]>, center: &[f64], x: &[f64]) -> f64 {
+    pub(crate) fn eval(&mut self, shape: &Shape, rotation: Option<&[f64]>, center: &[f64], x: &[f64]) -> f64 {
         self.eval_local(shape, rotation, center, x);
         rotate(rotation, &self.gy, &mut self.grad);
         self.c
     }
 
     /// `out = H_x v = R H_y R^T v` at the point of the last evaluation.
-    pub fn hess_mul(&mut self, rotation: Option<&[f64]>, v: &[f64], out: &mut [f64]) {
+    #[cfg(test)]
+    pub(crate) fn hess_mul(&mut self, rotation: Option<&[f64]>, v: &[f64], out: &mut [f64]) {
         rotate_transposed(rotation, v, &mut self.tmp);
         mat_vec(&self.hy, &self.tmp, &mut self.tmp2);
         rotate(rotation, &self.tmp2, out);
     }
 
     /// The full world-frame Hessian (row-major) at the point of the last evaluation.
-    pub fn hessian(&mut self, rotation: Option<&[f64]>) -> &[f64] {
+    #[cfg(test)]
+    pub(crate) fn hessian(&mut self, rotation: Option<&[f64]>) -> &[f64] {
         let d = self.grad.len();
         let mut e = vec![0.0; d];
         let mut col = vec![0.0; d];
@@ -208,7 +220,13 @@ impl WorldEval {
     }
 
     /// `C` only.
-    pub fn value(&mut self, shape: &Shape, rotation: Option<&[f64]>, center: &[f64], x: &[f64]) -> f64 {
+    pub(crate) fn value(
+        &mut self,
+        shape: &Shape,
+        rotation: Option<&[f64]>,
+        center: &[f64],
+        x: &[f64],
+    ) -> f64 {
         let d = x.len();
         for i in 0..d {
             self.tmp[i] = x[i] - center[i];
@@ -218,7 +236,7 @@ impl WorldEval {
     }
 
     /// The point `x` in the obstacle's frame, `R^T (x - c)`, written into `out`.
-    pub fn to_local(rotation: Option<&[f64]>, center: &[f64], x: &[f64], out: &mut [f64]) {
+    pub(crate) fn to_local(rotation: Option<&[f64]>, center: &[f64], x: &[f64], out: &mut [f64]) {
         let d = x.len();
         let diff: Vec<f64> = (0..d).map(|i| x[i] - center[i]).collect();
         rotate_transposed(rotation, &diff, out);

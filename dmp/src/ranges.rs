@@ -52,7 +52,7 @@ pub const EXPONENT: RangeInclusive<f64> = 1.0..=8.0;
 pub const SOLID_DIMENSION_M: RangeInclusive<f64> = 2e-3..=5e3;
 
 /// How far a rotation may be from orthonormal (the largest entry of `R R^T - I`).
-pub const ROTATION_TOLERANCE: f64 = 1e-6;
+pub(crate) const ROTATION_TOLERANCE: f64 = 1e-6;
 
 /// Magnitude of an obstacle's velocity, metres per second: a moving obstacle stays inside the reach for minutes
 /// from anywhere in the default workspace, and `tau * o_dot` (with `tau <= 1e4`) stays under `1e6`.
@@ -67,7 +67,7 @@ pub const ALPHA: RangeInclusive<f64> = 1e-2..=1e2;
 pub const N_BASIS: RangeInclusive<usize> = 1..=10_000;
 
 /// The stiffness `K` of each dimension (the `alpha_z beta_z` of other papers); the integration step is checked
-/// against it too ([`crate::execution::check_stability`]).
+/// against it too (`dt sqrt(max K) / tau` at most [`crate::execution::MAX_STIFF_STEP`]).
 pub const STIFFNESS: RangeInclusive<f64> = 1e-3..=1e8;
 
 /// The damping `D` of each dimension (critical damping `2 sqrt(K)` is at most `2e4`).

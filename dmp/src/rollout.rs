@@ -108,8 +108,8 @@ pub fn rollout(
 
 /// [`rollout`] of a pose primitive, its orientation dimensions in the chart `chart` (see
 /// [`crate::orientation::pose::pose_motion`]), holding `tool` if given ([`Execution::set_tool`]).
-#[cfg(feature = "orientation")]
-pub fn rollout_pose(
+#[cfg(all(feature = "learn", feature = "orientation"))]
+pub(crate) fn rollout_pose(
     primitive: &Primitive,
     motion: &Motion,
     field: &RepulsiveField,

@@ -4,9 +4,9 @@
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StallConfig {
     /// Speed `|dx/dt|` below which the robot counts as stopped.
-    pub speed_tol: f64,
+    pub(crate) speed_tol: f64,
     /// Distance to the goal within which stopping is arriving, not stalling.
-    pub goal_tol: f64,
+    pub(crate) goal_tol: f64,
     /// How long it must stay stopped away from its goal.
     pub window: f64,
 }

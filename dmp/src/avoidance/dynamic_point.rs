@@ -5,7 +5,8 @@ use super::{dot, norm, pow};
 /// # Formula
 /// `U_d = lambda (-cos theta)^beta |u| / p` when `cos theta = <u, r> / (|u| p) < 0`, else 0; `r = x - o`,
 /// `u` the velocity relative to the obstacle.
-pub fn potential(r: &[f64], u: &[f64], lambda: f64, beta: f64) -> f64 {
+#[cfg(test)]
+pub(crate) fn potential(r: &[f64], u: &[f64], lambda: f64, beta: f64) -> f64 {
     let (p, un) = (norm(r), norm(u));
     if p == 0.0 || un == 0.0 {
         return 0.0;
@@ -19,7 +20,7 @@ pub fn potential(r: &[f64], u: &[f64], lambda: f64, beta: f64) -> f64 {
 /// # Formula
 /// (ERRATA.md, term 2) `grad cos = (p^2 u - <u, r> r) / (|u| p^3)`,
 /// `phi = lambda |u| (-cos)^(beta - 1) / p * (beta grad cos - cos r / p^2)`.
-pub fn add_force(r: &[f64], u: &[f64], lambda: f64, beta: f64, out: &mut [f64]) {
+pub(crate) fn add_force(r: &[f64], u: &[f64], lambda: f64, beta: f64, out: &mut [f64]) {
     let (p2, un) = (dot(r, r), norm(u));
     if p2 == 0.0 || un == 0.0 {
         return;

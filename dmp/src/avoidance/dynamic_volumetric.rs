@@ -4,7 +4,8 @@ use super::{DynamicVolumetric, dot, norm, pow};
 
 /// # Formula
 /// `U_D = lambda (-cos theta)^beta |u| / C^eta` when `cos theta = <grad C, u> / (|grad C| |u|) < 0`, else 0.
-pub fn potential(c: f64, grad: &[f64], u: &[f64], params: &DynamicVolumetric) -> f64 {
+#[cfg(test)]
+pub(crate) fn potential(c: f64, grad: &[f64], u: &[f64], params: &DynamicVolumetric) -> f64 {
     let DynamicVolumetric { lambda, beta, eta } = *params;
     let (gn, un) = (norm(grad), norm(u));
     if gn == 0.0 || un == 0.0 {
@@ -15,7 +16,7 @@ pub fn potential(c: f64, grad: &[f64], u: &[f64], params: &DynamicVolumetric) ->
 }
 
 /// Whether the term is active: `cos theta < 0` (moving toward the obstacle), with `grad C` and `u` non-zero.
-pub fn is_active(grad: &[f64], u: &[f64]) -> bool {
+pub(crate) fn is_active(grad: &[f64], u: &[f64]) -> bool {
     dot(grad, u) < 0.0 && norm(grad) > 0.0 && norm(u) > 0.0
 }
 
@@ -27,7 +28,7 @@ pub fn is_active(grad: &[f64], u: &[f64]) -> bool {
 /// (ERRATA.md, term 5, with `|grad C|^2` in the denominator and the factor `eta` kept)
 /// `grad cos = (H u |grad C| - <grad C, u> H grad C / |grad C|) / (|u| |grad C|^2)`,
 /// `phi = lambda |u| (-cos)^(beta - 1) C^(-eta) (beta grad cos - eta cos grad C / C)`.
-pub fn add_force(
+pub(crate) fn add_force(
     c: f64,
     grad: &[f64],
     hu: &[f64],

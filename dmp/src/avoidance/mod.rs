@@ -3,11 +3,11 @@
 //! Conventions: `r = x - o`; `v` is the DMP's velocity state (`tau dx/dt`); `u = v - tau * o_dot` is the velocity
 //! relative to the obstacle (or `v` when relative velocity is off). Every term is in the units of `tau dv/dt`.
 
-pub mod dynamic_point;
-pub mod dynamic_volumetric;
-pub mod static_point;
-pub mod static_volumetric;
-pub mod steering_angle;
+pub(crate) mod dynamic_point;
+pub(crate) mod dynamic_volumetric;
+pub(crate) mod static_point;
+pub(crate) mod static_volumetric;
+pub(crate) mod steering_angle;
 
 use serde::{Deserialize, Serialize};
 
@@ -98,7 +98,7 @@ impl Method {
     }
 
     /// True for the three methods that act on boundary samples.
-    pub fn is_point_method(&self) -> bool {
+    pub(crate) fn is_point_method(&self) -> bool {
         matches!(self, Method::StaticPoint(_) | Method::DynamicPoint(_) | Method::SteeringAngle(_))
     }
 

@@ -11,7 +11,7 @@ use super::{dot, norm};
 /// In 2-D the axis is `+z` or `-z` by the sign of the z-component of `(o - x) x v`: the rotation is counter-
 /// clockwise or clockwise accordingly. When the axis vanishes (heading straight at the point) nothing is added.
 /// Dimensions other than 2 and 3 are refused by validation and add nothing here.
-pub fn add_force(r: &[f64], v: &[f64], u: &[f64], gamma: f64, beta: f64, out: &mut [f64]) {
+pub(crate) fn add_force(r: &[f64], v: &[f64], u: &[f64], gamma: f64, beta: f64, out: &mut [f64]) {
     let (p, un) = (norm(r), norm(u));
     if p == 0.0 || un == 0.0 {
         return;

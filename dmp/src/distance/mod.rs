@@ -87,7 +87,7 @@ pub fn signed_distance_world(obstacle: &Obstacle, x: &[f64], t: f64) -> f64 {
 ///
 /// # Panics
 /// If `y.len()` differs from the shape's dimension.
-pub fn nearest_surface_point(shape: &Shape, y: &[f64]) -> (f64, Vec<f64>) {
+pub(crate) fn nearest_surface_point(shape: &Shape, y: &[f64]) -> (f64, Vec<f64>) {
     let config =
         Config { intervals: grid_intervals(shape.dim()), per_grid: GRID_CANDIDATES, levels: MAX_LEVELS };
     nearest_with(shape, y, config)

@@ -31,7 +31,7 @@ pub const DEFAULT_OBSTACLE_BLEND: f64 = 0.1;
 const MAX_LEVELS: usize = 16;
 
 /// The quintic smoothstep of `u`, clamped to `[0, 1]`.
-pub fn smoothstep(u: f64) -> f64 {
+pub(crate) fn smoothstep(u: f64) -> f64 {
     let u = u.clamp(0.0, 1.0);
     u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
 }

@@ -21,15 +21,6 @@ impl Execution {
         Ok(())
     }
 
-    /// Changes the start `x0` the forcing term is scaled from, from the next output point on (the robot does not
-    /// move there: its position stays continuous).
-    pub fn set_start(&mut self, start: Vec<f64>) -> Result<(), InvalidInput> {
-        check_vector("start", &start, self.primitive.dim)?;
-        self.rebase();
-        self.motion.start = start;
-        Ok(())
-    }
-
     /// Starts the run at velocity `v` (`dx/dt`, every dimension) instead of at rest, from its start: a run that
     /// takes over a robot already moving (a session resumed on another server after a fail-over) keeps the robot's
     /// velocity continuous. Only before the run's first output point; the limiter takes the robot as having moved
@@ -74,11 +65,6 @@ impl Execution {
     pub fn stop(&mut self) {
         self.stopping = true;
         self.set_holding(true);
-    }
-
-    /// True once [`Execution::stop`] was called.
-    pub fn is_stopping(&self) -> bool {
-        self.stopping
     }
 
     /// Rolls back to the first recorded output point at or after `t` (no-op when `t` is at or past the current

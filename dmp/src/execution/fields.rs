@@ -53,7 +53,7 @@ impl Execution {
         Ok(())
     }
 
-    /// Blends every later change of the obstacles in over `seconds` ([`super::blend`]; by default
+    /// Blends every later change of the obstacles in over `seconds` (`execution/blend.rs`; by default
     /// [`super::DEFAULT_OBSTACLE_BLEND`]); 0 applies them at once. Refused (naming `obstacle_blend_s`) unless finite
     /// and non-negative.
     pub fn set_obstacle_blend(&mut self, seconds: f64) -> Result<(), crate::error::InvalidInput> {

@@ -31,7 +31,8 @@ impl Execution {
 
     /// The goal the DMP steers to at run time `t` (at or after the last change): the filtered goal while a change
     /// is being filtered, the motion's goal otherwise.
-    pub fn filtered_goal_at(&self, t: f64, out: &mut [f64]) {
+    #[cfg(test)]
+    pub(crate) fn filtered_goal_at(&self, t: f64, out: &mut [f64]) {
         self.integrator.goal_filter().goal_at(&self.motion.goal, t, self.motion.tau, out);
     }
 

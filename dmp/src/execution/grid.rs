@@ -3,8 +3,9 @@
 //! coarse grid, by a probe of one output step.
 
 use super::Execution;
+use super::diagnosis::{Diagnosis, step_is_finite};
+use super::field_sum::FieldSum;
 use super::hold::{hold_acc, hold_step};
-use super::ignored::{Diagnosis, FieldSum, step_is_finite};
 use crate::canonical::phase_after;
 use crate::dense::Knot;
 use crate::integrate::dormand_prince;

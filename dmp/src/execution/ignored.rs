@@ -4,10 +4,9 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
+use super::diagnosis::Diagnosis;
 use super::{Execution, cellmate_field};
-use crate::dense::Knot;
 use crate::field::{RepulsiveField, Scene};
-use crate::integrate::{Perturbation, State};
 use crate::isopotential::Shape;
 use crate::obstacle::Obstacle;
 
@@ -65,85 +64,6 @@ impl Ignored {
     pub(super) fn take_pending(&mut self) -> Vec<IgnoredObstacle> {
         std::mem::take(&mut self.pending)
     }
-}
-
-/// Which obstacles' terms were found not finite while a step was redone, and when.
-#[derive(Debug, Default)]
-pub(super) struct Diagnosis {
-    /// Indices into the run's field.
-    pub(super) obstacles: Vec<usize>,
-    /// Indices into the cell-mates' field.
-    pub(super) robots: Vec<usize>,
-    /// Run time of the first evaluation that found one.
-    pub(super) t: f64,
-}
-
-/// The run's field and its cell-mates' field, summed; while a step is diagnosed, each obstacle's term is checked
-/// first, at every finite state the step evaluates, until one is found that is not finite.
-pub(super) struct FieldSum<'a> {
-    pub(super) field: &'a mut RepulsiveField,
-    /// The fields the run's field is replacing ([`super::blend`]).
-    pub(super) blend: &'a mut super::blend::Blend,
-    pub(super) mates: &'a mut RepulsiveField,
-    pub(super) diagnosis: Option<&'a mut Diagnosis>,
-    /// A pose run's tool and chart: both fields act on its control points ([`super::tool`]).
-    #[cfg_attr(not(feature = "orientation"), allow(dead_code))]
-    pub(super) tool: Option<(&'a super::pose::HeldTool, &'a super::pose::Chart)>,
-    /// The relative rate `tau' / tau` of the temporal coupling in force ([`super::limiting`]).
-    pub(super) tau_rate: f64,
-}
-
-impl<'a> FieldSum<'a> {
-    pub(super) fn new(
-        field: &'a mut RepulsiveField,
-        blend: &'a mut super::blend::Blend,
-        mates: &'a mut RepulsiveField,
-        diagnosis: Option<&'a mut Diagnosis>,
-        tool: Option<&'a super::pose::HeldTool>,
-        chart: Option<&'a super::pose::Chart>,
-    ) -> Self {
-        Self { field, blend, mates, diagnosis, tool: tool.zip(chart), tau_rate: 0.0 }
-    }
-
-    /// With the temporal coupling's relative rate `tau' / tau` ([`super::limiting`]).
-    pub(super) fn coupled(mut self, tau_rate: f64) -> Self {
-        self.tau_rate = tau_rate;
-        self
-    }
-}
-
-impl Perturbation for FieldSum<'_> {
-    /// The obstacles' and cell-mates' terms, and the temporal coupling's: `-tau' v` ([`super::limiting`]).
-    fn add(&mut self, t: f64, x: &[f64], v: &[f64], tau: f64, out: &mut [f64]) {
-        if self.tau_rate != 0.0 {
-            let k = self.tau_rate * tau;
-            out.iter_mut().zip(v).for_each(|(o, v)| *o -= k * v);
-        }
-        #[cfg(feature = "orientation")]
-        if let Some((tool, chart)) = self.tool {
-            let diagnosis = self.diagnosis.as_deref_mut();
-            super::tool::add_on_tool(
-                self.field, self.blend, self.mates, tool, chart, t, x, v, tau, out, diagnosis,
-            );
-            return;
-        }
-        if let Some(d) = self.diagnosis.as_deref_mut()
-            && d.obstacles.is_empty()
-            && d.robots.is_empty()
-            && x.iter().chain(v).all(|v| v.is_finite())
-        {
-            self.field.nonfinite_obstacles(t, x, v, tau, &mut d.obstacles);
-            self.mates.nonfinite_obstacles(t, x, v, tau, &mut d.robots);
-            d.t = t;
-        }
-        self.blend.add(self.field, t, x, v, tau, out);
-        self.mates.add(t, x, v, tau, out);
-    }
-}
-
-/// True when the step from `knot0` to the state `s` (with the accelerations at both ends) is finite.
-pub(super) fn step_is_finite(knot0: &Knot, s: &State, acc1: &[f64]) -> bool {
-    knot0.xdd.iter().chain(&s.x).chain(&s.xd).chain(acc1).all(|v| v.is_finite())
 }
 
 impl Execution {

@@ -19,7 +19,7 @@
 use super::limits::Bounds;
 
 /// Relative margin under the bounds that the limiter works to.
-pub const MARGIN: f64 = 1e-4;
+pub(crate) const MARGIN: f64 = 1e-4;
 
 /// Bisection steps on the segment from the wanted to the braking acceleration.
 const BISECTIONS: usize = 12;

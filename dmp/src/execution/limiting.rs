@@ -43,21 +43,21 @@ use crate::error::InvalidInput;
 pub use super::limits::Limits;
 
 /// Temporal coupling starts above this use of a bound.
-pub const COUPLE_ABOVE: f64 = 0.9;
+pub(crate) const COUPLE_ABOVE: f64 = 0.9;
 /// Temporal coupling relaxes below this use of a bound.
-pub const RELAX_BELOW: f64 = 0.6;
+pub(crate) const RELAX_BELOW: f64 = 0.6;
 /// Growth rate of the time scale while coupling, 1/s.
-pub const COUPLE_RATE: f64 = 4.0;
+pub(crate) const COUPLE_RATE: f64 = 4.0;
 /// Relaxation rate of the time scale, 1/s.
-pub const RELAX_RATE: f64 = 1.0;
+pub(crate) const RELAX_RATE: f64 = 1.0;
 /// Largest time scale factor.
-pub const MAX_TAU_SCALE: f64 = 10.0;
+pub(crate) const MAX_TAU_SCALE: f64 = 10.0;
 /// The coupling's time scale and rate are applied every this many seconds (rounded to whole output steps).
-pub const COUPLE_PERIOD: f64 = 0.01;
+pub(crate) const COUPLE_PERIOD: f64 = 0.01;
 /// The speed coupling's term reaches its rate, or leaves it, over this many periods ([`COUPLE_PERIOD`]).
-pub const COUPLE_RATE_PERIODS: f64 = 4.0;
+pub(crate) const COUPLE_RATE_PERIODS: f64 = 4.0;
 /// Braking to rest starts when the DMP asks to decelerate at this many times the acceleration bound.
-pub const BRAKE_ABOVE: f64 = 4.0;
+pub(crate) const BRAKE_ABOVE: f64 = 4.0;
 
 /// What keeping the limits did in a stretch (the most that happened).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord)]

@@ -1,17 +1,17 @@
 //! One run on one phase: a robot, or a group of robots sharing a DMP, stepped stretch by stretch to a given time.
-//! The offline rollout ([`crate::rollout`]), the scenario runs and the server's streams all step through
+//! The offline rollout ([`mod@crate::rollout`]), the scenario runs and the server's streams all step through
 //! [`Execution`], so that the offline and the served paths agree by construction.
 //!
-//! Changes (a new goal, `tau` or start, pause, resume and stop, new obstacles, the cell-mates' motion) apply from the
+//! Changes (a new goal or `tau`, pause, resume and stop, new obstacles, the cell-mates' motion) apply from the
 //! next output point, never by a jump; the run can roll back to a recent point so that a new stretch supersedes
 //! points already handed out.
 //!
 //! Stepping ([`Stepping`]): RK4 on an internal grid of `step_points` output steps, the output points in between
-//! being the quintic Hermite interpolant of the two knots around them ([`crate::dense`]); every change restarts the
+//! being the quintic Hermite interpolant of the two knots around them (`dense.rs`); every change restarts the
 //! grid at the next output point, so a change takes effect exactly where it would with RK4 at the output rate. With
 //! a tolerance the grid adapts instead: Dormand–Prince 5(4) steps of a whole number of output steps, at most
 //! `step_points`, each accepted when its error estimate is within the tolerance
-//! ([`crate::integrate::dormand_prince`]), and never beyond the limit the caller sets
+//! (`integrate/dormand_prince.rs`), and never beyond the limit the caller sets
 //! ([`Execution::limit_knots_to`]: where its next change can apply, so that no step is computed past it for
 //! nothing).
 //!
@@ -26,6 +26,8 @@
 mod advance;
 mod blend;
 mod changes;
+mod diagnosis;
+mod field_sum;
 mod fields;
 mod goal_changes;
 mod goal_tolerance;
@@ -52,7 +54,7 @@ use crate::primitive::Primitive;
 use crate::stall::{Stall, StallConfig, StallDetector};
 
 use self::blend::Blend;
-pub use self::blend::{DEFAULT_OBSTACLE_BLEND, smoothstep};
+pub use self::blend::DEFAULT_OBSTACLE_BLEND;
 pub use self::goal_tolerance::GoalTolerance;
 pub use self::group::{GroupMember, join_group};
 use self::history::History;
@@ -61,12 +63,11 @@ pub use self::ignored::IgnoredObstacle;
 use self::limiter::Limiter;
 pub use self::limiting::{LimitAction, Limits};
 pub use self::pose::OrientationPoints;
-pub use self::stepping::{IntegrationCost, MAX_STIFF_STEP, Stepping, check_stability};
+pub(crate) use self::stepping::check_stability;
+pub use self::stepping::{IntegrationCost, MAX_STIFF_STEP, Stepping};
 
-/// The default distance to the goal under which a robot has arrived ([`GoalTolerance::DEFAULT`]).
-pub const ARRIVED_DISTANCE: f64 = GoalTolerance::DEFAULT.position;
 /// The default speed under which a robot has arrived, and the speed under which a stop has come to rest.
-pub const ARRIVED_SPEED: f64 = GoalTolerance::DEFAULT.speed;
+pub(crate) const ARRIVED_SPEED: f64 = GoalTolerance::DEFAULT.speed;
 
 /// What a stretch of points came to. Later variants are not "worse": see [`Execution::advance`] for the order in
 /// which they are judged.
@@ -396,7 +397,8 @@ impl Execution {
     }
 
     /// True while holding (a pause, or a stop).
-    pub fn is_holding(&self) -> bool {
+    #[cfg(test)]
+    pub(crate) fn is_holding(&self) -> bool {
         self.holding
     }
 

@@ -68,11 +68,6 @@ mod with_orientation {
     }
 
     impl Execution {
-        /// A pose run's chart: the orientation of the zero of its last three dimensions.
-        pub fn orientation_chart(&self) -> Option<&UnitQuaternion<f64>> {
-            self.chart.as_ref()
-        }
-
         /// Puts the run's orientation dimensions in the chart at `chart` (e.g. a replay's goal,
         /// [`crate::orientation::pose::pose_motion`]); only before the first point, and only for a pose primitive.
         pub fn set_orientation_chart(&mut self, chart: UnitQuaternion<f64>) -> Result<(), InvalidInput> {
@@ -84,11 +79,6 @@ mod with_orientation {
             }
             self.chart = Some(chart);
             Ok(())
-        }
-
-        /// The orientation of a point of the run (its last three dimensions in the chart).
-        pub fn orientation_of(&self, x: &[f64]) -> Option<UnitQuaternion<f64>> {
-            self.chart.as_ref().map(|c| from_chart(c, &last3(x)))
         }
 
         /// Changes a pose run's goal from the next output point on: the position part (`n` values, `None` keeps

@@ -8,13 +8,13 @@ use crate::error::{InvalidInput, Result};
 pub const MAX_STIFF_STEP: f64 = 2.0;
 
 /// Largest output step, seconds.
-pub const MAX_DT: f64 = 0.1;
+pub(crate) const MAX_DT: f64 = 0.1;
 
 /// Checks that RK4 with step `dt` is stable for stiffness `k` and time scale `tau`; the error names `field`.
 ///
 /// # Formula
 /// `dt sqrt(max K) / tau <= MAX_STIFF_STEP`.
-pub fn check_stability(k: &[f64], dt: f64, tau: f64, field: &str) -> Result<(), InvalidInput> {
+pub(crate) fn check_stability(k: &[f64], dt: f64, tau: f64, field: &str) -> Result<(), InvalidInput> {
     let k_max = k.iter().copied().fold(0.0, f64::max);
     let x = dt * k_max.sqrt() / tau;
     if x > MAX_STIFF_STEP {
@@ -54,7 +54,7 @@ impl Stepping {
     }
 
     /// True when the internal step is coarser than the output step (a fixed coarse step, or the adaptive one).
-    pub fn is_coarse(&self) -> bool {
+    pub(crate) fn is_coarse(&self) -> bool {
         self.step_points > 1 || self.tolerance.is_some()
     }
 

@@ -4,6 +4,8 @@
 use nalgebra::Vector3;
 
 use super::Execution;
+use super::blend::Blend;
+use super::diagnosis::Diagnosis;
 use super::pose::Chart;
 use crate::error::InvalidInput;
 use crate::field::{Contact, DEFAULT_MAX_PERTURBATION, RepulsiveField};
@@ -108,7 +110,7 @@ fn same_thing(a: &Contact, b: &Contact) -> bool {
 #[allow(clippy::too_many_arguments)]
 pub(super) fn add_on_tool(
     field: &mut RepulsiveField,
-    blend: &mut super::blend::Blend,
+    blend: &mut Blend,
     mates: &mut RepulsiveField,
     tool: &Tool,
     chart: &Chart,
@@ -117,7 +119,7 @@ pub(super) fn add_on_tool(
     v: &[f64],
     tau: f64,
     out: &mut [f64],
-    mut diagnosis: Option<&mut super::ignored::Diagnosis>,
+    mut diagnosis: Option<&mut Diagnosis>,
 ) {
     if x.len() != 6 {
         return;
@@ -132,15 +134,9 @@ pub(super) fn add_on_tool(
         let m = pose.point(r);
         xi[..3].copy_from_slice(m.position.as_slice());
         vi[..3].copy_from_slice(m.velocity.as_slice());
-        if let Some(d) = diagnosis.as_deref_mut()
-            && d.obstacles.is_empty()
-            && d.robots.is_empty()
-            && xi.iter().chain(&vi).all(|v| v.is_finite())
-        {
+        if let Some(d) = diagnosis.as_deref_mut() {
             // As at a point robot: the obstacles whose term is not finite at this control point.
-            field.nonfinite_obstacles(t, &xi, &vi, tau, &mut d.obstacles);
-            mates.nonfinite_obstacles(t, &xi, &vi, tau, &mut d.robots);
-            d.t = t;
+            d.check(field, mates, (t, &xi, &vi, tau));
         }
         let mut phi = [0.0; 6];
         blend.add(field, t, &xi, &vi, tau, &mut phi);

@@ -20,7 +20,7 @@ impl RepulsiveField {
     /// far that centre moves, and `r` the radius of a ball about the centre holding the whole shape
     /// ([`crate::Shape::bounding_radius_sq`]): if `|x_0 - c_0| > R + |w| (n - 1) dt + r`, no state is inside it.
     /// Another robot of the scene moves as its own states say, so its own `R` is added instead of `|w| (n - 1) dt`.
-    pub fn contacts_along(
+    pub(crate) fn contacts_along(
         &mut self,
         t0: f64,
         dt: f64,

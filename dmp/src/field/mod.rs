@@ -188,14 +188,8 @@ impl RepulsiveField {
     /// Moves obstacle `i` in place (centre at time zero, constant velocity), keeping everything compiled: the
     /// cheap update of a moving obstacle whose shape stays the same. False (and no change) when `i` is out of range
     /// or the values do not fit ([`Obstacle::set_motion`]).
-    pub fn set_obstacle_motion(&mut self, i: usize, center: &[f64], velocity: &[f64]) -> bool {
+    pub(crate) fn set_obstacle_motion(&mut self, i: usize, center: &[f64], velocity: &[f64]) -> bool {
         self.scene.obstacles.get_mut(i).is_some_and(|o| o.set_motion(center, velocity))
-    }
-
-    /// Sets the cap on the norm of each robot's repulsive term.
-    pub fn with_max_perturbation(mut self, cap: f64) -> Self {
-        self.max_perturbation = cap;
-        self
     }
 
     /// The scene it was built from.
@@ -209,7 +203,7 @@ impl RepulsiveField {
     }
 
     /// Dimension each robot moves in.
-    pub fn agent_dim(&self) -> usize {
+    pub(crate) fn agent_dim(&self) -> usize {
         self.sub_dim
     }
 
@@ -260,7 +254,14 @@ impl RepulsiveField {
     /// Pushes onto `out` (once each) the indices of the obstacles whose own term is not finite at `(t, x, v)` for
     /// some robot: each obstacle evaluated alone, as [`Perturbation::add`] would sum it. The diagnosis of a step
     /// that is not finite; nothing in the hot path calls it.
-    pub fn nonfinite_obstacles(&mut self, t: f64, x: &[f64], v: &[f64], tau: f64, out: &mut Vec<usize>) {
+    pub(crate) fn nonfinite_obstacles(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        v: &[f64],
+        tau: f64,
+        out: &mut Vec<usize>,
+    ) {
         let av = self.scene.avoidance;
         if av.method == Method::None {
             return;

@@ -33,7 +33,7 @@ const E: [f64; 7] =
     [71.0 / 57600.0, 0.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0];
 
 /// Order of the error estimate plus one: the step-size exponent `1 / 5`.
-pub const ERROR_ORDER: f64 = 5.0;
+pub(crate) const ERROR_ORDER: f64 = 5.0;
 
 /// The stages of one step, allocated once.
 #[derive(Debug, Clone)]
@@ -58,7 +58,7 @@ impl Integrator {
     /// Returns the error estimate scaled by `tol` (see the module): the caller accepts the step at or below 1, or
     /// restores its state and retries with a smaller `h`. Not finite if the state stopped being finite.
     #[allow(clippy::too_many_arguments)]
-    pub fn step_dormand_prince<P: Perturbation + ?Sized>(
+    pub(crate) fn step_dormand_prince<P: Perturbation + ?Sized>(
         &mut self,
         motion: &crate::Motion,
         perturbation: &mut P,
@@ -123,7 +123,7 @@ impl Integrator {
 
 /// The step after one of `h` whose scaled error was `err`: the classical controller
 /// `h 0.9 err^(-1/5)`, changed by at most a factor of five either way (a non-finite error gives the smallest).
-pub fn next_step(h: f64, err: f64) -> f64 {
+pub(crate) fn next_step(h: f64, err: f64) -> f64 {
     let factor = if err.is_finite() {
         if err == 0.0 { 5.0 } else { (0.9 * err.powf(-1.0 / ERROR_ORDER)).clamp(0.2, 5.0) }
     } else {

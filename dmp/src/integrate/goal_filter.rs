@@ -53,12 +53,12 @@ impl GoalFilter {
     }
 
     /// True while a goal change is being filtered.
-    pub fn is_active(&self) -> bool {
+    pub(crate) fn is_active(&self) -> bool {
         self.active
     }
 
     /// The filtered goal at time `t` under time scale `tau`, towards `target`, into `out`.
-    pub fn goal_at(&self, target: &[f64], t: f64, tau: f64, out: &mut [f64]) {
+    pub(crate) fn goal_at(&self, target: &[f64], t: f64, tau: f64, out: &mut [f64]) {
         if !self.active {
             out.copy_from_slice(target);
             return;
@@ -97,7 +97,7 @@ impl GoalFilter {
     }
 
     /// Sets `alpha_g` from time `t` on (anchoring first).
-    pub fn set_alpha(&mut self, alpha: f64, target: &[f64], t: f64, tau: f64) {
+    pub(crate) fn set_alpha(&mut self, alpha: f64, target: &[f64], t: f64, tau: f64) {
         let frozen = self.frozen;
         self.anchor(target, t, tau, frozen);
         self.alpha = alpha;
@@ -106,7 +106,7 @@ impl GoalFilter {
 
     /// After a rollback to time `t`, where the filtered goal was `g`: when the anchor is later than `t` (a change
     /// after it), the filter restarts from `g` there; otherwise the anchor still describes the points from `t` on.
-    pub fn restore(&mut self, t: f64, g: &[f64], target: &[f64]) {
+    pub(crate) fn restore(&mut self, t: f64, g: &[f64], target: &[f64]) {
         if self.t0 > t {
             self.from.clear();
             self.from.extend_from_slice(g);

@@ -1,7 +1,7 @@
 //! Integration of the transformation system: classical RK4 at a fixed step, or Dormand–Prince 5(4) with an error
-//! estimate for an adaptive step ([`dormand_prince`]), both with the phase in closed form.
+//! estimate for an adaptive step (`integrate/dormand_prince.rs`), both with the phase in closed form.
 
-pub mod dormand_prince;
+pub(crate) mod dormand_prince;
 pub mod goal_filter;
 
 use crate::basis::{ForcingTerm, GaussianBasis};
@@ -153,7 +153,7 @@ impl Integrator {
     }
 
     /// The goal filter, to change it.
-    pub fn goal_filter_mut(&mut self) -> &mut GoalFilter {
+    pub(crate) fn goal_filter_mut(&mut self) -> &mut GoalFilter {
         &mut self.goal_filter
     }
 

@@ -48,7 +48,7 @@ impl Shape {
     /// Both families lie in the box `|y_i| <= a_i`: outside it some `|q_i| = |y_i / a_i| > 1`, so a term of `C + 1`
     /// (`q_i^(2 n_i)`, or `P^(m/n)` with `P > 1`, or `q_3^(2m)`) exceeds 1 on its own. A point farther than this
     /// from the centre is outside, whatever the rotation: contact checks skip the evaluation of `C` there.
-    pub fn bounding_radius_sq(&self) -> f64 {
+    pub(crate) fn bounding_radius_sq(&self) -> f64 {
         self.semi_axes().iter().map(|a| a * a).sum()
     }
 
@@ -112,7 +112,7 @@ pub(crate) mod test_support {
     use super::Isopotential;
 
     /// Checks value, gradient and Hessian of `iso` at `y` against central finite differences.
-    pub fn check_derivatives(iso: &dyn Isopotential, y: &[f64]) {
+    pub(crate) fn check_derivatives(iso: &dyn Isopotential, y: &[f64]) {
         let d = iso.dim();
         let mut g = vec![0.0; d];
         let mut h = vec![0.0; d * d];

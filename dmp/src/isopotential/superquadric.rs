@@ -118,7 +118,7 @@ impl Superquadric {
     /// One axis' share of the isopotential at the local coordinate `y_i`: its term of `C` (without the `- 1`),
     /// of the gradient, and of the diagonal Hessian.
     #[inline]
-    pub fn axis_terms(&self, i: usize, y_i: f64) -> (f64, f64, f64) {
+    pub(crate) fn axis_terms(&self, i: usize, y_i: f64) -> (f64, f64, f64) {
         let ax = self.axes[i];
         let q = y_i * ax.inv_a;
         let q_2n2 = ax.q_2n2(q);

@@ -22,7 +22,7 @@ use nalgebra::{Matrix3, Vector3};
 /// Below this angle (radians) the coefficients are summed from their Taylor series (8 terms: the first omitted
 /// one is under `1e-20` relative); above it the closed forms lose at most about `60 ε / θ⁴ < 3e-13` relative to
 /// cancellation (the worst is `b₁`).
-pub const SERIES_BELOW: f64 = 0.5;
+pub(crate) const SERIES_BELOW: f64 = 0.5;
 
 /// Terms summed of each series.
 const TERMS: i32 = 8;
@@ -94,7 +94,7 @@ fn skew(y: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 /// `J(y)`: the world-frame angular velocity of `exp(y(t))` is `J(y) ẏ` (module formula).
-pub fn exp_jacobian(y: &Vector3<f64>) -> Matrix3<f64> {
+pub(crate) fn exp_jacobian(y: &Vector3<f64>) -> Matrix3<f64> {
     let c = coefficients(y.norm());
     let s = skew(y);
     Matrix3::identity() + s * c.a + s * s * c.b
@@ -102,13 +102,13 @@ pub fn exp_jacobian(y: &Vector3<f64>) -> Matrix3<f64> {
 
 /// `J⁻¹(y)`: `d/dt log(e(t)) = J⁻¹(log e) ω` for the world-frame angular velocity `ω` of `e` (module formula).
 /// Finite for angles below `2π`.
-pub fn log_jacobian(y: &Vector3<f64>) -> Matrix3<f64> {
+pub(crate) fn log_jacobian(y: &Vector3<f64>) -> Matrix3<f64> {
     let s = skew(y);
     Matrix3::identity() - s * 0.5 + s * s * inverse_coefficient(y.norm())
 }
 
 /// The angular velocity `ω = J(y) ẏ` and acceleration `ω̇ = J(y) ÿ + J̇ ẏ` of `exp(y(t))`, world frame.
-pub fn angular_motion(
+pub(crate) fn angular_motion(
     y: &Vector3<f64>,
     yd: &Vector3<f64>,
     ydd: &Vector3<f64>,

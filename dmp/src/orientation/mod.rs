@@ -6,7 +6,7 @@
 //! the orientation error in the tangent space, `y = log(q ⊗ q̄_g)`, which is zero at the goal, and the output is
 //! `q = exp(y) ⊗ q_g`: every output is a unit quaternion, and `y` has the role a position has in the position DMP,
 //! with `ẏ` and `ÿ` its true time derivatives. The angular velocity and acceleration follow from `(y, ẏ, ÿ)`
-//! exactly, through the Jacobian of the exponential map ([`jacobian`]). See [`OrientationRun`] for the equations.
+//! exactly, through the Jacobian of the exponential map (`orientation/jacobian.rs`). See [`OrientationRun`] for the equations.
 //!
 //! # What Ude et al.'s form gets wrong
 //! Ude, Nemec, Petrič and Morimoto, "Orientation in Cartesian Space Dynamic Movement Primitives" (ICRA 2014),
@@ -27,23 +27,23 @@
 //! radian; `ω` and `ω̇` are in the world (base) frame, `q̇ = ½ (0, ω) ⊗ q`; a goal and its opposite give the same
 //! run (the sign nearest the start is used, so no run turns the long way). Details in [`quaternion`].
 //!
-//! | concept | module |
+//! | concept | module or file |
 //! | --- | --- |
 //! | wire order, log and exp, double cover, angles | [`quaternion`] |
-//! | Jacobians of exp and log, angular velocity and acceleration | [`jacobian`] |
-//! | a demonstration, checked and sign-consistent | [`demonstration`] |
-//! | the learned primitive, learning | [`primitive`] |
-//! | a run, stepped by the caller | [`run`] |
-//! | full rollouts | [`mod@rollout`] |
+//! | Jacobians of exp and log, angular velocity and acceleration | `orientation/jacobian.rs` |
+//! | a demonstration, checked and sign-consistent | [`OrientationDemonstration`], `orientation/demonstration.rs` |
+//! | the learned primitive, learning | [`OrientationPrimitive`], `orientation/primitive.rs` |
+//! | a run, stepped by the caller | [`OrientationRun`], `orientation/run.rs` |
+//! | full rollouts | [`rollout_orientation`], `orientation/rollout.rs` |
 //! | pose primitives (position and orientation on one phase), learning and replay | [`pose`] |
 
-pub mod demonstration;
-pub mod jacobian;
+pub(crate) mod demonstration;
+pub(crate) mod jacobian;
 pub mod pose;
-pub mod primitive;
+pub(crate) mod primitive;
 pub mod quaternion;
-pub mod rollout;
-pub mod run;
+pub(crate) mod rollout;
+pub(crate) mod run;
 
 pub use demonstration::OrientationDemonstration;
 pub use primitive::OrientationPrimitive;

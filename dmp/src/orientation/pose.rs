@@ -1,10 +1,10 @@
 //! Pose primitives: a position DMP and an orientation DMP on one phase, run as one primitive of dimension `n + 3`
-//! whose last three dimensions are the rotation vector of the orientation in a chart ([`OrientationChart`]).
+//! whose last three dimensions are the rotation vector of the orientation in a chart ([`crate::OrientationChart`]).
 //!
 //! # Formula
 //! The orientation part is Koutras and Doulgeri's DMP ([`super`]): with `q_ref` the chart's reference,
 //! `y = log(q ⊗ q̄_ref)` follows the transformation system of the position DMP (Ginesi et al., `eq:dmp_acc_obst`)
-//! dimension by dimension, and `q = exp(y) ⊗ q_ref`, `ω = J(y) ẏ`, `ω̇ = J(y) ÿ + J̇ ẏ` ([`super::jacobian`]).
+//! dimension by dimension, and `q = exp(y) ⊗ q_ref`, `ω = J(y) ẏ`, `ω̇ = J(y) ÿ + J̇ ẏ` (`orientation/jacobian.rs`).
 //! With the chart at the goal (what [`learn_pose`] stores and [`pose_motion`] builds for a replay) the orientation
 //! part of a pose run is exactly an [`super::OrientationRun`]; since both parts share the phase `s` and `tau`,
 //! a change of `tau`, a pause or a stop acts on both at once, and the one [`crate::Execution`] runs both.
@@ -22,7 +22,9 @@ use crate::execution::OrientationPoints;
 use crate::integrate::Motion;
 #[cfg(feature = "learn")]
 use crate::learn::{Demonstration, LearnConfig, learn, per_dimension};
-use crate::primitive::{OrientationChart, Primitive};
+#[cfg(feature = "learn")]
+use crate::primitive::OrientationChart;
+use crate::primitive::Primitive;
 
 /// The chart of a pose primitive, as a quaternion; `None` for a position-only primitive.
 pub fn chart_of(p: &Primitive) -> Result<Option<UnitQuaternion<f64>>, InvalidInput> {
@@ -30,7 +32,7 @@ pub fn chart_of(p: &Primitive) -> Result<Option<UnitQuaternion<f64>>, InvalidInp
 }
 
 /// The chart coordinates `log(q ⊗ q̄_ref)` of `q`, in the sign of `q` nearest `q_ref` (angle at most π).
-pub fn to_chart(reference: &UnitQuaternion<f64>, q: &UnitQuaternion<f64>) -> Vector3<f64> {
+pub(crate) fn to_chart(reference: &UnitQuaternion<f64>, q: &UnitQuaternion<f64>) -> Vector3<f64> {
     log(&(closest_sign(q, reference) * reference.conjugate()))
 }
 

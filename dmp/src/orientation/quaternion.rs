@@ -11,7 +11,7 @@
 //!   `exp(y) = (cos(|y|/2), sin(|y|/2) y / |y|)`. `atan2` rather than `acos` keeps small angles to full precision.
 //! - **Double cover.** `q` and `-q` are the same orientation. [`log`] does not fold its argument to `w >= 0`: it
 //!   returns an angle in `[0, 2π)`, continuous along any continuous path that avoids `e = -1`, which is what a
-//!   sign-consistent demonstration needs. [`closest_sign`] picks the representative of a goal nearest to a
+//!   sign-consistent demonstration needs. `closest_sign` picks the representative of a goal nearest to a
 //!   reference (`w` of `q ⊗ ḡ` >= 0), so that a rotation never takes the 360° detour; [`angle_between`] is
 //!   sign-blind.
 
@@ -79,7 +79,10 @@ pub fn exp(y: &Vector3<f64>) -> UnitQuaternion<f64> {
 
 /// `goal` or `-goal`, whichever is nearer to `reference`: the one with `w` of `reference ⊗ ḡoal` >= 0, that is a
 /// non-negative 4-dot product, so that `log(reference ⊗ ḡoal)` has an angle of at most π.
-pub fn closest_sign(goal: &UnitQuaternion<f64>, reference: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+pub(crate) fn closest_sign(
+    goal: &UnitQuaternion<f64>,
+    reference: &UnitQuaternion<f64>,
+) -> UnitQuaternion<f64> {
     if goal.coords.dot(&reference.coords) < 0.0 {
         UnitQuaternion::new_unchecked(-goal.into_inner())
     } else {

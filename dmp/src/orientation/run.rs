@@ -58,7 +58,7 @@ pub struct OrientationSample {
 ///   `tau² ÿ = K (0 - y) - D tau ẏ - K (0 - y_0) s + K f(s)` (Ginesi et al., `eq:dmp_acc_obst` without
 ///   obstacles; see [`Integrator::acceleration`]), `tau ṡ = -alpha s`;
 /// - the output is `q = exp(y) ⊗ q_g`, a unit quaternion by construction, and, with `J` the Jacobian of the
-///   exponential map ([`super::jacobian`]), `ω = J(y) ẏ` and `ω̇ = J(y) ÿ + J̇ ẏ` in the world frame: since
+///   exponential map (`orientation/jacobian.rs`), `ω = J(y) ẏ` and `ω̇ = J(y) ÿ + J̇ ẏ` in the world frame: since
 ///   `q_g` is constant, `2 q̇ ⊗ q̄ = 2 (d/dt exp(y)) ⊗ exp(y)⁻¹`.
 #[derive(Debug, Clone)]
 pub struct OrientationRun {
@@ -79,7 +79,7 @@ impl OrientationRun {
     }
 
     /// A run that starts at `motion.start` turning at `omega` (world frame, rad/s), e.g. to take over from a
-    /// motion in progress: `ẏ_0 = J⁻¹(y_0) ω` ([`super::jacobian::log_jacobian`]).
+    /// motion in progress: `ẏ_0 = J⁻¹(y_0) ω` (`log_jacobian`, `orientation/jacobian.rs`).
     pub fn moving(
         primitive: &OrientationPrimitive,
         motion: &OrientationMotion,
@@ -125,7 +125,7 @@ impl OrientationRun {
     }
 
     /// The tangent-space state: `y`, `ẏ`, `ÿ`.
-    pub fn tangent(&self) -> [Vector3<f64>; 3] {
+    pub(crate) fn tangent(&self) -> [Vector3<f64>; 3] {
         [&self.state.x, &self.state.xd, &self.acc].map(|v| Vector3::from_column_slice(v))
     }
 
@@ -137,7 +137,7 @@ impl OrientationRun {
     }
 
     /// Advances by `dt` (one RK4 step). `dt` must be finite, positive and stable for the stiffness and `tau`
-    /// ([`check_stability`]); a state that stops being finite is reported as [`DmpError::Diverged`].
+    /// (`dt sqrt(max K) / tau` at most [`crate::execution::MAX_STIFF_STEP`]); a state that stops being finite is reported as [`DmpError::Diverged`].
     pub fn step(&mut self, dt: f64) -> Result<()> {
         ensure_positive(|| "dt".into(), dt)?;
         check_stability(&self.k, dt, self.motion.tau, "dt")?;

@@ -64,7 +64,7 @@ impl Prepared {
     }
 
     /// The same robots with nothing to avoid: the obstacle-free DMP.
-    pub fn free_field(&self) -> Result<RepulsiveField> {
+    pub(crate) fn free_field(&self) -> Result<RepulsiveField> {
         let scene = Scene { obstacles: Vec::new(), robot_avoidance: Avoidance::NONE, ..self.scene.clone() };
         RepulsiveField::new(scene, self.primitive.dim)
     }

@@ -67,12 +67,13 @@ impl Tool {
     }
 
     /// The inertia `I` of the control points about the tool origin, tool frame (see [`inertia`]).
-    pub fn inertia(&self) -> &Matrix3<f64> {
+    #[cfg(test)]
+    pub(crate) fn inertia(&self) -> &Matrix3<f64> {
         &self.inertia
     }
 
     /// Its (pseudo-)inverse, tool frame.
-    pub fn inertia_inverse(&self) -> &Matrix3<f64> {
+    pub(crate) fn inertia_inverse(&self) -> &Matrix3<f64> {
         &self.inertia_inv
     }
 }

@@ -11,16 +11,16 @@ use crate::integrate::Perturbation;
 use crate::orientation::jacobian::log_jacobian;
 
 /// Dimension of a pose run's state: position (3) and rotation vector (3).
-pub const POSE_DIM: usize = 6;
+pub(crate) const POSE_DIM: usize = 6;
 
 /// The summed force and moment of the scene on the tool, world frame, in units of `tau dv/dt` (times metres for
 /// the moment).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Wrench {
+pub(crate) struct Wrench {
     /// `F = sum_i phi_i`.
-    pub force: Vector3<f64>,
+    pub(crate) force: Vector3<f64>,
     /// `M = sum_i (R r_i) × phi_i`, about the tool origin `p`.
-    pub moment: Vector3<f64>,
+    pub(crate) moment: Vector3<f64>,
 }
 
 /// A scene's repulsive field acting on a [`Tool`], for a pose run of dimension 6 (position, then the rotation
@@ -75,7 +75,8 @@ impl ToolField {
 
     /// The summed force and moment at the state `x = (p, y)`, `v = tau (ṗ, ẏ)`, time `t` (uncapped sums of the
     /// points' terms, each capped by the scene's field).
-    pub fn wrench(&mut self, t: f64, x: &[f64], v: &[f64], tau: f64) -> Wrench {
+    #[cfg(test)]
+    pub(crate) fn wrench(&mut self, t: f64, x: &[f64], v: &[f64], tau: f64) -> Wrench {
         let pose = ToolPose::from_state(x, v, &self.q_ref);
         self.wrench_at(t, &pose, tau)
     }
@@ -94,7 +95,7 @@ impl ToolField {
     }
 
     /// The angular term in chart coordinates for a moment `M` at `pose`: `J(y)⁻¹ R I⁻¹ Rᵀ M` (module formula).
-    pub fn angular_term(&self, pose: &ToolPose, moment: &Vector3<f64>) -> Vector3<f64> {
+    pub(crate) fn angular_term(&self, pose: &ToolPose, moment: &Vector3<f64>) -> Vector3<f64> {
         angular_term(&self.tool, pose, moment)
     }
 }
@@ -119,14 +120,14 @@ impl Perturbation for ToolField {
 
 /// The angular term in chart coordinates for a moment `M` on `tool` at `pose`: `J(y)⁻¹ R I⁻¹ Rᵀ M` (module
 /// formula).
-pub fn angular_term(tool: &Tool, pose: &ToolPose, moment: &Vector3<f64>) -> Vector3<f64> {
+pub(crate) fn angular_term(tool: &Tool, pose: &ToolPose, moment: &Vector3<f64>) -> Vector3<f64> {
     let r = &pose.rotation;
     log_jacobian(&pose.chart) * (r * (tool.inertia_inverse() * (r.transpose() * moment)))
 }
 
 /// `v` scaled down to norm `max` when longer; a vector that is not finite (the sums of capped terms never are,
 /// unless the state is not) becomes zero, as a term with no direction.
-pub fn cap(v: Vector3<f64>, max: f64) -> Vector3<f64> {
+pub(crate) fn cap(v: Vector3<f64>, max: f64) -> Vector3<f64> {
     let n = v.norm();
     if !n.is_finite() {
         Vector3::zeros()

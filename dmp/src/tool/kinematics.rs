@@ -38,7 +38,7 @@ impl ToolPose {
     /// The pose of the state `x = (p, y)`, `v = tau (ṗ, ẏ)` (six entries each, the first six used).
     ///
     /// # Formula
-    /// `q = exp(y) ⊗ q_ref`, `ω = J(y) ẏ` ([`crate::orientation::jacobian`]).
+    /// `q = exp(y) ⊗ q_ref`, `ω = J(y) ẏ` (`orientation/jacobian.rs`).
     pub fn from_state(x: &[f64], v: &[f64], q_ref: &UnitQuaternion<f64>) -> Self {
         let chart = Vector3::new(x[3], x[4], x[5]);
         let q = exp(&chart) * q_ref;

@@ -9,7 +9,7 @@
 //!
 //! # Formula
 //! The pose run of `pose-convention` (dimension 6): `x = (p, y)`, `v = tau (ṗ, ẏ)`, `q = exp(y) ⊗ q_ref`,
-//! `R = R(q)`, `ω = J(y) ẏ` ([`crate::orientation::jacobian`]). For each control point `r_i` (tool frame,
+//! `R = R(q)`, `ω = J(y) ẏ` (`orientation/jacobian.rs`). For each control point `r_i` (tool frame,
 //! `i = 1..N`):
 //!
 //! - `a_i = R r_i`, `c_i = p + a_i`, `tau ċ_i = tau ṗ + (tau ω) × a_i` ([`ToolPose::point`]);
@@ -48,22 +48,23 @@
 //! `dmp/tests/properties/bar_through_gap.rs`). A tool exactly square to a symmetric gap feels no moment at all: a
 //! local minimum, reported as a stall like the paper's.
 //!
-//! | concept | file |
+//! | concept | module or file |
 //! | --- | --- |
 //! | control points: surface or axis samples | [`sampling`] |
-//! | the tool: shape, offset, control points, inertia | [`body`] |
-//! | the points' places and velocities at a pose | [`kinematics`] |
-//! | the field on the tool (a [`crate::Perturbation`] of a pose run) | [`field`] |
+//! | the tool: shape, offset, control points, inertia | [`Tool`], `tool/body.rs` |
+//! | the points' places and velocities at a pose | [`ToolPose`], `tool/kinematics.rs` |
+//! | the field on the tool (a [`crate::Perturbation`] of a pose run) | [`ToolField`], `tool/field.rs` |
 
-pub mod body;
-pub mod clearance;
-pub mod field;
-pub mod kinematics;
+mod body;
+mod clearance;
+mod field;
+mod kinematics;
 pub mod sampling;
 
 pub use body::{Tool, inertia};
 pub use clearance::{sampled_clearance, surface_samples};
-pub use field::{POSE_DIM, ToolField, Wrench, angular_term, cap};
+pub use field::ToolField;
+pub(crate) use field::{angular_term, cap};
 pub use kinematics::{PointMotion, ToolPose};
 pub use sampling::ControlPoints;
 

@@ -21,7 +21,7 @@ pub const AXIS_POINTS: std::ops::RangeInclusive<usize> = 2..=10_000;
 /// How a tool is sampled.
 ///
 /// - [`ControlPoints::Surface`] is the general choice (a tray, a ring, a box): `count` points of the surface
-///   `C = 0`, in the nearly uniform directions of [`crate::directions::unit_directions`] (a Fibonacci sphere), the
+///   `C = 0`, in the nearly uniform directions of a Fibonacci sphere (`directions.rs`), the
 ///   same boundary sampling as the point methods' obstacles. The obstacles then need no inflation for the tool,
 ///   but the surface between samples is not guarded: use enough of them for the obstacles' size.
 /// - [`ControlPoints::Axis`] is for a long, thin tool (a bar, a rod, a probe): `count` points evenly spaced along
