@@ -9,7 +9,7 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 /// The encapsulation header of little-endian plain CDR (`CDR_LE`).
-pub const CDR_LE: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
+pub(crate) const CDR_LE: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 /// A payload that cannot be encoded or decoded.
 #[derive(Debug, thiserror::Error)]

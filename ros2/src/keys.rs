@@ -13,7 +13,7 @@ pub struct RosType {
 
 impl RosType {
     /// The DDS name rmw_zenoh puts in keys: `pkg::msg::dds_::Type_`.
-    pub fn dds_name(&self) -> String {
+    pub(crate) fn dds_name(&self) -> String {
         format!("{}_", self.name.replace("/msg/", "::msg::dds_::"))
     }
 }
@@ -36,7 +36,7 @@ pub const MARKER_ARRAY: RosType = RosType {
 
 /// A topic name without its leading `/` (`/collision_object` and `collision_object` are one topic at the root
 /// namespace).
-pub fn topic_chunks(topic: &str) -> &str {
+pub(crate) fn topic_chunks(topic: &str) -> &str {
     topic.trim_start_matches('/')
 }
 

@@ -11,6 +11,9 @@
 //! | the attachment of every sample: sequence number, source timestamp, publisher GID | [`attachment`] |
 //! | the liveliness tokens that list a node and its publishers in ROS 2's graph, and GIDs | [`liveliness`] |
 
+#![warn(missing_docs)]
+#![warn(unreachable_pub)]
+
 pub mod attachment;
 pub mod cdr;
 pub mod keys;

@@ -10,14 +10,14 @@
 use crate::keys::{RosType, topic_chunks};
 
 /// The admin space of every token.
-pub const ADMIN_SPACE: &str = "@ros2_lv";
+pub(crate) const ADMIN_SPACE: &str = "@ros2_lv";
 
 /// The QoS chunk of an entity with the default QoS (reliable, volatile, keep last, default depth, no deadline,
 /// lifespan or liveliness lease).
-pub const DEFAULT_QOS: &str = "::,:,:,:,,";
+pub(crate) const DEFAULT_QOS: &str = "::,:,:,:,,";
 
 /// A name with its `/` as `%` (rmw_zenoh's `mangle_name`).
-pub fn mangle(name: &str) -> String {
+pub(crate) fn mangle(name: &str) -> String {
     name.replace('/', "%")
 }
 

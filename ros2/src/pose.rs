@@ -7,7 +7,7 @@
 //! [2(xz - yw), 2(yz + xw), 1 - 2(x² + y²)]]`. Composing `a` then `b` (b expressed in a's frame):
 //! `t = t_a + R(q_a) t_b`, `q = q_a q_b` (Hamilton product).
 
-use crate::msgs::geometry_msgs::{Point, Pose, Quaternion, Transform, Vector3};
+use crate::msgs::geometry_msgs::{Point, Pose, Quaternion};
 
 /// A quaternion that is not a rotation.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -79,13 +79,6 @@ impl Rigid {
         let [x, y, z] = self.t;
         let [qx, qy, qz, w] = self.q;
         Pose { position: Point { x, y, z }, orientation: Quaternion { x: qx, y: qy, z: qz, w } }
-    }
-
-    /// This transform as a message's transform.
-    pub fn to_transform(&self) -> Transform {
-        let [x, y, z] = self.t;
-        let [qx, qy, qz, w] = self.q;
-        Transform { translation: Vector3 { x, y, z }, rotation: Quaternion { x: qx, y: qy, z: qz, w } }
     }
 
     /// `self` then `other` (`other` expressed in `self`'s frame).
