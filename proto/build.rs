@@ -1,6 +1,7 @@
-//! Compiles `dmp/v1/*.proto` without a system `protoc`: protox parses them, tonic-prost-build generates the code,
-//! the encoded descriptor set is written for server reflection, and the field numbers of every message are written
-//! as constants (`tags.rs`, the `dmp_proto::tags` module) for code that reads a message lazily.
+//! Compiles `dmp/v1/*.proto` without a system `protoc`: protox parses them, tonic-prost-build generates the code
+//! (the server stubs only with the feature `server`), the encoded descriptor set is written for server reflection,
+//! and the field numbers of every message are written as constants (`tags.rs`, the `dmp_proto::tags` module) for
+//! code that reads a message lazily.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -39,7 +40,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     std::fs::write(out.join("tags.rs"), tags)?;
 
-    tonic_prost_build::configure().build_server(true).build_client(true).compile_fds(fds)?;
+    // Server stubs only for a crate that serves (feature `server`): a client's build stays without them.
+    let server = std::env::var_os("CARGO_FEATURE_SERVER").is_some();
+    tonic_prost_build::configure().build_server(server).build_client(true).compile_fds(fds)?;
     Ok(())
 }
 

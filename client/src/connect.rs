@@ -22,13 +22,13 @@ use tonic::service::Interceptor;
 use tonic::service::interceptor::InterceptedService;
 use tonic::transport::{Certificate, Channel, ClientTlsConfig, Endpoint, Identity};
 
-use crate::error::ClientError;
+use crate::error::{ClientError, chain};
 
 /// How long a connection waits for the server by default.
 pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// The channel every call goes through: the credentials are added to each.
-pub type Transport = InterceptedService<Channel, Credentials>;
+pub(crate) type Transport = InterceptedService<Channel, Credentials>;
 
 /// TLS of a client.
 #[derive(Clone, Default)]
@@ -100,7 +100,7 @@ impl Default for ConnectOptions {
 
 /// The `authorization` metadata sent with every call (never printed).
 #[derive(Clone, Default)]
-pub struct Credentials {
+pub(crate) struct Credentials {
     header: Option<AsciiMetadataValue>,
 }
 
@@ -112,7 +112,7 @@ impl std::fmt::Debug for Credentials {
 
 impl Credentials {
     /// The credentials of `token` (none: nothing is sent).
-    pub fn token(token: Option<&str>) -> Result<Self, ClientError> {
+    pub(crate) fn token(token: Option<&str>) -> Result<Self, ClientError> {
         let header = token
             .map(|t| {
                 let mut v = AsciiMetadataValue::try_from(format!("Bearer {}", t.trim()))
@@ -135,7 +135,7 @@ impl Interceptor for Credentials {
 }
 
 /// The URL with a scheme: a bare `HOST:PORT` is `https://` with TLS, `http://` without.
-pub fn normalize_url(url: &str, tls: bool) -> String {
+pub(crate) fn normalize_url(url: &str, tls: bool) -> String {
     if url.contains("://") {
         url.to_owned()
     } else if tls {
@@ -147,9 +147,8 @@ pub fn normalize_url(url: &str, tls: bool) -> String {
 
 /// Opens a channel to `url` with `options`. A server that refuses, does not answer or fails the TLS handshake gives
 /// [`ClientError::Connect`]; bad options give [`ClientError::Argument`].
-pub async fn open(url: &str, options: &ConnectOptions) -> Result<(Channel, String), ClientError> {
+pub(crate) async fn open(url: &str, options: &ConnectOptions) -> Result<(Channel, String), ClientError> {
     let url = normalize_url(url, options.tls.is_some());
-    let chain = crate::grpc::chain;
     let mut endpoint = Endpoint::from_shared(url.clone())
         .map_err(|e| {
             ClientError::argument("server", format!("`{url}` is not a valid address: {}", chain(&e)))

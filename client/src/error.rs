@@ -105,11 +105,42 @@ impl From<tonic::Status> for ClientError {
         let mut message = s.message().to_string();
         // A status made by the transport (TLS refused, plaintext against TLS) says why only in its source.
         if let Some(source) = std::error::Error::source(&s) {
-            let why = crate::grpc::chain(source);
+            let why = chain(source);
             if !message.contains(&why) {
                 message = format!("{message}: {why}");
             }
         }
         ClientError::Status { code: s.code(), message }
+    }
+}
+
+/// Every error of an error's chain, `: `-separated (tonic's transport error says little on its own).
+pub(crate) fn chain(e: &dyn std::error::Error) -> String {
+    let mut out = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        let text = s.to_string();
+        if !out.contains(&text) {
+            out.push_str(": ");
+            out.push_str(&text);
+        }
+        source = s.source();
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wire_errors_are_bad_input() {
+        let e = dmp_proto::obstacle_json::JsonObstacle::parse(
+            &serde_json::json!({"id": "e", "center": [0], "semi_axes": [1], "bogus": 1}),
+            "o",
+        )
+        .map_err(ClientError::from)
+        .unwrap_err();
+        assert!(e.is_bad_input() && e.to_string().starts_with("o.bogus"), "{e}");
     }
 }

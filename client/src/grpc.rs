@@ -15,7 +15,6 @@
 //! # Ok(()) }
 //! ```
 
-use std::pin::Pin;
 use std::time::Duration;
 
 use dmp_proto::learning::pose_demonstration_to_proto;
@@ -35,31 +34,20 @@ use tonic::transport::Channel;
 
 pub use crate::connect::CONNECT_TIMEOUT;
 use crate::connect::{ConnectOptions, Credentials, Transport};
+use crate::error::{ClientError, chain};
 pub use crate::session::{Session, SessionSender};
-
-use crate::error::ClientError;
 use crate::setpoints::Setpoints;
+use crate::streams::boxed;
+pub use crate::streams::{DecodedStream, GroupStream, SceneStream, SegmentStream};
 
 /// The server `dmpctl` talks to unless told otherwise.
 pub const DEFAULT_SERVER: &str = "http://127.0.0.1:50051";
 
 /// Largest message sent or received (a 1,000,000-step 3-D plan is ~75 MB).
-pub const MAX_MESSAGE_BYTES: usize = 256 * 1024 * 1024;
+const MAX_MESSAGE_BYTES: usize = 256 * 1024 * 1024;
 
 /// Messages a session may queue before [`SessionSender`] waits for the server to read.
 const SESSION_QUEUE: usize = 64;
-
-/// Messages of a server stream, each decoded as `T`.
-pub type DecodedStream<T> = Pin<Box<dyn Stream<Item = Result<T, ClientError>> + Send>>;
-
-/// Segments of an Execute or Session call.
-pub type SegmentStream = DecodedStream<v1::Segment>;
-
-/// Steps of an ExecuteGroup call.
-pub type GroupStream = Pin<Box<dyn Stream<Item = Result<v1::GroupSegment, ClientError>> + Send>>;
-
-/// Snapshots of a WatchScene call: the current scene, then one per change.
-pub type SceneStream = Pin<Box<dyn Stream<Item = Result<v1::SceneSnapshot, ClientError>> + Send>>;
 
 /// A client of the DMP cell's server.
 #[derive(Debug, Clone)]
@@ -77,29 +65,8 @@ pub struct DmpClient {
     cell: String,
 }
 
-/// Every error of an error's chain, `: `-separated (tonic's transport error says little on its own).
-pub(crate) fn chain(e: &dyn std::error::Error) -> String {
-    let mut out = e.to_string();
-    let mut source = e.source();
-    while let Some(s) = source {
-        let text = s.to_string();
-        if !out.contains(&text) {
-            out.push_str(": ");
-            out.push_str(&text);
-        }
-        source = s.source();
-    }
-    out
-}
-
 fn missing(what: &str) -> ClientError {
     ClientError::Protocol(format!("the answer has no `{what}`"))
-}
-
-fn boxed<T: Send + 'static>(
-    s: tonic::Streaming<T>,
-) -> Pin<Box<dyn Stream<Item = Result<T, ClientError>> + Send>> {
-    Box::pin(s.map(|r| r.map_err(ClientError::from)))
 }
 
 impl DmpClient {
@@ -125,13 +92,8 @@ impl DmpClient {
         Ok(Self::from_channel_with(channel, url, credentials))
     }
 
-    /// A client over an existing channel (`url` only names it in messages), without credentials.
-    pub fn from_channel(channel: Channel, url: impl Into<String>) -> Self {
-        Self::from_channel_with(channel, url, Credentials::default())
-    }
-
-    /// A client over an existing channel that sends `credentials` with every call.
-    pub fn from_channel_with(channel: Channel, url: impl Into<String>, credentials: Credentials) -> Self {
+    /// A client over an existing channel (`url` only names it in messages) that sends `credentials` with every call.
+    fn from_channel_with(channel: Channel, url: impl Into<String>, credentials: Credentials) -> Self {
         let n = MAX_MESSAGE_BYTES;
         let transport = InterceptedService::new(channel.clone(), credentials);
         Self {

@@ -10,7 +10,7 @@ use tokio::sync::mpsc;
 use tokio_stream::{Stream, StreamExt};
 
 use crate::error::ClientError;
-use crate::grpc::SegmentStream;
+use crate::streams::SegmentStream;
 
 /// The sending half of a session: commands and measured states. Cloneable; a send fails once the session ended.
 #[derive(Debug, Clone)]

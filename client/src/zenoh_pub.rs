@@ -48,7 +48,7 @@ fn zerr(context: &str) -> impl FnOnce(zenoh::Error) -> ClientError + '_ {
 /// What a publishing peer opens with. With `connect` endpoints, scouting is off, opening fails fast if they cannot
 /// be reached, and only the `listen` endpoints are listened on (none: nothing, a publisher needs no port); without,
 /// multicast scouting finds the server on the LAN and Zenoh's default `listen` applies unless some are given.
-pub fn publisher_options(connect: &[String], listen: &[String]) -> SessionOptions {
+pub(crate) fn publisher_options(connect: &[String], listen: &[String]) -> SessionOptions {
     SessionOptions {
         mode: "peer".into(),
         listen: (!connect.is_empty() || !listen.is_empty()).then(|| listen.to_vec()),
@@ -121,7 +121,10 @@ impl fmt::Debug for ObstaclePublisher {
 }
 
 impl ObstaclePublisher {
-    /// Opens a peer session for `cell` (see [`publisher_options`]).
+    /// Opens a peer session for `cell`. With `connect` endpoints, scouting is off, opening fails fast if they cannot
+    /// be reached, and only the `listen` endpoints are listened on (none: nothing, a publisher needs no port);
+    /// without, multicast scouting finds the server on the LAN and Zenoh's default `listen` applies unless some
+    /// are given.
     pub async fn open(cell: &str, connect: &[String], listen: &[String]) -> Result<Self, ClientError> {
         Self::open_with(cell, session_config(&publisher_options(connect, listen))?).await
     }

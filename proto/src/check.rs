@@ -3,7 +3,7 @@
 use crate::WireError;
 
 /// Checks that every entry of `v` is finite (the error names the first that is not, `field[i]`).
-pub fn check_finite(field: &str, v: &[f64]) -> Result<(), WireError> {
+pub(crate) fn check_finite(field: &str, v: &[f64]) -> Result<(), WireError> {
     match v.iter().position(|x| !x.is_finite()) {
         Some(i) => Err(WireError::new(format!("{field}[{i}]"), "must be a finite number")),
         None => Ok(()),

@@ -45,6 +45,8 @@ pub fn pose_demonstration_to_proto(
 }
 
 /// The orientations of a demonstration message, checked (unit quaternions, one per time); `None` without any.
+/// (Feature `orientation`.)
+#[cfg(feature = "orientation")]
 pub fn orientations_from_proto(
     d: &v1::Demonstration,
 ) -> Result<Option<dmp::OrientationDemonstration>, WireError> {

@@ -5,7 +5,7 @@
 //!
 //! | concept | module |
 //! | --- | --- |
-//! | the generated messages and services | [`v1`] |
+//! | the generated messages and services (clients; servers with the feature `server`) | [`v1`] |
 //! | field numbers of the messages, from the schema | [`tags`] |
 //! | encoding Zenoh payloads | [`codec`] |
 //! | Zenoh key expressions, the rule for names in keys | [`keys`] |
@@ -21,12 +21,18 @@
 //! | a robot's state, checked | [`robot_state`] |
 //! | a segment read lazily | [`segment_view`] |
 
+#![warn(missing_docs)]
+#![warn(unreachable_pub)]
+
+/// The schema's package `dmp.v1`, generated: its messages, a client of each service and, with the feature `server`,
+/// the trait each service's server implements (`*_service_server`).
 #[allow(missing_docs, clippy::all, missing_debug_implementations, rust_2018_idioms)]
 pub mod v1 {
     tonic::include_proto!("dmp.v1");
 }
 
-/// The encoded file descriptor set, for gRPC server reflection.
+/// The encoded file descriptor set, for gRPC server reflection (feature `server`).
+#[cfg(feature = "server")]
 pub const FILE_DESCRIPTOR_SET: &[u8] = tonic::include_file_descriptor_set!("dmp_descriptor");
 
 pub mod avoidance;

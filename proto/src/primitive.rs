@@ -68,7 +68,7 @@ pub fn primitive_from_proto(p: &v1::Primitive) -> Result<dmp::Primitive, WireErr
 /// Checks a valid primitive's numbers against [`dmp::ranges`] and [`TAU_RANGE`](crate::check::TAU_RANGE) (the
 /// start and goal against the workspace are the server's): `alpha`, `N`, `K`, `D`, the weights and `tau`. Stored
 /// primitives written before these ranges are checked again with it when they are used.
-pub fn check_primitive_ranges(p: &dmp::Primitive) -> Result<(), WireError> {
+fn check_primitive_ranges(p: &dmp::Primitive) -> Result<(), WireError> {
     check_range("alpha", p.alpha, &ranges::ALPHA, "")?;
     check_count("n_basis", p.n_basis, &ranges::N_BASIS)?;
     check_each("k", &p.k, &ranges::STIFFNESS, "")?;

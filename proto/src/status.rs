@@ -5,7 +5,7 @@ use dmp::{LimitAction, Outcome};
 use crate::v1::SegmentStatus;
 
 /// The status of a segment whose points came to `outcome`.
-pub fn segment_status(outcome: Outcome) -> SegmentStatus {
+fn segment_status(outcome: Outcome) -> SegmentStatus {
     match outcome {
         Outcome::Running => SegmentStatus::Running,
         Outcome::Holding => SegmentStatus::Paused,

@@ -112,7 +112,7 @@ pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstrati
 }
 
 /// Reads and parses a CSV demonstration.
-pub fn load_demonstration_csv(path: &Path) -> Result<CsvDemonstration, DmpctlError> {
+pub(crate) fn load_demonstration_csv(path: &Path) -> Result<CsvDemonstration, DmpctlError> {
     let text = std::fs::read_to_string(path)
         .map_err(|source| DmpctlError::Io { path: path.to_path_buf(), source })?;
     parse_demonstration_csv(&text, path)

@@ -125,7 +125,7 @@ impl Cursor<'_> {
 
 /// The line and column (from 1, the column in characters) where the value at `field` starts in `text`; None when
 /// the path has no such value or the text is not plain JSON there.
-pub fn locate(text: &str, field: &str) -> Option<(usize, usize)> {
+pub(crate) fn locate(text: &str, field: &str) -> Option<(usize, usize)> {
     let mut c = Cursor { bytes: text.as_bytes(), at: 0 };
     for step in steps(field)? {
         c.enter(&step)?;

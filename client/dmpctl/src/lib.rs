@@ -3,38 +3,51 @@
 //!
 //! | concept | module |
 //! | --- | --- |
-//! | the command line: flags and dispatch | [`cli`] |
-//! | TLS and token flags | [`connect_args`] |
-//! | reading scenario files, errors at the field | [`scenario_file`] |
-//! | obstacles from JSON (`scene put`, a scenario's), one error style `FILE:LINE:COLUMN: FIELD: REASON` | [`obstacle_file`] |
-//! | the line and column of a value at a field path | [`json_position`] |
-//! | offline runs and timing | [`offline`] |
-//! | output files | [`outputs`] |
-//! | demonstrations from CSV | [`demo_csv`] |
-//! | the commands that talk to the server (`learn`, `list`, `plan`, `stream`, `scene` ...) | [`server_commands`] |
-//! | the figure of `plan` and `stream` | [`server_plot`] |
-//! | `robot put`, `show`, `delete`: a robot's record | [`robot_commands`] |
+//! | the dispatcher: runs a parsed command line | [`cli`] |
+//! | the flags and commands, as clap parses them (TLS and token flags included) | `args` |
+//! | the commands that talk to the server (`learn`, `list`, `plan`, `stream`, `scene` ...) | `server_commands` |
+//! | `info`, `stats`, `health` and the server's warnings | `server_info` |
+//! | the figure of `plan` and `stream` | `server_plot` |
+//! | `robot put`, `show`, `delete`: a robot's record | `robot_commands` |
 //! | `scenario run --server`: the offline experiment computed by the server | [`scenario_through_server`] |
-//! | the tools with robots of their own (`sim`, `load`, `scenario run --server`): clean-up on Ctrl-C | [`tools`] |
-//! | progress on a terminal (`indicatif`), nothing when piped | [`progress`] |
-//! | errors and the exit code | [`error`] |
+//! | where a command acts: its cell and Zenoh endpoints, its server found over Zenoh | `place` |
+//! | the tools with robots of their own (`sim`, `load`, `scenario run --server`): clean-up on Ctrl-C | `tools` |
+//! | offline runs and timing | [`offline`] |
+//! | reading scenario files, errors at the field | [`scenario_file`] |
+//! | obstacles from JSON (`scene put`, a scenario's), one error style `FILE:LINE:COLUMN: FIELD: REASON` | `obstacle_file` |
+//! | the line and column of a value at a field path | `json_position` |
+//! | demonstrations from CSV | [`demo_csv`] |
+//! | the JSON printed of a stored primitive | `primitive_json` |
+//! | output files | `outputs` |
+//! | progress on a terminal (`indicatif`), nothing when piped | `progress` |
+//! | errors and the exit code | [`DmpctlError`] |
+//!
+//! The modules form layers, each using only those below it: the dispatcher [`cli`] on top; the commands
+//! (`server_commands`, `robot_commands`, [`scenario_through_server`], `server_plot`, `server_info`, `place`,
+//! `tools`); the flags (`args`); and the files, outputs and runs they share ([`offline`], [`scenario_file`],
+//! `obstacle_file`, `json_position`, [`demo_csv`], `primitive_json`, `outputs`, `progress`, `error`). What other
+//! crates use (the tests, the deploy checks) is public; the rest is the crate's own.
 
+#![warn(missing_docs)]
+#![warn(unreachable_pub)]
+
+mod args;
 pub mod cli;
-pub mod connect_args;
 pub mod demo_csv;
-pub mod error;
-pub mod json_position;
-pub mod obstacle_file;
+mod error;
+mod json_position;
+mod obstacle_file;
 pub mod offline;
-pub mod outputs;
-pub mod place;
-pub mod progress;
-pub mod robot_commands;
+mod outputs;
+mod place;
+mod primitive_json;
+mod progress;
+mod robot_commands;
 pub mod scenario_file;
 pub mod scenario_through_server;
-pub mod server_commands;
-pub mod server_info;
-pub mod server_plot;
-pub mod tools;
+mod server_commands;
+mod server_info;
+mod server_plot;
+mod tools;
 
 pub use error::DmpctlError;

@@ -11,14 +11,18 @@ use crate::error::DmpctlError;
 use crate::json_position::locate;
 
 /// A parse error at `field` of the file at `path`, pointing at the value's line and column in `text` when found.
-pub fn error_at(path: &Path, text: &str, field: String, message: String) -> DmpctlError {
+pub(crate) fn error_at(path: &Path, text: &str, field: String, message: String) -> DmpctlError {
     let position = locate(text, &field);
     DmpctlError::Parse { path: path.to_path_buf(), position, field, message }
 }
 
 /// The obstacles of `text` (the file at `path`): the entries of its `obstacles`, or the whole document as one
 /// obstacle; each parsed and checked, the first error naming its field. `ttl_s` replaces each one's `ttl_s`.
-pub fn obstacles_of(text: &str, path: &Path, ttl_s: Option<f64>) -> Result<Vec<JsonObstacle>, DmpctlError> {
+pub(crate) fn obstacles_of(
+    text: &str,
+    path: &Path,
+    ttl_s: Option<f64>,
+) -> Result<Vec<JsonObstacle>, DmpctlError> {
     let value: Value = serde_json::from_str(text).map_err(|e| DmpctlError::Parse {
         path: path.to_path_buf(),
         position: Some((e.line(), e.column())),
@@ -38,7 +42,7 @@ pub fn obstacles_of(text: &str, path: &Path, ttl_s: Option<f64>) -> Result<Vec<J
 
 /// Checks the `obstacles` of a scenario's text as [`obstacles_of`] reads them; a text that is not plain JSON
 /// (e.g. JSON5 with a `NaN`) is left to the scenario's own reading.
-pub fn check_scenario_obstacles(text: &str, path: &Path) -> Result<(), DmpctlError> {
+pub(crate) fn check_scenario_obstacles(text: &str, path: &Path) -> Result<(), DmpctlError> {
     let Ok(value) = serde_json::from_str::<Value>(text) else { return Ok(()) };
     if let Some(Value::Array(list)) = value.get("obstacles") {
         listed(text, path, list, None)?;
@@ -74,7 +78,7 @@ fn one(
 }
 
 /// A parser's message without its trailing ` at line L column C` (the position is given apart).
-pub fn without_position(message: &str) -> String {
+pub(crate) fn without_position(message: &str) -> String {
     match message.rfind(" at line ") {
         Some(i) if message[i..].contains(" column ") => message[..i].to_string(),
         _ => message.to_string(),

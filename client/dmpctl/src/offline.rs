@@ -38,7 +38,7 @@ pub fn run_scenario(path: &Path, out: &Path) -> Result<RunSummary, DmpctlError> 
 
 /// Writes the three files of a run (a pose run's `trajectory.csv` has its orientations after the positions; its
 /// plot draws the positions).
-pub fn write_outputs(
+pub(crate) fn write_outputs(
     p: &Prepared,
     free: &dmp::Rollout,
     adapted: &dmp::Rollout,
@@ -148,29 +148,29 @@ const TOOL_OUTLINE_SAMPLES: usize = 2000;
 
 /// The JSON line of `scenario bench`.
 #[derive(Debug, Clone, Serialize)]
-pub struct BenchReport {
+pub(crate) struct BenchReport {
     /// The scenario's name.
-    pub scenario: String,
+    pub(crate) scenario: String,
     /// Median over repeats of steps per second of the avoidance rollout.
-    pub steps_per_second: f64,
+    pub(crate) steps_per_second: f64,
     /// Steps per rollout.
-    pub steps: usize,
+    pub(crate) steps: usize,
     /// Number of timed rollouts.
-    pub repeats: usize,
+    pub(crate) repeats: usize,
     /// Median wall time of one rollout.
-    pub median_seconds: f64,
+    pub(crate) median_seconds: f64,
     /// Fastest rollout.
-    pub min_seconds: f64,
+    pub(crate) min_seconds: f64,
     /// Slowest rollout.
-    pub max_seconds: f64,
+    pub(crate) max_seconds: f64,
     /// Obstacles in the scene.
-    pub obstacles: usize,
+    pub(crate) obstacles: usize,
     /// The avoidance method.
-    pub method: String,
+    pub(crate) method: String,
 }
 
 /// Times the scenario's avoidance rollout `repeats` times (after one untimed warm-up run).
-pub fn bench_scenario(path: &Path, repeats: usize) -> Result<BenchReport, DmpctlError> {
+pub(crate) fn bench_scenario(path: &Path, repeats: usize) -> Result<BenchReport, DmpctlError> {
     let p = prepare_scenario(path)?;
     let repeats = repeats.max(1);
     let mut seconds = Vec::with_capacity(repeats);

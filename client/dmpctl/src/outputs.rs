@@ -13,7 +13,7 @@ use crate::error::DmpctlError;
 
 /// The CSV of SPEC.md: header `t,x1..xd,xd1..xdd,a1..ad`, one row per step from `t = 0`. Numbers are written in
 /// their shortest exact form, so the file round-trips bit for bit.
-pub fn trajectory_csv(traj: &Trajectory) -> String {
+pub(crate) fn trajectory_csv(traj: &Trajectory) -> String {
     let d = traj.dim();
     let mut out = String::with_capacity(traj.len() * (d * 3 + 1) * 22);
     out.push('t');
@@ -36,7 +36,7 @@ pub fn trajectory_csv(traj: &Trajectory) -> String {
 /// A pose run's CSV: the columns of [`trajectory_csv`] for its positions (`t,x1..xn,xd1..xdn,a1..an`), then its
 /// orientation `qx,qy,qz,qw`, angular velocity `wx,wy,wz` (rad/s) and angular acceleration `wdx,wdy,wdz`
 /// (rad/s²), world frame.
-pub fn pose_trajectory_csv(traj: &Trajectory, orientations: &OrientationPoints) -> String {
+pub(crate) fn pose_trajectory_csv(traj: &Trajectory, orientations: &OrientationPoints) -> String {
     let n = traj.dim() - 3;
     let mut out = String::with_capacity(traj.len() * (n * 3 + 11) * 22);
     out.push('t');
@@ -61,7 +61,7 @@ pub fn pose_trajectory_csv(traj: &Trajectory, orientations: &OrientationPoints) 
 }
 
 /// The positions of a run: all of a position scenario's dimensions, the first `n` of a pose scenario's.
-pub fn positions_of<'a>(p: &Prepared, traj: &'a Trajectory) -> Cow<'a, Trajectory> {
+pub(crate) fn positions_of<'a>(p: &Prepared, traj: &'a Trajectory) -> Cow<'a, Trajectory> {
     let n = p.position_dim();
     if n == traj.dim() {
         return Cow::Borrowed(traj);
@@ -74,13 +74,13 @@ pub fn positions_of<'a>(p: &Prepared, traj: &'a Trajectory) -> Cow<'a, Trajector
 }
 
 /// Writes `contents` to `dir/name`, creating `dir`.
-pub fn write_file(dir: &Path, name: &str, contents: &[u8]) -> Result<(), DmpctlError> {
+pub(crate) fn write_file(dir: &Path, name: &str, contents: &[u8]) -> Result<(), DmpctlError> {
     std::fs::create_dir_all(dir).map_err(|source| DmpctlError::Io { path: dir.to_path_buf(), source })?;
     let path = dir.join(name);
     std::fs::write(&path, contents).map_err(|source| DmpctlError::Io { path, source })
 }
 
 /// Pretty JSON of any serializable value.
-pub fn to_json<T: Serialize>(value: &T) -> String {
+pub(crate) fn to_json<T: Serialize>(value: &T) -> String {
     serde_json::to_string_pretty(value).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
 }

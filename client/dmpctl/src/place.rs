@@ -4,28 +4,28 @@
 use dmp_client::connect::ConnectOptions;
 use dmp_client::grpc::DmpClient;
 
-use crate::cli::{Cli, Command, SceneCommand, Via};
+use crate::args::{Cli, Command, SceneCommand, Via};
 use crate::error::DmpctlError;
 
 /// Where a command acts: its one cell, for gRPC and Zenoh alike, and the Zenoh endpoints it connects to.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Place {
+pub(crate) struct Place {
     /// `--cell`, else (commands that use Zenoh) the server's default cell from GetInfo; `None`: the server's
     /// default, which gRPC requests get by naming no cell.
-    pub cell: Option<String>,
+    pub(crate) cell: Option<String>,
     /// `--zenoh-connect`, else (commands that use Zenoh, when no `--zenoh-config` names endpoints) the server's
     /// Zenoh locators from GetInfo when the server is on this host ([`usable_locators`]); empty: scouting.
-    pub zenoh_connect: Vec<String>,
+    pub(crate) zenoh_connect: Vec<String>,
 }
 
 impl Place {
     /// The cell gRPC requests name (empty: the server's default).
-    pub fn grpc_cell(&self) -> &str {
+    pub(crate) fn grpc_cell(&self) -> &str {
         self.cell.as_deref().unwrap_or("")
     }
 
     /// The cell of the Zenoh keys.
-    pub fn zenoh_cell(&self) -> &str {
+    pub(crate) fn zenoh_cell(&self) -> &str {
         self.cell.as_deref().unwrap_or("default")
     }
 }
@@ -34,7 +34,7 @@ impl Place {
 /// `--zenoh-config`), the server of the plant that serves the cell, asked over Zenoh
 /// (`dmp_client::discovery`); else `default`. A plant that does not answer is said on stderr and `default` is
 /// used. Commands that only publish over Zenoh (`scene ... --via zenoh`) ask nothing.
-pub async fn resolve_server(cli: &Cli, default: &str) -> String {
+pub(crate) async fn resolve_server(cli: &Cli, default: &str) -> String {
     if let Some(s) = &cli.server {
         return s.clone();
     }
@@ -74,7 +74,11 @@ pub async fn resolve_server(cli: &Cli, default: &str) -> String {
 /// changes `--via zenoh`, `sim`, `load --scene-updates`) ask the server (GetInfo) for what they were not given, so
 /// that their Zenoh keys name the server's cell; if it cannot be asked (no gRPC access, only a Zenoh certificate),
 /// they say so and go on with `default`. gRPC commands ask nothing: naming no cell is the server's default.
-pub async fn resolve_place(cli: &Cli, server: &str, options: &ConnectOptions) -> Result<Place, DmpctlError> {
+pub(crate) async fn resolve_place(
+    cli: &Cli,
+    server: &str,
+    options: &ConnectOptions,
+) -> Result<Place, DmpctlError> {
     if let Some(cell) = &cli.cell {
         dmp_proto::keys::check_name("--cell", cell).map_err(|e| DmpctlError::argument("--cell", e.rule))?;
     }
@@ -131,7 +135,7 @@ fn is_loopback(host: &str) -> bool {
 /// reached on loopback. A remote server's listen addresses (its loopback, or every one of its interfaces) say
 /// nothing reliable about how to reach it from here, and a wrong one would publish to another system: none then
 /// (scouting, or `--zenoh-connect`).
-pub fn usable_locators(server: &str, locators: &[String]) -> Vec<String> {
+pub(crate) fn usable_locators(server: &str, locators: &[String]) -> Vec<String> {
     if !is_loopback(url_host(server)) {
         return Vec::new();
     }

@@ -11,11 +11,11 @@ use std::time::Duration;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// How long a command runs before its progress appears.
-pub const REVEAL_AFTER: Duration = Duration::from_secs(2);
+pub(crate) const REVEAL_AFTER: Duration = Duration::from_secs(2);
 
 /// The progress of one command; cleared when dropped.
 #[derive(Debug)]
-pub struct Progress {
+pub(crate) struct Progress {
     bar: ProgressBar,
     done: Arc<AtomicBool>,
 }
@@ -23,12 +23,12 @@ pub struct Progress {
 impl Progress {
     /// Progress of `what` (e.g. `sim panda: 1 robot`), drawn on stderr after [`REVEAL_AFTER`] when stderr is a
     /// terminal; hidden otherwise.
-    pub fn new(what: impl Into<String>) -> Self {
+    pub(crate) fn new(what: impl Into<String>) -> Self {
         Self::with_target(what, std::io::stderr().is_terminal())
     }
 
     /// [`Progress::new`], drawn (after [`REVEAL_AFTER`]) only if `terminal`.
-    pub fn with_target(what: impl Into<String>, terminal: bool) -> Self {
+    pub(crate) fn with_target(what: impl Into<String>, terminal: bool) -> Self {
         let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden());
         let style = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {prefix}: {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_spinner());
@@ -49,25 +49,25 @@ impl Progress {
         Self { bar, done }
     }
 
-    /// Whether it is drawn now.
-    pub fn is_hidden(&self) -> bool {
+    /// Whether it is hidden now (not drawn).
+    pub(crate) fn is_hidden(&self) -> bool {
         self.bar.is_hidden()
     }
 
     /// Sets what it says after the elapsed time (`3 robots, 120 segments`).
-    pub fn set_message(&self, message: impl Into<String>) {
+    pub(crate) fn set_message(&self, message: impl Into<String>) {
         self.bar.set_message(message.into());
     }
 
     /// Counts one more step (a segment) and says `message`.
-    pub fn tick(&self, message: impl Into<String>) {
+    pub(crate) fn tick(&self, message: impl Into<String>) {
         self.bar.inc(1);
         self.bar.set_message(message.into());
     }
 
     /// Prints a line on stderr above the spinner (plainly when it is not drawn).
-    pub fn println(&self, line: &str) {
-        if self.bar.is_hidden() {
+    pub(crate) fn println(&self, line: &str) {
+        if self.is_hidden() {
             eprintln!("{line}");
         } else {
             self.bar.println(line);

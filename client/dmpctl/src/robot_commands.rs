@@ -1,7 +1,7 @@
 //! `dmpctl robot put | show | delete`: a robot's record on the server (its limits, footprint and tool), the
 //! defaults of its motion requests.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use dmp::Limits;
 use dmp_client::grpc::DmpClient;
@@ -10,46 +10,12 @@ use dmp_proto::v1;
 use serde::Deserialize;
 use serde_json::{Value, json};
 
-use clap::Subcommand;
-
-use crate::cli::Vector;
 use crate::error::DmpctlError;
 use crate::outputs::to_json;
 
-/// `dmpctl robot ...`
-#[derive(Debug, Subcommand)]
-pub enum RobotCommand {
-    /// Store the record of robot ID (replacing the one before), and print it as stored.
-    Put {
-        /// The robot.
-        id: String,
-        /// Its limits: a profile (`panda`, `psm`, `youbot`) or a JSON file of the six fields of `Limits`
-        /// (`max_speed`, `max_acceleration`, `max_jerk`, `max_angular_speed`, ...; a field left out is no limit).
-        #[arg(long)]
-        limits: Option<String>,
-        /// Its footprint: the semi-axes of an ellipsoid, metres, e.g. `0.4,0.3`.
-        #[arg(long, allow_hyphen_values = true)]
-        footprint: Option<Vector>,
-        /// The tool it holds in its pose runs: a JSON file `{"semi_axes": [...], "exponents": [...], "offset":
-        /// [...], "axis": true, "control_points": 25}`.
-        #[arg(long)]
-        tool: Option<PathBuf>,
-    },
-    /// The record of robot ID, as JSON.
-    Show {
-        /// The robot.
-        id: String,
-    },
-    /// Delete the record of robot ID (its primitives stay).
-    Delete {
-        /// The robot.
-        id: String,
-    },
-}
-
 /// `--limits`: a profile name (`panda`, `psm`, `youbot`, or `dvrk_psm`, `youbot_base`) or a JSON file of the six
 /// fields of `Limits` (`{"max_speed": 0.5, "max_jerk": 10}`; a field left out is 0, no limit).
-pub fn read_limits(given: &str) -> Result<Limits, DmpctlError> {
+pub(crate) fn read_limits(given: &str) -> Result<Limits, DmpctlError> {
     if let Some(l) = Limits::profile(given) {
         return Ok(l);
     }
@@ -94,7 +60,7 @@ pub fn read_limits(given: &str) -> Result<Limits, DmpctlError> {
 
 /// `--tool FILE`: a JSON tool, `{"semi_axes": [0.3, 0.02, 0.02], "exponents": [], "offset": [0, 0, 0.1],
 /// "axis": true, "control_points": 25}` (all but `semi_axes` optional).
-pub fn read_tool(path: &Path) -> Result<v1::Tool, DmpctlError> {
+pub(crate) fn read_tool(path: &Path) -> Result<v1::Tool, DmpctlError> {
     #[derive(Deserialize)]
     #[serde(deny_unknown_fields)]
     struct File {
@@ -121,7 +87,7 @@ pub fn read_tool(path: &Path) -> Result<v1::Tool, DmpctlError> {
 }
 
 /// The record `robot put` sends.
-pub fn record(
+pub(crate) fn record(
     id: &str,
     limits: Option<&Limits>,
     footprint: Option<&[f64]>,
@@ -137,7 +103,7 @@ pub fn record(
 }
 
 /// A record as JSON (the fields of the message, unset ones null).
-pub fn record_json(r: &v1::RobotRecord) -> Value {
+pub(crate) fn record_json(r: &v1::RobotRecord) -> Value {
     let limits = r.limits.as_ref().map(|l| {
         json!({
             "max_speed": l.max_speed, "max_acceleration": l.max_acceleration, "max_jerk": l.max_jerk,
@@ -160,17 +126,17 @@ pub fn record_json(r: &v1::RobotRecord) -> Value {
 }
 
 /// `robot put`: stores the record; prints it as stored.
-pub async fn put(client: &DmpClient, record: v1::RobotRecord) -> Result<String, DmpctlError> {
+pub(crate) async fn put(client: &DmpClient, record: v1::RobotRecord) -> Result<String, DmpctlError> {
     Ok(to_json(&record_json(&client.put_robot(record).await?)))
 }
 
 /// `robot show`: the record as JSON.
-pub async fn show(client: &DmpClient, id: &str) -> Result<String, DmpctlError> {
+pub(crate) async fn show(client: &DmpClient, id: &str) -> Result<String, DmpctlError> {
     Ok(to_json(&record_json(&client.get_robot(id).await?)))
 }
 
 /// `robot delete`.
-pub async fn delete(client: &DmpClient, id: &str) -> Result<String, DmpctlError> {
+pub(crate) async fn delete(client: &DmpClient, id: &str) -> Result<String, DmpctlError> {
     client.delete_robot(id).await?;
     Ok(format!("deleted the record of {id}"))
 }

@@ -9,8 +9,8 @@ use crate::error::DmpctlError;
 use crate::obstacle_file::{check_scenario_obstacles, error_at, without_position};
 
 /// Parses a scenario from text; `path` only names the source in errors, which give the value's line and column.
-/// Its obstacles are read as `scene put` reads them ([`check_scenario_obstacles`]): the same broken obstacle gives
-/// the same error.
+/// Its obstacles are read as `scene put` reads them (`obstacle_file::check_scenario_obstacles`): the same broken
+/// obstacle gives the same error.
 pub fn parse_scenario(text: &str, path: &Path) -> Result<Scenario, DmpctlError> {
     let mut de = json5::Deserializer::from_str(text);
     let parsed: Result<Scenario, _> = serde_path_to_error::deserialize(&mut de);
@@ -51,7 +51,7 @@ pub fn load_scenario(path: &Path) -> Result<Scenario, DmpctlError> {
 }
 
 /// Reads, parses and validates a scenario file, and learns its primitive.
-pub fn prepare_scenario(path: &Path) -> Result<dmp::scenario::Prepared, DmpctlError> {
+pub(crate) fn prepare_scenario(path: &Path) -> Result<dmp::scenario::Prepared, DmpctlError> {
     let scenario = load_scenario(path)?;
     dmp::scenario::prepare(&scenario)
         .map_err(|source| DmpctlError::Invalid { path: path.to_path_buf(), source })

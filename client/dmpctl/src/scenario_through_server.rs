@@ -44,7 +44,7 @@ use crate::offline::{RunSummary, write_outputs};
 use crate::scenario_file::load_scenario;
 
 /// The namespace of the robots of `scenario run --server`: `scenario.<name>` (`.` is allowed in robot ids).
-pub const ROBOT_PREFIX: &str = "scenario.";
+pub(crate) const ROBOT_PREFIX: &str = "scenario.";
 
 /// The robot a single-robot scenario named `name` is stored under: `scenario.<name>`, sanitized.
 pub fn scenario_robot(name: &str) -> String {
@@ -62,7 +62,7 @@ pub fn robot_ids(s: &Scenario) -> Vec<String> {
 }
 
 /// Deletes every primitive of `robots` (the run's own); returns how many versions were deleted.
-pub async fn clean_up(client: &DmpClient, robots: &[String]) -> Result<u64, ClientError> {
+pub(crate) async fn clean_up(client: &DmpClient, robots: &[String]) -> Result<u64, ClientError> {
     let mut deleted = 0;
     for robot in robots {
         deleted += client.delete_robot_primitives(robot).await?;
@@ -72,7 +72,7 @@ pub async fn clean_up(client: &DmpClient, robots: &[String]) -> Result<u64, Clie
 
 /// A robot id or primitive name the server accepts: 1 to 128 characters of `[A-Za-z0-9_.-]`, others replaced by
 /// `_`; empty gives `scenario`.
-pub fn sanitize(name: &str) -> String {
+pub(crate) fn sanitize(name: &str) -> String {
     let s: String = name
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.') { c } else { '_' })

@@ -1,35 +1,35 @@
 //! The commands of `dmpctl` that talk to the server (gRPC, or Zenoh for `scene --via zenoh`); each returns what to
-//! print on standard output. Argument types are in [`crate::cli`].
+//! print on standard output. Argument types are the `args` module's.
 
 use std::path::Path;
 use std::time::Duration;
 
-use dmp_client::convert::record_json;
 use dmp_client::grpc::{DmpClient, record_primitive};
 use dmp_client::setpoints::Setpoints;
 use dmp_client::zenoh_pub::ObstaclePublisher;
-use dmp_proto::avoidance::avoidance_to_proto;
 use dmp_proto::keys::obstacle_key;
 use dmp_proto::learning::learn_parameters_to_proto;
 use dmp_proto::obstacle_json::{JsonObstacle, obstacle_to_json};
 use dmp_proto::v1;
 use serde_json::{Value, json};
 
-use crate::cli::{LearnArgs, LearnSource, MotionArgs, PlanArgs, StreamArgs, Via};
+use crate::args::{LearnArgs, LearnSource, PlanArgs, StreamArgs, Via};
 use crate::demo_csv::load_demonstration_csv;
 use crate::error::DmpctlError;
 use crate::outputs::{to_json, trajectory_csv, write_file};
+use crate::primitive_json::record_json;
 use crate::scenario_file::load_scenario;
+use crate::server_info::print_warnings;
 
 /// How long `scene ... --via zenoh` waits for the server's subscriber.
-pub const ZENOH_SUBSCRIBER_WAIT: Duration = Duration::from_secs(5);
+pub(crate) const ZENOH_SUBSCRIBER_WAIT: Duration = Duration::from_secs(5);
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> DmpctlError + '_ {
     move |source| DmpctlError::Io { path: path.to_path_buf(), source }
 }
 
 /// `learn`: one demonstration (a scenario's, or a CSV file's) to the next version of `(robot, name)`.
-pub async fn learn(client: &DmpClient, a: &LearnArgs) -> Result<String, DmpctlError> {
+pub(crate) async fn learn(client: &DmpClient, a: &LearnArgs) -> Result<String, DmpctlError> {
     let (t, x, q, mut params) = match &a.source {
         LearnSource { scenario: Some(path), .. } => {
             let s = load_scenario(path)?;
@@ -81,7 +81,7 @@ pub async fn learn(client: &DmpClient, a: &LearnArgs) -> Result<String, DmpctlEr
 }
 
 /// `list`: one line per primitive of the robot.
-pub async fn list(client: &DmpClient, robot: &str) -> Result<String, DmpctlError> {
+pub(crate) async fn list(client: &DmpClient, robot: &str) -> Result<String, DmpctlError> {
     let records = client.list(robot).await?;
     if records.is_empty() {
         return Ok(format!("robot `{robot}` has no primitives"));
@@ -102,7 +102,7 @@ pub async fn list(client: &DmpClient, robot: &str) -> Result<String, DmpctlError
 }
 
 /// `robots`: one line per robot that has primitives (`sim.panda  2 primitives  updated 2026-11-26T06:51:00Z`).
-pub async fn robots(client: &DmpClient) -> Result<String, DmpctlError> {
+pub(crate) async fn robots(client: &DmpClient) -> Result<String, DmpctlError> {
     let robots = client.list_robots().await?;
     if robots.is_empty() {
         return Ok("no robot has primitives (that this client may read)".into());
@@ -120,50 +120,31 @@ pub async fn robots(client: &DmpClient) -> Result<String, DmpctlError> {
 }
 
 /// A time in Unix milliseconds as RFC 3339 UTC, to the second (`2026-11-26T06:51:00Z`).
-pub fn readable_time(unix_ms: u64) -> String {
+pub(crate) fn readable_time(unix_ms: u64) -> String {
     let t = std::time::UNIX_EPOCH + Duration::from_millis(unix_ms);
     humantime::format_rfc3339_seconds(t).to_string()
 }
 
 /// `show`: the record as JSON (the primitive in the engine's serde form).
-pub async fn show(client: &DmpClient, robot: &str, name: &str, version: u64) -> Result<String, DmpctlError> {
+pub(crate) async fn show(
+    client: &DmpClient,
+    robot: &str,
+    name: &str,
+    version: u64,
+) -> Result<String, DmpctlError> {
     Ok(to_json(&record_json(&client.get(robot, name, version).await?)?))
 }
 
 /// `delete`: every version of `(robot, name)`.
-pub async fn delete(client: &DmpClient, robot: &str, name: &str) -> Result<String, DmpctlError> {
+pub(crate) async fn delete(client: &DmpClient, robot: &str, name: &str) -> Result<String, DmpctlError> {
     let n = client.delete(robot, name).await?;
     Ok(format!("deleted {n} version{} of {robot}/{name}", if n == 1 { "" } else { "s" }))
 }
 
-/// The motion of a `plan` or `stream` command.
-pub fn motion_spec(m: &MotionArgs) -> v1::MotionSpec {
-    v1::MotionSpec {
-        robot_id: m.robot.clone(),
-        primitive: m.name.clone(),
-        version: m.version,
-        start: m.start.as_ref().map(|v| v.0.clone()).unwrap_or_default(),
-        goal: m.goal.as_ref().map(|v| v.0.clone()).unwrap_or_default(),
-        start_orientation: m.start_orientation.as_ref().map(|v| v.0.clone()).unwrap_or_default(),
-        goal_orientation: m.goal_orientation.as_ref().map(|v| v.0.clone()).unwrap_or_default(),
-        tau: m.tau.unwrap_or(0.0),
-        avoidance: m.avoidance.as_ref().map(|a| avoidance_to_proto(a, m.point_samples.unwrap_or(0))),
-        ignore_scene: m.ignore_scene,
-        goal_tolerance: (m.goal_tolerance.is_some() || m.goal_speed_tolerance.is_some()).then(|| {
-            v1::GoalTolerance {
-                position: m.goal_tolerance.unwrap_or(0.0),
-                speed: m.goal_speed_tolerance.unwrap_or(0.0),
-                ..Default::default()
-            }
-        }),
-        ..Default::default()
-    }
-}
-
 /// `plan`: the whole trajectory, written to `DIR/trajectory.csv`, and its figure to `DIR/plot.svg`.
-pub async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, DmpctlError> {
+pub(crate) async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, DmpctlError> {
     let request = v1::PlanRequest {
-        motion: Some(motion_spec(&a.motion)),
+        motion: Some(a.motion.spec()),
         dt: a.dt.unwrap_or(0.0),
         duration: a.duration.unwrap_or(0.0),
     };
@@ -190,15 +171,13 @@ pub async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, DmpctlErro
     ))
 }
 
-pub use crate::server_info::{health, info_json, print_warnings, stats_json, warning_line};
-
 /// The status name of a segment.
-pub fn status_name(seg: &v1::Segment) -> &'static str {
+pub(crate) fn status_name(seg: &v1::Segment) -> &'static str {
     v1::SegmentStatus::try_from(seg.status).map_or("UNKNOWN", |s| s.as_str_name())
 }
 
 /// The stderr line of a segment.
-pub fn segment_line(seg: &v1::Segment) -> String {
+pub(crate) fn segment_line(seg: &v1::Segment) -> String {
     let points = if seg.dim == 0 { 0 } else { seg.positions.len() / seg.dim as usize };
     format!(
         "segment {} t {:.4} s points {} status {} scene_version {}",
@@ -213,11 +192,11 @@ pub fn segment_line(seg: &v1::Segment) -> String {
 /// `stream`: executes, prints a line per segment on stderr, writes the setpoints in force to `DIR/trajectory.csv`
 /// and their figure to `DIR/plot.svg`.
 /// Ctrl-C ends the stream early and still writes what was received.
-pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, DmpctlError> {
+pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, DmpctlError> {
     use tokio_stream::StreamExt;
     let pacing = if a.realtime { v1::Pacing::Realtime } else { v1::Pacing::AsFastAsRead };
     let request = v1::ExecuteRequest {
-        motion: Some(motion_spec(&a.motion)),
+        motion: Some(a.motion.spec()),
         dt: a.dt.unwrap_or(0.0),
         segment_s: a.segment.unwrap_or(0.0),
         pacing: pacing as i32,
@@ -286,20 +265,20 @@ pub async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, Dmpctl
 /// Reads the obstacles of `path`: one JSON obstacle, or a file (e.g. a scenario) whose `obstacles` are all taken.
 /// Every obstacle is validated with the engine; `ttl_s` replaces each one's time to live. Errors name the file and
 /// the field.
-pub fn read_obstacles(path: &Path, ttl_s: Option<f64>) -> Result<Vec<JsonObstacle>, DmpctlError> {
+pub(crate) fn read_obstacles(path: &Path, ttl_s: Option<f64>) -> Result<Vec<JsonObstacle>, DmpctlError> {
     let text = std::fs::read_to_string(path).map_err(io(path))?;
     crate::obstacle_file::obstacles_of(&text, path, ttl_s)
 }
 
 /// Zenoh settings of the command line.
 #[derive(Debug, Clone)]
-pub struct ZenohArgs {
+pub(crate) struct ZenohArgs {
     /// The cell.
-    pub cell: String,
+    pub(crate) cell: String,
     /// Endpoints to connect to.
-    pub connect: Vec<String>,
+    pub(crate) connect: Vec<String>,
     /// A stock Zenoh configuration file to open the session with (TLS, credentials).
-    pub config_file: Option<std::path::PathBuf>,
+    pub(crate) config_file: Option<std::path::PathBuf>,
 }
 
 async fn publisher(z: &ZenohArgs) -> Result<ObstaclePublisher, DmpctlError> {
@@ -312,7 +291,7 @@ async fn publisher(z: &ZenohArgs) -> Result<ObstaclePublisher, DmpctlError> {
 }
 
 /// `scene put FILE`, with the file's obstacles read and checked ([`read_obstacles`]).
-pub async fn scene_put<F: Future<Output = Result<DmpClient, DmpctlError>>>(
+pub(crate) async fn scene_put<F: Future<Output = Result<DmpClient, DmpctlError>>>(
     connect: impl FnOnce() -> F,
     z: &ZenohArgs,
     obstacles: &[JsonObstacle],
@@ -340,7 +319,7 @@ pub async fn scene_put<F: Future<Output = Result<DmpClient, DmpctlError>>>(
 }
 
 /// `scene delete ID`.
-pub async fn scene_delete<F: Future<Output = Result<DmpClient, DmpctlError>>>(
+pub(crate) async fn scene_delete<F: Future<Output = Result<DmpClient, DmpctlError>>>(
     connect: impl FnOnce() -> F,
     z: &ZenohArgs,
     id: &str,
@@ -365,7 +344,7 @@ pub async fn scene_delete<F: Future<Output = Result<DmpClient, DmpctlError>>>(
 }
 
 /// `scene list`: the scene as JSON.
-pub async fn scene_list(client: &DmpClient) -> Result<String, DmpctlError> {
+pub(crate) async fn scene_list(client: &DmpClient) -> Result<String, DmpctlError> {
     let s = client.list_obstacles().await?;
     let obstacles: Vec<Value> = s.obstacles.iter().map(obstacle_to_json).collect();
     Ok(to_json(&json!({"scene_version": s.scene_version, "obstacles": obstacles})))
@@ -374,6 +353,7 @@ pub async fn scene_list(client: &DmpClient) -> Result<String, DmpctlError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::server_info::warning_line;
 
     #[test]
     fn times_read_as_rfc_3339() {

@@ -9,7 +9,7 @@ use dmp_proto::v1;
 use crate::error::DmpctlError;
 
 /// `info`: the server's set-up and the caller's identity, as JSON.
-pub fn info_json(info: &v1::ServerInfo) -> serde_json::Value {
+pub(crate) fn info_json(info: &v1::ServerInfo) -> serde_json::Value {
     serde_json::json!({
         "version": info.version,
         "cell": info.cell,
@@ -35,7 +35,7 @@ pub fn info_json(info: &v1::ServerInfo) -> serde_json::Value {
 }
 
 /// The line a warning of the server is printed as (on stderr, `dmpctl: warning: ...`).
-pub fn warning_line(w: &v1::Warning) -> String {
+pub(crate) fn warning_line(w: &v1::Warning) -> String {
     let kind = v1::warning::Kind::try_from(w.kind).map_or("UNKNOWN", |k| k.as_str_name());
     let mut line = format!("warning: {kind}");
     if !w.obstacle_id.is_empty() {
@@ -51,7 +51,7 @@ pub fn warning_line(w: &v1::Warning) -> String {
 
 /// Prints the warnings of a reply on stderr, and a scene that went stale or fresh again (`stale` holds the last
 /// state seen: the change is printed once).
-pub fn print_warnings(warnings: &[v1::Warning], scene_stale: bool, stale: &mut bool) {
+pub(crate) fn print_warnings(warnings: &[v1::Warning], scene_stale: bool, stale: &mut bool) {
     for w in warnings {
         eprintln!("dmpctl: {}", warning_line(w));
     }
@@ -68,7 +68,7 @@ pub fn print_warnings(warnings: &[v1::Warning], scene_stale: bool, stale: &mut b
 }
 
 /// `stats`: the server's statistics as JSON.
-pub fn stats_json(s: &v1::ServerStats) -> serde_json::Value {
+pub(crate) fn stats_json(s: &v1::ServerStats) -> serde_json::Value {
     serde_json::json!({
         "uptime_s": s.uptime_s,
         "cpu_seconds": s.cpu_seconds,
@@ -90,7 +90,7 @@ pub fn stats_json(s: &v1::ServerStats) -> serde_json::Value {
 }
 
 /// The services `health` checks: the server as a whole, then each of its services.
-pub const HEALTH_SERVICES: [&str; 6] = [
+pub(crate) const HEALTH_SERVICES: [&str; 6] = [
     "",
     "dmp.v1.PrimitiveService",
     "dmp.v1.RobotService",
@@ -103,7 +103,7 @@ pub const HEALTH_SERVICES: [&str; 6] = [
 const HEALTH_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// `health`: one line per service with its status; an error naming those not serving.
-pub async fn health(client: &DmpClient) -> Result<String, DmpctlError> {
+pub(crate) async fn health(client: &DmpClient) -> Result<String, DmpctlError> {
     let mut lines = Vec::new();
     let mut down = Vec::new();
     for service in HEALTH_SERVICES {

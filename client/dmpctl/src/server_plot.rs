@@ -12,22 +12,21 @@ use dmp_proto::avoidance::avoidance_to_proto;
 use dmp_proto::obstacle::obstacle_to_engine;
 use dmp_proto::v1;
 
-use crate::cli::MotionArgs;
+use crate::args::MotionArgs;
 use crate::error::DmpctlError;
 use crate::outputs::write_file;
-use crate::server_commands::motion_spec;
 
 /// The scene versions a stream went through: an event each time the version changes after the first segment.
 #[derive(Debug, Default)]
-pub struct SceneVersions {
+pub(crate) struct SceneVersions {
     last: Option<u64>,
     /// The changes.
-    pub events: Vec<Event>,
+    pub(crate) events: Vec<Event>,
 }
 
 impl SceneVersions {
     /// Notes the scene version of a segment.
-    pub fn see(&mut self, seg: &v1::Segment) {
+    pub(crate) fn see(&mut self, seg: &v1::Segment) {
         if self.last.is_some_and(|v| v != seg.scene_version) {
             self.events.push(Event::new(seg.start_time, format!("scene version {}", seg.scene_version)));
         }
@@ -55,7 +54,7 @@ fn true_shape(o: &v1::Obstacle) -> Option<Solid> {
 
 /// Writes `out/plot.svg` of `traj`, executed for `motion` with step `dt`. What fails here is a warning on stderr:
 /// the trajectory is already written.
-pub async fn write_plot(
+pub(crate) async fn write_plot(
     client: &DmpClient,
     motion: &MotionArgs,
     what: &str,
@@ -78,7 +77,7 @@ async fn try_write_plot(
     events: &[Event],
     out: &Path,
 ) -> Result<(), DmpctlError> {
-    let mut spec = motion_spec(motion);
+    let mut spec = motion.spec();
     spec.avoidance = Some(avoidance_to_proto(&dmp::Avoidance::NONE, 0));
     spec.ignore_scene = true;
     let duration = traj.t.last().copied().unwrap_or(0.0) - traj.t.first().copied().unwrap_or(0.0);

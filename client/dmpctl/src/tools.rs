@@ -11,7 +11,7 @@ use crate::progress::Progress;
 
 /// Runs `work`, with `progress` saying `status()` a few times a second; on Ctrl-C drops it and runs `clean_up`
 /// (None: `--keep`), which returns what it did.
-pub async fn until_interrupted<T>(
+pub(crate) async fn until_interrupted<T>(
     work: impl Future<Output = Result<T, DmpctlError>>,
     clean_up: Option<impl Future<Output = Result<String, DmpctlError>>>,
     progress: &Progress,
@@ -39,6 +39,6 @@ pub async fn until_interrupted<T>(
 const STATUS_EVERY: Duration = Duration::from_millis(250);
 
 /// What a clean-up of `versions` primitive versions of `robots` says.
-pub fn deleted(versions: u64, robots: &[String]) -> String {
+pub(crate) fn deleted(versions: u64, robots: &[String]) -> String {
     format!("deleted {versions} primitive versions of {}", robots.join(", "))
 }

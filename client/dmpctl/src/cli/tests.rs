@@ -1,9 +1,11 @@
 //! Tests of the command line: parsing, refusals naming the flag. The commands against the real server are
 //! end-to-end tests (`tests/tests/client/dmpctl.rs`).
 
+use clap::Parser;
 use dmp_client::ClientError;
 
 use super::*;
+use crate::args::{Vector, Via};
 use crate::place::usable_locators;
 
 fn parse(args: &[&str]) -> Cli {
@@ -195,7 +197,7 @@ fn plan_parses_vectors_with_negative_entries_and_avoidance() {
     assert_eq!((a.motion.tau, a.duration, a.dt), (Some(2.0), Some(3.0), Some(0.002)));
     assert_eq!(a.motion.avoidance, Some(dmp::Avoidance::NONE));
     assert!(a.motion.ignore_scene);
-    let spec = server_commands::motion_spec(&a.motion);
+    let spec = a.motion.spec();
     assert_eq!((spec.goal, spec.tau), (vec![-1.0, 0.5], 2.0));
     assert!(spec.avoidance.is_some());
 
@@ -212,7 +214,7 @@ fn plan_parses_vectors_with_negative_entries_and_avoidance() {
     ]);
     let Command::Plan(a) = c.command else { panic!() };
     assert_eq!(a.motion.avoidance.unwrap().method.name(), "static_volumetric");
-    let spec = server_commands::motion_spec(&a.motion);
+    let spec = a.motion.spec();
     assert!(spec.goal.is_empty() && spec.start.is_empty() && spec.tau == 0.0);
     assert!(spec.goal_orientation.is_empty() && spec.start_orientation.is_empty());
 
@@ -231,7 +233,7 @@ fn plan_parses_vectors_with_negative_entries_and_avoidance() {
         "0,0,0,1",
     ]);
     let Command::Plan(a) = c.command else { panic!() };
-    let spec = server_commands::motion_spec(&a.motion);
+    let spec = a.motion.spec();
     assert_eq!(spec.goal_orientation, vec![0.0, 0.0, -0.6, 0.8]);
     assert_eq!(spec.start_orientation, vec![0.0, 0.0, 0.0, 1.0]);
 

@@ -1,91 +1,122 @@
-//! The flags of the motion commands: what to replay (`MotionArgs`), and `plan` and `stream` around it.
+//! The flags of the motion commands: what to replay (`MotionArgs`, and the motion it asks the server for), and
+//! `plan` and `stream` around it.
 
 use std::path::PathBuf;
 
 use clap::Args;
+use dmp_proto::avoidance::avoidance_to_proto;
+use dmp_proto::v1;
 
-use super::{Vector, parse_avoidance, positive};
+use super::values::{Vector, parse_avoidance, positive};
 
 /// What to replay and how (shared by `plan` and `stream`).
 #[derive(Debug, Args)]
-pub struct MotionArgs {
+pub(crate) struct MotionArgs {
     /// The robot.
     #[arg(long)]
-    pub robot: String,
+    pub(crate) robot: String,
     /// The primitive.
     #[arg(long)]
-    pub name: String,
+    pub(crate) name: String,
     /// Its version (default: the latest).
     #[arg(long, default_value_t = 0)]
-    pub version: u64,
+    pub(crate) version: u64,
     /// Start [default: the primitive's].
     #[arg(long, value_name = "X,Y,..", allow_hyphen_values = true)]
-    pub start: Option<Vector>,
+    pub(crate) start: Option<Vector>,
     /// Goal [default: the primitive's].
     #[arg(long, value_name = "X,Y,..", allow_hyphen_values = true)]
-    pub goal: Option<Vector>,
+    pub(crate) goal: Option<Vector>,
     /// A pose primitive's start orientation, a unit quaternion [default: the primitive's].
     #[arg(long = "start-orientation", value_name = "QX,QY,QZ,QW", allow_hyphen_values = true)]
-    pub start_orientation: Option<Vector>,
+    pub(crate) start_orientation: Option<Vector>,
     /// A pose primitive's goal orientation, a unit quaternion; q and -q are the same [default: the primitive's].
     #[arg(long = "goal-orientation", value_name = "QX,QY,QZ,QW", allow_hyphen_values = true)]
-    pub goal_orientation: Option<Vector>,
+    pub(crate) goal_orientation: Option<Vector>,
     /// Time scale, seconds; larger is slower [default: the primitive's].
     #[arg(long, value_parser = positive, allow_hyphen_values = true)]
-    pub tau: Option<f64>,
+    pub(crate) tau: Option<f64>,
     /// Avoidance as in the scenario format, e.g. `{"method": "dynamic_volumetric", "lambda": 10, "beta": 2,
     /// "eta": 0.5}`, or `none` [default: the server's].
     #[arg(long, value_name = "JSON", value_parser = parse_avoidance)]
-    pub avoidance: Option<dmp::Avoidance>,
+    pub(crate) avoidance: Option<dmp::Avoidance>,
     /// Boundary samples per obstacle for the point methods [default: 50].
     #[arg(long = "point-samples", value_name = "N")]
-    pub point_samples: Option<usize>,
+    pub(crate) point_samples: Option<usize>,
     /// Ignore the cell's scene.
     #[arg(long = "ignore-scene")]
-    pub ignore_scene: bool,
+    pub(crate) ignore_scene: bool,
     /// "At the goal": largest distance to the goal, in the demonstration's units [default: 0.001].
     #[arg(long = "goal-tolerance", value_name = "DISTANCE", value_parser = positive)]
-    pub goal_tolerance: Option<f64>,
+    pub(crate) goal_tolerance: Option<f64>,
     /// "At rest": largest speed at the goal, in the demonstration's units per second [default: 0.001].
     #[arg(long = "goal-speed-tolerance", value_name = "SPEED", value_parser = positive)]
-    pub goal_speed_tolerance: Option<f64>,
+    pub(crate) goal_speed_tolerance: Option<f64>,
+}
+
+impl MotionArgs {
+    /// The motion these flags ask for, as the schema's message (a flag not given is the message's default: the
+    /// primitive's or the server's).
+    pub(crate) fn spec(&self) -> v1::MotionSpec {
+        let vector = |v: &Option<Vector>| v.as_ref().map(|v| v.0.clone()).unwrap_or_default();
+        let samples = self.point_samples.unwrap_or(0);
+        let tolerance = self.goal_tolerance.is_some() || self.goal_speed_tolerance.is_some();
+        v1::MotionSpec {
+            robot_id: self.robot.clone(),
+            primitive: self.name.clone(),
+            version: self.version,
+            start: vector(&self.start),
+            goal: vector(&self.goal),
+            start_orientation: vector(&self.start_orientation),
+            goal_orientation: vector(&self.goal_orientation),
+            tau: self.tau.unwrap_or(0.0),
+            avoidance: self.avoidance.as_ref().map(|a| avoidance_to_proto(a, samples)),
+            ignore_scene: self.ignore_scene,
+            goal_tolerance: tolerance.then(|| v1::GoalTolerance {
+                position: self.goal_tolerance.unwrap_or(0.0),
+                speed: self.goal_speed_tolerance.unwrap_or(0.0),
+                ..Default::default()
+            }),
+            ..Default::default()
+        }
+    }
 }
 
 /// `dmpctl plan`.
 #[derive(Debug, Args)]
-pub struct PlanArgs {
+pub(crate) struct PlanArgs {
     /// What to replay.
     #[command(flatten)]
-    pub motion: MotionArgs,
+    pub(crate) motion: MotionArgs,
     /// Length of the plan, seconds [default: 1.2 tau].
     #[arg(long = "duration-s", alias = "duration", value_name = "S", value_parser = positive, allow_hyphen_values = true)]
-    pub duration: Option<f64>,
+    pub(crate) duration: Option<f64>,
     /// Step, seconds [default: 0.001].
     #[arg(long = "dt-s", alias = "dt", value_name = "S", value_parser = positive, allow_hyphen_values = true)]
-    pub dt: Option<f64>,
+    pub(crate) dt: Option<f64>,
     /// Output directory (created).
     #[arg(long)]
-    pub out: PathBuf,
+    pub(crate) out: PathBuf,
 }
 
 /// `dmpctl stream`.
 #[derive(Debug, Args)]
-pub struct StreamArgs {
+pub(crate) struct StreamArgs {
     /// What to replay.
     #[command(flatten)]
-    pub motion: MotionArgs,
+    pub(crate) motion: MotionArgs,
     /// Pace segments on the wall clock (default: as fast as they are read).
     #[arg(long)]
-    pub realtime: bool,
+    pub(crate) realtime: bool,
     /// Step, seconds [default: 0.001].
     #[arg(long = "dt-s", alias = "dt", value_name = "S", value_parser = positive, allow_hyphen_values = true)]
-    pub dt: Option<f64>,
+    pub(crate) dt: Option<f64>,
     /// Segment length, seconds [default: 0.01].
     #[arg(long = "segment-s", alias = "segment", value_name = "S", value_parser = positive, allow_hyphen_values = true)]
-    pub segment: Option<f64>,
+    pub(crate) segment: Option<f64>,
     /// Real-time lookahead, seconds [default: 0.05].
     #[arg(long = "lookahead-s", alias = "lookahead", value_name = "S", value_parser = positive, allow_hyphen_values = true)]
-    pub lookahead: Option<f64>,
+    pub(crate) lookahead: Option<f64>,
     /// Stop after this long, seconds [default: at the goal, or 3 tau].
     #[arg(
         long = "max-duration-s",
@@ -94,8 +125,8 @@ pub struct StreamArgs {
         value_parser = positive,
         allow_hyphen_values = true
     )]
-    pub max_duration: Option<f64>,
+    pub(crate) max_duration: Option<f64>,
     /// Output directory (created).
     #[arg(long)]
-    pub out: PathBuf,
+    pub(crate) out: PathBuf,
 }

@@ -1,15 +1,13 @@
-//! The client's side of the wire. The conversions between the schema, the scenario format and the engine are
-//! `dmp_proto`'s, shared with the server; what is left here is the client's own: the JSON that `dmpctl` prints of a
-//! stored record.
+//! The JSON that `dmpctl show` prints of a stored primitive record. The conversions between the schema, the
+//! scenario format and the engine are `dmp_proto`'s, shared with the server.
 
+use dmp_client::ClientError;
 use dmp_proto::primitive::primitive_from_proto;
 use dmp_proto::v1;
 use serde_json::{Value, json};
 
-use crate::error::ClientError;
-
 /// The JSON of a stored record: identity, and the primitive in the engine's serde form (which round-trips).
-pub fn record_json(r: &v1::PrimitiveRecord) -> Result<Value, ClientError> {
+pub(crate) fn record_json(r: &v1::PrimitiveRecord) -> Result<Value, ClientError> {
     let p =
         r.primitive.as_ref().ok_or_else(|| ClientError::Protocol("a record without its primitive".into()))?;
     let prim =
@@ -46,16 +44,5 @@ mod tests {
         assert_eq!(serde_json::from_value::<dmp::Primitive>(v["primitive"].clone()).unwrap(), p);
         let e = record_json(&v1::PrimitiveRecord { primitive: None, ..record }).unwrap_err();
         assert!(matches!(e, ClientError::Protocol(_)), "{e}");
-    }
-
-    #[test]
-    fn wire_errors_are_bad_input() {
-        let e = dmp_proto::obstacle_json::JsonObstacle::parse(
-            &json!({"id": "e", "center": [0], "semi_axes": [1], "bogus": 1}),
-            "o",
-        )
-        .map_err(ClientError::from)
-        .unwrap_err();
-        assert!(e.is_bad_input() && e.to_string().starts_with("o.bogus"), "{e}");
     }
 }

@@ -8,26 +8,26 @@ use dmp_client::ClientError;
 use dmp_client::connect::{ConnectOptions, TlsOptions};
 
 /// The environment variable holding the bearer token.
-pub const TOKEN_ENV: &str = "DMP_TOKEN";
+pub(crate) const TOKEN_ENV: &str = "DMP_TOKEN";
 
 /// See the module.
 #[derive(Clone, Default, Args)]
-pub struct ConnectArgs {
+pub(crate) struct ConnectArgs {
     /// The CA that signed the server's certificate (PEM): connect over TLS (`https://`).
     #[arg(long, global = true, value_name = "FILE")]
-    pub tls_ca: Option<PathBuf>,
+    pub(crate) tls_ca: Option<PathBuf>,
     /// This client's certificate (PEM), for mutual TLS; its common name names an identity.
     #[arg(long, global = true, value_name = "FILE", requires = "tls_key")]
-    pub tls_cert: Option<PathBuf>,
+    pub(crate) tls_cert: Option<PathBuf>,
     /// This client's private key (PEM).
     #[arg(long, global = true, value_name = "FILE", requires = "tls_cert")]
-    pub tls_key: Option<PathBuf>,
+    pub(crate) tls_key: Option<PathBuf>,
     /// A file holding the bearer token (as `dmp-server access init` writes them).
     #[arg(long, global = true, value_name = "FILE", conflicts_with = "token")]
-    pub token_file: Option<PathBuf>,
+    pub(crate) token_file: Option<PathBuf>,
     /// The bearer token. Prefer `DMP_TOKEN` or `--token-file`: a token on the command line shows in `ps`.
     #[arg(long, global = true, value_name = "TOKEN")]
-    pub token: Option<String>,
+    pub(crate) token: Option<String>,
 }
 
 impl std::fmt::Debug for ConnectArgs {
@@ -44,7 +44,7 @@ impl std::fmt::Debug for ConnectArgs {
 
 impl ConnectArgs {
     /// The options to connect with; `token_from_env` is the value of `DMP_TOKEN`. Warnings go to `warn`.
-    pub fn options(
+    pub(crate) fn options(
         &self,
         token_from_env: Option<String>,
         mut warn: impl FnMut(&str),
