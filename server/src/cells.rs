@@ -8,7 +8,7 @@ pub mod cell;
 pub mod directory;
 pub mod rendezvous;
 pub(crate) mod robot_bus;
-pub mod staleness;
+pub(crate) mod staleness;
 pub(crate) mod state_admission;
 pub(crate) mod taken;
 

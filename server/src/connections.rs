@@ -12,7 +12,7 @@ use std::time::Duration;
 
 /// One connection's activity. Shared by the connection and the requests that came on it.
 #[derive(Debug)]
-pub struct ConnectionActivity {
+pub(crate) struct ConnectionActivity {
     streams: AtomicUsize,
     /// Nanoseconds of [`nanos_now`] at the last request or stream end.
     last_active: AtomicU64,
@@ -26,30 +26,30 @@ impl Default for ConnectionActivity {
 
 impl ConnectionActivity {
     /// A request came (or a stream ended): the connection is active now.
-    pub fn touch(&self) {
+    pub(crate) fn touch(&self) {
         self.last_active.fetch_max(nanos_now(), Ordering::AcqRel);
     }
 
     /// Streams open on the connection.
-    pub fn streams(&self) -> usize {
+    pub(crate) fn streams(&self) -> usize {
         self.streams.load(Ordering::Acquire)
     }
 
     /// Counts one more stream unless `max` are open already; true when counted.
-    pub fn try_open_stream(&self, max: usize) -> bool {
+    pub(crate) fn try_open_stream(&self, max: usize) -> bool {
         self.touch();
         self.streams.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| (n < max).then_some(n + 1)).is_ok()
     }
 
     /// One stream fewer.
-    pub fn close_stream(&self) {
+    pub(crate) fn close_stream(&self) {
         self.streams.fetch_sub(1, Ordering::AcqRel);
         self.touch();
     }
 
     /// How long until the connection has been idle for `timeout`: None when it is idle that long already (no
     /// stream open, no request for `timeout`); with a stream open, `timeout` (look again then).
-    pub fn idle_remaining(&self, timeout: Duration) -> Option<Duration> {
+    pub(crate) fn idle_remaining(&self, timeout: Duration) -> Option<Duration> {
         if self.streams() > 0 {
             return Some(timeout);
         }

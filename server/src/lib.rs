@@ -13,8 +13,12 @@
 //! | transports | [`grpc`], [`zenoh_bridge`], [`ros2`], [`metrics`], [`telemetry`] | the gRPC services, the Zenoh bridge that feeds the scenes, ROS 2 over rmw_zenoh, Prometheus, OpenTelemetry |
 //! | assembly | [`server`] | starting the parts above in order, and running until shutdown |
 
+#![warn(missing_docs)]
+#![warn(unreachable_pub)]
+
 pub mod clock;
 pub mod config;
+
 pub mod error;
 pub mod memory;
 pub(crate) mod wire;
@@ -27,7 +31,7 @@ pub mod cells;
 
 pub mod runs;
 
-pub mod plant;
+pub(crate) mod plant;
 
 pub(crate) mod grpc;
 pub(crate) mod metrics;

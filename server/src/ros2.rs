@@ -18,15 +18,15 @@
 //! at warn with the key and the reason, and counted twice: in the server's malformed Zenoh payloads (GetStats, the
 //! metrics) and in [`Ros2Counters`].
 
-pub mod collision;
-pub mod graph;
+pub(crate) mod collision;
+pub(crate) mod graph;
 pub mod marker_shapes;
 pub mod markers;
-pub mod obstacle_array;
+pub(crate) mod obstacle_array;
 
 pub mod paths;
-pub mod shapes;
-pub mod trajectories;
+pub(crate) mod shapes;
+pub(crate) mod trajectories;
 pub mod trajectory;
 
 use std::sync::atomic::{AtomicU64, Ordering};

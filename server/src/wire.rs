@@ -9,7 +9,7 @@ use crate::config::RequestLimits;
 use crate::error::ServerError;
 
 /// The engine's primitive of a message, validated and within the limits.
-pub fn primitive_from_proto(
+pub(crate) fn primitive_from_proto(
     p: &v1::Primitive,
     limits: &RequestLimits,
 ) -> Result<dmp::Primitive, ServerError> {
@@ -27,7 +27,7 @@ pub fn primitive_from_proto(
 
 /// A stored primitive, checked again when it is used: one stored before the ranges of [`dmp::ranges`] were
 /// enforced, and now outside them, is refused with the field and the range rather than run.
-pub fn stored_primitive(
+pub(crate) fn stored_primitive(
     p: &v1::Primitive,
     limits: &RequestLimits,
     what: &str,
@@ -43,14 +43,14 @@ pub fn stored_primitive(
 /// The engine's obstacle of a message ([`dmp_proto::obstacle::obstacle_to_engine`], every number in its range), with
 /// its centre within the workspace box `[-workspace_m, workspace_m]`: the one check of an obstacle's place, for the
 /// cells' scenes (gRPC and Zenoh) and a motion's own obstacles.
-pub fn obstacle_from_proto(o: &v1::Obstacle, workspace_m: f64) -> Result<dmp::Obstacle, ServerError> {
+pub(crate) fn obstacle_from_proto(o: &v1::Obstacle, workspace_m: f64) -> Result<dmp::Obstacle, ServerError> {
     let engine = dmp_proto::obstacle::obstacle_to_engine(o)?;
     check_in_workspace("center", &o.center, workspace_m)?;
     Ok(engine)
 }
 
 /// The engine's demonstration of a message, within the limits.
-pub fn demonstration_from_proto(
+pub(crate) fn demonstration_from_proto(
     d: &v1::Demonstration,
     limits: &RequestLimits,
 ) -> Result<dmp::Demonstration, ServerError> {
@@ -72,7 +72,7 @@ pub fn demonstration_from_proto(
 }
 
 /// The learning configuration of a message, with the documented defaults, within the limits.
-pub fn learn_config_from_proto(
+pub(crate) fn learn_config_from_proto(
     p: Option<&v1::LearnParameters>,
     limits: &RequestLimits,
 ) -> Result<dmp::LearnConfig, ServerError> {

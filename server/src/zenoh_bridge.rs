@@ -450,7 +450,7 @@ impl ZenohBridge {
     }
 }
 
-pub mod catch_up;
-pub mod reachability;
+pub(crate) mod catch_up;
+pub(crate) mod reachability;
 #[cfg(test)]
 mod tests;

@@ -5,20 +5,20 @@ use sha2::{Digest, Sha256};
 use subtle::ConstantTimeEq;
 
 /// The SHA-256 digest of a token.
-pub type TokenDigest = [u8; 32];
+pub(crate) type TokenDigest = [u8; 32];
 
 /// The digest of `token`.
-pub fn digest(token: &str) -> TokenDigest {
+pub(crate) fn digest(token: &str) -> TokenDigest {
     Sha256::digest(token.as_bytes()).into()
 }
 
 /// The hex of a digest (what the access file's `token_sha256` holds).
-pub fn digest_hex(token: &str) -> String {
+pub(crate) fn digest_hex(token: &str) -> String {
     hex::encode(digest(token))
 }
 
 /// Parses the 64 hex digits of a `token_sha256`.
-pub fn parse_digest(hex_digest: &str) -> Result<TokenDigest, String> {
+pub(crate) fn parse_digest(hex_digest: &str) -> Result<TokenDigest, String> {
     let mut out = [0u8; 32];
     hex::decode_to_slice(hex_digest.trim(), &mut out).map_err(|_| {
         "must be the 64 hex digits of a SHA-256 digest (`sha256sum` of the token)".to_string()
@@ -28,7 +28,10 @@ pub fn parse_digest(hex_digest: &str) -> Result<TokenDigest, String> {
 
 /// The index of the digest in `digests` equal to `candidate`. Every digest is compared, each in constant time, so
 /// that the time taken says nothing of which one matched or how much of one did.
-pub fn find(digests: impl Iterator<Item = Option<TokenDigest>>, candidate: &TokenDigest) -> Option<usize> {
+pub(crate) fn find(
+    digests: impl Iterator<Item = Option<TokenDigest>>,
+    candidate: &TokenDigest,
+) -> Option<usize> {
     let mut found = None;
     for (i, d) in digests.enumerate() {
         let Some(d) = d else { continue };
@@ -40,14 +43,14 @@ pub fn find(digests: impl Iterator<Item = Option<TokenDigest>>, candidate: &Toke
 }
 
 /// The token of an `authorization` header value: `Bearer <token>` (the scheme in any case).
-pub fn bearer(header: &str) -> Option<&str> {
+pub(crate) fn bearer(header: &str) -> Option<&str> {
     let (scheme, token) = header.split_once(' ')?;
     let token = token.trim();
     (scheme.eq_ignore_ascii_case("bearer") && !token.is_empty()).then_some(token)
 }
 
 /// The common name of a DER certificate's subject (the first one), if it has one.
-pub fn common_name(der: &[u8]) -> Option<String> {
+pub(crate) fn common_name(der: &[u8]) -> Option<String> {
     let (_, cert) = x509_parser::parse_x509_certificate(der).ok()?;
     let cn = cert.subject().iter_common_name().next()?;
     cn.as_str().ok().map(str::to_owned)

@@ -9,20 +9,20 @@ use crate::error::ServerError;
 
 /// How the server is exposed, once checked.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct Exposure {
+pub(crate) struct Exposure {
     /// What is exposed without protection (`--insecure`), in words; empty when nothing is.
     pub warnings: Vec<String>,
 }
 
 impl Exposure {
     /// Whether something is exposed without protection.
-    pub fn insecure(&self) -> bool {
+    pub(crate) fn insecure(&self) -> bool {
         !self.warnings.is_empty()
     }
 }
 
 /// Checks `config` against the rules above.
-pub fn check(config: &Config) -> Result<Exposure, ServerError> {
+pub(crate) fn check(config: &Config) -> Result<Exposure, ServerError> {
     let s = &config.security;
     let tls = s.tls_cert.is_some() && s.tls_key.is_some();
     let access = s.access.is_some();
@@ -92,7 +92,7 @@ fn is_loopback(ip: IpAddr) -> bool {
 
 /// Whether a Zenoh endpoint (`tcp/127.0.0.1:7447`, `tcp/[::1]:7447#...`, `tcp/localhost:7447`) is on loopback.
 /// What cannot be read as an address is taken as not loopback.
-pub fn endpoint_is_loopback(endpoint: &str) -> bool {
+pub(crate) fn endpoint_is_loopback(endpoint: &str) -> bool {
     let Some((_, address)) = endpoint.split_once('/') else { return false };
     let address = address.split(['?', '#']).next().unwrap_or_default();
     if let Ok(socket) = address.parse::<SocketAddr>() {

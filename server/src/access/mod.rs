@@ -7,12 +7,12 @@
 //! Without an access file the server is open: every caller is `anonymous` with the admin role (the server then
 //! listens on loopback only, unless told `--insecure`).
 
-pub mod credential;
-pub mod exposure;
-pub mod file;
+pub(crate) mod credential;
+pub(crate) mod exposure;
+pub(crate) mod file;
 pub mod init;
-pub mod role;
-pub mod zenoh_acl;
+pub(crate) mod role;
+pub(crate) mod zenoh_acl;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -46,19 +46,44 @@ impl std::fmt::Display for Role {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Action<'a> {
     /// Learn or put a primitive of `robot`.
-    WritePrimitive { robot: &'a str },
+    WritePrimitive {
+        /// The robot.
+        robot: &'a str,
+    },
     /// Delete a primitive of `robot`.
-    DeletePrimitive { robot: &'a str },
+    DeletePrimitive {
+        /// The robot.
+        robot: &'a str,
+    },
     /// Get or list the primitives of `robot`.
-    ReadPrimitive { robot: &'a str },
+    ReadPrimitive {
+        /// The robot.
+        robot: &'a str,
+    },
     /// Plan a motion of `robots` in `cell` (answers only, moves nothing).
-    Plan { cell: &'a str, robots: &'a [&'a str] },
+    Plan {
+        /// The cell.
+        cell: &'a str,
+        /// The robots.
+        robots: &'a [&'a str],
+    },
     /// Execute `robots` in `cell`: Execute, Session and ExecuteGroup, and the commands of a session.
-    Execute { cell: &'a str, robots: &'a [&'a str] },
+    Execute {
+        /// The cell.
+        cell: &'a str,
+        /// The robots.
+        robots: &'a [&'a str],
+    },
     /// Put or delete obstacles of `cell`.
-    ChangeScene { cell: &'a str },
+    ChangeScene {
+        /// The cell.
+        cell: &'a str,
+    },
     /// List or watch the obstacles of `cell`.
-    ReadScene { cell: &'a str },
+    ReadScene {
+        /// The cell.
+        cell: &'a str,
+    },
     /// The server's counters.
     Stats,
     /// gRPC reflection (the services' descriptions).
@@ -125,7 +150,7 @@ impl Scope {
 }
 
 /// Whether `role` within `scope` may do `action`.
-pub fn allows(role: Role, scope: &Scope, action: &Action<'_>) -> bool {
+pub(crate) fn allows(role: Role, scope: &Scope, action: &Action<'_>) -> bool {
     use Action as A;
     match role {
         Role::Admin => true,

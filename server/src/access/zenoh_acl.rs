@@ -55,7 +55,7 @@ struct Grant {
 }
 
 /// The `access_control` block of a Zenoh configuration for `access`.
-pub fn access_control(access: &Access) -> Value {
+pub(crate) fn access_control(access: &Access) -> Value {
     let (mut rules, mut subjects, mut policies) = (Vec::new(), Vec::new(), Vec::new());
     for identity in access.identities() {
         let Some(cn) = &identity.cert_common_name else { continue };

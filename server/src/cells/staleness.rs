@@ -22,7 +22,7 @@ use crate::config::scene::{StalePolicy, Staleness};
 /// A stream's view of its cell's staleness: it flags the segments, warns once when the scene goes stale, and
 /// under `stop` holds the robots (a session's Pause and Resume still decide once the scene is fresh again).
 #[derive(Debug, Clone)]
-pub struct StaleGuard {
+pub(crate) struct StaleGuard {
     policy: StalePolicy,
     /// The run ignores the cell's scene: nothing to guard.
     ignored: bool,
@@ -34,18 +34,18 @@ pub struct StaleGuard {
 
 impl StaleGuard {
     /// A guard for a run in a cell of `staleness`; `ignore_scene` runs are never flagged nor held.
-    pub fn new(staleness: Staleness, ignore_scene: bool) -> Self {
+    pub(crate) fn new(staleness: Staleness, ignore_scene: bool) -> Self {
         Self { policy: staleness.policy, ignored: ignore_scene, stale: Vec::new(), paused: false }
     }
 
     /// The segments computed now are computed with stale obstacles.
-    pub fn is_stale(&self) -> bool {
+    pub(crate) fn is_stale(&self) -> bool {
         !self.stale.is_empty()
     }
 
     /// Reads the stale obstacles of a new snapshot; pushes a `SCENE_STALE` warning into `warnings` when the scene
     /// goes from fresh to stale.
-    pub fn observe(&mut self, snapshot: &ObstacleSet, warnings: &mut Vec<v1::Warning>) {
+    pub(crate) fn observe(&mut self, snapshot: &ObstacleSet, warnings: &mut Vec<v1::Warning>) {
         if self.ignored {
             return;
         }
@@ -70,13 +70,13 @@ impl StaleGuard {
     }
 
     /// Notes the session's own Pause (`true`) or Resume (`false`).
-    pub fn note_paused(&mut self, paused: bool) {
+    pub(crate) fn note_paused(&mut self, paused: bool) {
         self.paused = paused;
     }
 
     /// Whether the run must hold: under `stop`, while the scene is stale (or the session paused it); `None` under
     /// the other policies and for runs that ignore the scene.
-    pub fn hold(&self) -> Option<bool> {
+    pub(crate) fn hold(&self) -> Option<bool> {
         (self.policy == StalePolicy::Stop && !self.ignored).then_some(self.paused || self.is_stale())
     }
 }

@@ -89,7 +89,7 @@ impl GivenBack {
 }
 
 /// [`GivenBack::moved`], or never for a cell that is not a taken one.
-pub async fn moved(given_back: Option<GivenBack>, cell: &str) -> ServerError {
+pub(crate) async fn moved(given_back: Option<GivenBack>, cell: &str) -> ServerError {
     match given_back {
         Some(g) => g.moved(cell).await,
         None => std::future::pending().await,

@@ -22,7 +22,7 @@ type ClientCounts = Arc<Mutex<HashMap<IpAddr, usize>>>;
 
 /// The pool a stream takes its permit from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum StreamKind {
+pub(crate) enum StreamKind {
     /// Execute, Session, ExecuteGroup.
     Execution,
     /// WatchScene.
@@ -31,7 +31,7 @@ pub enum StreamKind {
 
 /// Where a request came from.
 #[derive(Debug, Clone, Default)]
-pub struct Peer {
+pub(crate) struct Peer {
     /// The client's IP address (None for a transport without one).
     pub client: Option<IpAddr>,
     /// The connection's activity (None for a connection the server did not wrap).
@@ -40,7 +40,7 @@ pub struct Peer {
 
 impl Peer {
     /// The peer of a request, from what the connection put in its extensions.
-    pub fn of<T>(request: &Request<T>) -> Self {
+    pub(crate) fn of<T>(request: &Request<T>) -> Self {
         match request.extensions().get::<BatchedConnectInfo<TcpConnectInfo>>() {
             Some(info) => Peer {
                 client: info.inner.remote_addr().map(|a| a.ip()),
@@ -53,7 +53,7 @@ impl Peer {
 
 /// The server's stream permits.
 #[derive(Debug)]
-pub struct StreamPermits {
+pub(crate) struct StreamPermits {
     executions: Arc<Semaphore>,
     watches: Arc<Semaphore>,
     per_client: ClientCounts,
@@ -67,7 +67,7 @@ pub struct StreamPermits {
 
 impl StreamPermits {
     /// The permits of `limits`.
-    pub fn new(limits: &RequestLimits) -> Self {
+    pub(crate) fn new(limits: &RequestLimits) -> Self {
         Self {
             executions: Arc::new(Semaphore::new(limits.max_streams)),
             watches: Arc::new(Semaphore::new(limits.max_watches)),
@@ -81,7 +81,7 @@ impl StreamPermits {
     }
 
     /// Streams refused so far, by the setting of the limit that refused them.
-    pub fn refusals(&self) -> [(&'static str, u64); 4] {
+    pub(crate) fn refusals(&self) -> [(&'static str, u64); 4] {
         let n = |i: usize| self.refused[i].load(Ordering::Relaxed);
         [
             ("limits.max_streams", n(0)),
@@ -96,23 +96,23 @@ impl StreamPermits {
     }
 
     /// Executions open now.
-    pub fn open_executions(&self) -> usize {
+    pub(crate) fn open_executions(&self) -> usize {
         self.max_executions.saturating_sub(self.executions.available_permits())
     }
 
     /// Watches open now.
-    pub fn open_watches(&self) -> usize {
+    pub(crate) fn open_watches(&self) -> usize {
         self.max_watches.saturating_sub(self.watches.available_permits())
     }
 
     /// Streams of `client` open now.
     #[cfg(test)]
-    pub fn client_streams(&self, client: IpAddr) -> usize {
+    pub(crate) fn client_streams(&self, client: IpAddr) -> usize {
         self.per_client.lock().unwrap_or_else(|p| p.into_inner()).get(&client).copied().unwrap_or(0)
     }
 
     /// A permit for a stream of `kind` from `peer`, or ResourceExhausted naming the limit reached.
-    pub fn acquire(&self, kind: StreamKind, peer: &Peer) -> Result<StreamPermit, ServerError> {
+    pub(crate) fn acquire(&self, kind: StreamKind, peer: &Peer) -> Result<StreamPermit, ServerError> {
         let (pool, max, name, what, index) = match kind {
             StreamKind::Execution => (&self.executions, self.max_executions, "max_streams", "executions", 0),
             StreamKind::Watch => (&self.watches, self.max_watches, "max_watches", "scene watches", 1),
@@ -156,7 +156,7 @@ impl StreamPermits {
 
 /// A stream's place in its pool, its client's and its connection's counts; given back when dropped.
 #[derive(Debug)]
-pub struct StreamPermit {
+pub(crate) struct StreamPermit {
     _pool: OwnedSemaphorePermit,
     client: Option<(ClientCounts, IpAddr)>,
     connection: Option<Arc<ConnectionActivity>>,

@@ -31,13 +31,13 @@ use tokio::time::{Instant, Sleep};
 use crate::connections::{ConnectionActivity, nanos_now};
 
 /// Longest a flushed write is held after the connection's previous write.
-pub const HOLD: Duration = Duration::from_millis(3);
+pub(crate) const HOLD: Duration = Duration::from_millis(3);
 
 /// Held bytes above which a flush writes at once.
-pub const HIGH_WATER: usize = 64 * 1024;
+pub(crate) const HIGH_WATER: usize = 64 * 1024;
 
 /// Most bytes held: a write beyond waits for the socket.
-pub const MAX_HELD: usize = 256 * 1024;
+pub(crate) const MAX_HELD: usize = 256 * 1024;
 
 /// A connection's urgency: while it lasts, every flush of the connection writes at once.
 #[derive(Debug, Clone, Default)]
@@ -59,7 +59,7 @@ impl Urgency {
 /// What a request on a [`BatchedWrites`] connection knows of it (tonic puts it in the request's extensions): the
 /// wrapped connection's own information and the connection's [`Urgency`].
 #[derive(Debug, Clone)]
-pub struct BatchedConnectInfo<C> {
+pub(crate) struct BatchedConnectInfo<C> {
     /// The wrapped connection's information.
     pub inner: C,
     /// The connection's urgency.
@@ -70,7 +70,7 @@ pub struct BatchedConnectInfo<C> {
 
 /// A connection whose flushes are batched (see the module).
 #[derive(Debug)]
-pub struct BatchedWrites<T> {
+pub(crate) struct BatchedWrites<T> {
     io: T,
     held: Vec<u8>,
     /// Bytes of `held` already written.
@@ -91,7 +91,7 @@ pub struct BatchedWrites<T> {
 
 impl<T> BatchedWrites<T> {
     /// Wraps a connection.
-    pub fn new(io: T) -> Self {
+    pub(crate) fn new(io: T) -> Self {
         Self::with_hold(io, HOLD)
     }
 
@@ -111,7 +111,7 @@ impl<T> BatchedWrites<T> {
     }
 
     /// Closes the connection once it has had no open stream and no request for `timeout` (None: never).
-    pub fn with_idle_timeout(mut self, timeout: Option<Duration>) -> Self {
+    pub(crate) fn with_idle_timeout(mut self, timeout: Option<Duration>) -> Self {
         self.idle_timeout = timeout.filter(|t| !t.is_zero());
         self
     }

@@ -25,13 +25,13 @@ const REFLECTION_PREFIXES: &[&str] = &["/grpc.reflection.v1.ServerReflection/", 
 
 /// Wraps the services with [`Authenticate`].
 #[derive(Debug, Clone)]
-pub struct AuthenticateLayer {
+pub(crate) struct AuthenticateLayer {
     access: Arc<AccessControl>,
 }
 
 impl AuthenticateLayer {
     /// Authenticates against `access`.
-    pub fn new(access: Arc<AccessControl>) -> Self {
+    pub(crate) fn new(access: Arc<AccessControl>) -> Self {
         Self { access }
     }
 }
@@ -46,7 +46,7 @@ impl<S> tower::Layer<S> for AuthenticateLayer {
 
 /// See the module.
 #[derive(Debug, Clone)]
-pub struct Authenticate<S> {
+pub(crate) struct Authenticate<S> {
     inner: S,
     access: Arc<AccessControl>,
 }

@@ -49,16 +49,16 @@ use crate::zenoh_bridge::reachability;
 
 /// The accepted connections: no Nagle delay (segments are small and latency-critical; the server batches its own
 /// writes instead, and writes at once what cannot wait), TCP keep-alive, and the idle timeout.
-pub type Incoming = std::pin::Pin<
+pub(crate) type Incoming = std::pin::Pin<
     Box<dyn tokio_stream::Stream<Item = Result<BatchedWrites<tokio::net::TcpStream>, std::io::Error>> + Send>,
 >;
 
 /// The services behind the authentication layer.
-pub type GrpcRouter = Router<Stack<AuthenticateLayer, Identity>>;
+pub(crate) type GrpcRouter = Router<Stack<AuthenticateLayer, Identity>>;
 
 /// The health service, every service SERVING; the scene only while the configured Zenoh routers or peers are
 /// reachable (checked on `session` until `shutdown`).
-pub async fn health(
+pub(crate) async fn health(
     session: Option<&Session>,
     zenoh: &ZenohConfig,
     shutdown: &CancellationToken,
@@ -79,7 +79,7 @@ pub async fn health(
 
 /// Every service over `state`, with `health` and reflection, behind the layer that authenticates each request
 /// against `access`, over `tls` when given.
-pub fn router(
+pub(crate) fn router(
     state: &Arc<ServiceState>,
     tls: Option<ServerTlsConfig>,
     access: Arc<AccessControl>,
@@ -131,7 +131,7 @@ pub fn router(
 }
 
 /// The connections accepted on `listener`, as [`Incoming`] says, bounded by `limits`.
-pub fn incoming(listener: TcpListener, limits: &RequestLimits) -> Incoming {
+pub(crate) fn incoming(listener: TcpListener, limits: &RequestLimits) -> Incoming {
     let idle_timeout = seconds(limits.idle_timeout_s);
     Box::pin(tokio_stream::StreamExt::map(
         TcpIncoming::from(listener).with_nodelay(Some(true)).with_keepalive(seconds(limits.tcp_keepalive_s)),

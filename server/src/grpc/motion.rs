@@ -43,13 +43,13 @@ use super::stream_request::{DEFAULT_DT, StreamRequest};
 
 /// Implements `dmp.v1.MotionService`.
 #[derive(Debug, Clone)]
-pub struct MotionServiceImpl {
+pub(crate) struct MotionServiceImpl {
     pub(super) state: Arc<ServiceState>,
 }
 
 impl MotionServiceImpl {
     /// The service over the shared state.
-    pub fn new(state: Arc<ServiceState>) -> Self {
+    pub(crate) fn new(state: Arc<ServiceState>) -> Self {
         Self { state }
     }
 }

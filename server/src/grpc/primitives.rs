@@ -22,18 +22,18 @@ use crate::wire::{demonstration_from_proto, learn_config_from_proto, primitive_f
 /// Most cells of the least-squares design matrix of a Learn (samples x (N + 1)): the SVD keeps about three such
 /// matrices and costs samples x (N + 1)^2 operations. This is 200,000 samples with the default N = 50 (about
 /// 80 MB a matrix), or 10,000 samples with N = 1000.
-pub const MAX_LEARN_CELLS: usize = 200_000 * 51;
+pub(crate) const MAX_LEARN_CELLS: usize = 200_000 * 51;
 
 /// The gRPC primitive service.
 #[derive(Debug, Clone)]
-pub struct PrimitiveServiceImpl {
+pub(crate) struct PrimitiveServiceImpl {
     /// What every service shares (the store and the limits here).
     pub state: Arc<ServiceState>,
 }
 
 impl PrimitiveServiceImpl {
     /// The service over the shared state.
-    pub fn new(state: Arc<ServiceState>) -> Self {
+    pub(crate) fn new(state: Arc<ServiceState>) -> Self {
         Self { state }
     }
 }

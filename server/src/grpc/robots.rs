@@ -25,21 +25,21 @@ use crate::grpc::shared::ServiceState;
 
 /// The gRPC robot service.
 #[derive(Debug, Clone)]
-pub struct RobotServiceImpl {
+pub(crate) struct RobotServiceImpl {
     /// What every service shares (the store and the limits here).
     pub state: Arc<ServiceState>,
 }
 
 impl RobotServiceImpl {
     /// The service over the shared state.
-    pub fn new(state: Arc<ServiceState>) -> Self {
+    pub(crate) fn new(state: Arc<ServiceState>) -> Self {
         Self { state }
     }
 }
 
 /// The record to store for `r`, every field checked against the same rules as a motion request's (errors name
 /// `robot.*`), stamped `now_unix_ms`.
-pub fn checked_record(
+pub(crate) fn checked_record(
     r: &v1::RobotRecord,
     limits: &RequestLimits,
     now_unix_ms: i64,

@@ -23,20 +23,20 @@ use crate::grpc::shared::ServiceState;
 
 /// The scene service.
 #[derive(Debug, Clone)]
-pub struct SceneServiceImpl {
+pub(crate) struct SceneServiceImpl {
     /// What the services share.
     pub state: Arc<ServiceState>,
 }
 
 impl SceneServiceImpl {
     /// The service on the shared state.
-    pub fn new(state: Arc<ServiceState>) -> Self {
+    pub(crate) fn new(state: Arc<ServiceState>) -> Self {
         Self { state }
     }
 }
 
 /// The message of a snapshot: obstacles sorted by id, centres moved to `now_unix_s`.
-pub fn snapshot_to_proto(snapshot: &ObstacleSet, now_unix_s: f64) -> v1::SceneSnapshot {
+pub(crate) fn snapshot_to_proto(snapshot: &ObstacleSet, now_unix_s: f64) -> v1::SceneSnapshot {
     v1::SceneSnapshot {
         scene_version: snapshot.version,
         obstacles: snapshot.obstacles.values().map(|o| o.proto_at(now_unix_s)).collect(),
@@ -51,7 +51,7 @@ pub fn snapshot_to_proto(snapshot: &ObstacleSet, now_unix_s: f64) -> v1::SceneSn
 /// while no change comes) or on `shutdown` (a last `Unavailable` status, if there is room). The bound is the
 /// backpressure: a slow reader is sent the latest snapshot when it catches up (versions in between are skipped; each
 /// event is a whole snapshot, so nothing is lost), never a growing queue.
-pub fn watch_stream(
+pub(crate) fn watch_stream(
     scene: &Cell,
     clock: Clock,
     buffer: usize,

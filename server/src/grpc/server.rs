@@ -12,18 +12,18 @@ use crate::grpc::shared::ServiceState;
 
 /// The service.
 #[derive(Debug, Clone)]
-pub struct ServerServiceImpl {
+pub(crate) struct ServerServiceImpl {
     state: Arc<ServiceState>,
 }
 
 impl ServerServiceImpl {
     /// The service over the server's state.
-    pub fn new(state: Arc<ServiceState>) -> Self {
+    pub(crate) fn new(state: Arc<ServiceState>) -> Self {
         Self { state }
     }
 
     /// The statistics now.
-    pub fn stats(&self) -> v1::ServerStats {
+    pub(crate) fn stats(&self) -> v1::ServerStats {
         let s = &self.state;
         let cells = s.cells.all();
         v1::ServerStats {

@@ -16,7 +16,7 @@ use crate::runs::control::{Control, warning};
 
 /// What a session's messages are checked against: its robot and the server's bounds.
 #[derive(Debug, Clone)]
-pub struct SessionCommands {
+pub(crate) struct SessionCommands {
     robot_id: String,
     dim: usize,
     /// A pose run: goals may carry an orientation.
@@ -29,7 +29,7 @@ pub struct SessionCommands {
 impl SessionCommands {
     /// The checks of a session of `robot_id`, moving in `dim` dimensions in the box `[-workspace_m, workspace_m]`;
     /// its states are stamped against `clock`.
-    pub fn new(
+    pub(crate) fn new(
         robot_id: String,
         dim: usize,
         pose: bool,
@@ -41,7 +41,7 @@ impl SessionCommands {
     }
 
     /// The command of one message (None: an empty message), or the warning that rejects it.
-    pub fn control(&self, message: Option<Message>) -> Control {
+    pub(crate) fn control(&self, message: Option<Message>) -> Control {
         match message {
             Some(Message::SetGoal(g)) => {
                 self.goal(g.goal, &g.goal_orientation).unwrap_or_else(|e| rejected("set_goal", &e))
@@ -110,7 +110,7 @@ impl SessionCommands {
 }
 
 /// The rejection of a command for `e`, a fault in the command's field (`command.field`).
-pub fn rejected(command: &str, e: &WireError) -> Control {
+pub(crate) fn rejected(command: &str, e: &WireError) -> Control {
     Control::Rejected(warning(Kind::CommandRejected, format!("{command}.{}", e.field), e.rule.clone()))
 }
 

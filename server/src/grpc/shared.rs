@@ -18,7 +18,7 @@ use crate::store::Store;
 /// What the gRPC services share: the configuration, the store, the cells, the runs' context, the budgets and who
 /// may do what.
 #[derive(Debug)]
-pub struct ServiceState {
+pub(crate) struct ServiceState {
     /// The Zenoh locators the embedded session listens on (empty without Zenoh), for GetInfo.
     pub zenoh_locators: Vec<String>,
     /// The effective configuration.
@@ -47,7 +47,7 @@ impl ServiceState {
     /// Who sent `request` (the authentication layer put it there), as the access file in force now knows it. A
     /// request that did not pass the layer, as
     /// handlers called directly, is the open server's caller when there is no access file, and refused otherwise.
-    pub fn caller<T>(&self, request: &tonic::Request<T>) -> Result<Caller, ServerError> {
+    pub(crate) fn caller<T>(&self, request: &tonic::Request<T>) -> Result<Caller, ServerError> {
         match request.extensions().get::<Caller>() {
             Some(c) => self.access.refresh(c),
             None if !self.access.enabled() => Ok(Caller::open()),
@@ -56,7 +56,7 @@ impl ServiceState {
     }
 
     /// A permit for a stream of `kind` from `peer`, or ResourceExhausted naming the limit reached.
-    pub fn stream_permit(&self, kind: StreamKind, peer: &Peer) -> Result<StreamPermit, ServerError> {
+    pub(crate) fn stream_permit(&self, kind: StreamKind, peer: &Peer) -> Result<StreamPermit, ServerError> {
         if self.runs.shutdown.is_cancelled() {
             return Err(ServerError::ShuttingDown);
         }

@@ -14,7 +14,7 @@ use crate::error::ServerError;
 const HANDSHAKE_TIMEOUT: Duration = Duration::from_secs(10);
 
 /// The TLS configuration of `security`; None without a certificate.
-pub fn server_tls(security: &SecurityConfig) -> Result<Option<ServerTlsConfig>, ServerError> {
+pub(crate) fn server_tls(security: &SecurityConfig) -> Result<Option<ServerTlsConfig>, ServerError> {
     let (cert, key) = match (&security.tls_cert, &security.tls_key) {
         (Some(cert), Some(key)) => (cert, key),
         (None, None) if security.tls_client_ca.is_none() => return Ok(None),
@@ -36,7 +36,7 @@ pub fn server_tls(security: &SecurityConfig) -> Result<Option<ServerTlsConfig>, 
 }
 
 /// rustls' process-wide cryptography: ring (the one this build links). Installing it twice is harmless.
-pub fn install_crypto_provider() {
+pub(crate) fn install_crypto_provider() {
     let _ = rustls::crypto::ring::default_provider().install_default();
 }
 

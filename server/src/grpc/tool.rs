@@ -6,7 +6,7 @@ use dmp_proto::v1;
 use crate::error::ServerError;
 
 /// The most control points a tool may have.
-pub const MAX_TOOL_POINTS: usize = 256;
+pub(crate) const MAX_TOOL_POINTS: usize = 256;
 
 /// The engine's tool of `t`; errors name `{field}.*` (`field` is where the message sits, e.g. `motion.tool`).
 pub(crate) fn tool_from_proto(t: &v1::Tool, field: &str) -> Result<dmp::tool::Tool, ServerError> {

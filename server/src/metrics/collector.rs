@@ -15,7 +15,7 @@ use crate::grpc::shared::ServiceState;
 
 /// Renders the server's metrics at each scrape.
 #[derive(Debug)]
-pub struct ServerCollector {
+pub(crate) struct ServerCollector {
     state: Arc<ServiceState>,
     /// The Zenoh bridge's count of refused payloads (none without Zenoh).
     malformed: Option<Arc<AtomicU64>>,
@@ -23,7 +23,7 @@ pub struct ServerCollector {
 
 impl ServerCollector {
     /// The metrics of `state`, and of the Zenoh bridge's `malformed` counter.
-    pub fn new(state: Arc<ServiceState>, malformed: Option<Arc<AtomicU64>>) -> Self {
+    pub(crate) fn new(state: Arc<ServiceState>, malformed: Option<Arc<AtomicU64>>) -> Self {
         Self { state, malformed }
     }
 }

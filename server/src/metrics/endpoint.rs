@@ -26,16 +26,16 @@ use tracing::{debug, info, warn};
 use crate::error::ServerError;
 
 /// Most scrape connections open at once.
-pub const MAX_CONNECTIONS: usize = 4;
+pub(crate) const MAX_CONNECTIONS: usize = 4;
 /// Longest a scrape connection may stay open (Prometheus reconnects).
-pub const CONNECTION_TIMEOUT: Duration = Duration::from_secs(60);
+pub(crate) const CONNECTION_TIMEOUT: Duration = Duration::from_secs(60);
 /// Longest a client may take to send its request's headers.
-pub const HEADER_TIMEOUT: Duration = Duration::from_secs(5);
+pub(crate) const HEADER_TIMEOUT: Duration = Duration::from_secs(5);
 /// The content type of the OpenMetrics text format.
-pub const CONTENT_TYPE: &str = "application/openmetrics-text; version=1.0.0; charset=utf-8";
+pub(crate) const CONTENT_TYPE: &str = "application/openmetrics-text; version=1.0.0; charset=utf-8";
 
 /// Listens on `addr` and serves `registry` until `stop`; returns the address bound (the real port for port 0).
-pub async fn serve(
+pub(crate) async fn serve(
     addr: SocketAddr,
     registry: Registry,
     stop: CancellationToken,

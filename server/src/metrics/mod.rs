@@ -33,20 +33,20 @@
 //! publisher; the histogram starts when the server received the update).
 
 mod collector;
-pub mod endpoint;
+pub(crate) mod endpoint;
 
 use std::net::SocketAddr;
 use std::sync::Arc;
 use std::sync::atomic::AtomicU64;
 
-pub use collector::ServerCollector;
+pub(crate) use collector::ServerCollector;
 
 use crate::error::ServerError;
 use crate::grpc::shared::ServiceState;
 
 /// Serves the metrics of `state` (and of the Zenoh bridge's `malformed` counter) on `metrics_addr` when the
 /// configuration sets it, until the server shuts down; returns the address bound.
-pub async fn serve_configured(
+pub(crate) async fn serve_configured(
     state: &Arc<ServiceState>,
     malformed: Option<Arc<AtomicU64>>,
 ) -> Result<Option<SocketAddr>, ServerError> {

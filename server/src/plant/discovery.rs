@@ -25,7 +25,7 @@ const ASK_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// The token, the queryables and the directory's subscriber of one server.
 #[derive(Debug)]
-pub struct Discovery {
+pub(crate) struct Discovery {
     token: LivelinessToken,
     queryables: Vec<Queryable<()>>,
     servers: Subscriber<()>,

@@ -40,14 +40,14 @@ use crate::cells::rendezvous::rendezvous;
 use crate::cells::taken::TakenCells;
 
 /// What applies an obstacle sample (the bridge's, [`crate::zenoh_bridge::ZenohBridge::obstacle_sink`]).
-pub type ObstacleSink = Arc<dyn Fn(&Sample) + Send + Sync>;
+pub(crate) type ObstacleSink = Arc<dyn Fn(&Sample) + Send + Sync>;
 
 /// How long the query for a taken cell's scene waits for replies.
 const SCENE_QUERY_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// The fail-over task of one server.
 #[derive(Debug)]
-pub struct Failover {
+pub(crate) struct Failover {
     task: JoinHandle<()>,
 }
 

@@ -27,9 +27,9 @@
 //!
 //! Robot records (`RobotService`) are not replicated: each server keeps its own.
 
-pub mod discovery;
-pub mod failover;
-pub mod replication;
+pub(crate) mod discovery;
+pub(crate) mod failover;
+pub(crate) mod replication;
 
 use std::sync::Arc;
 
@@ -51,7 +51,7 @@ use crate::cells::directory::Directory;
 /// This server's part in the plant: its announcement and the replication of its store. Closed with
 /// [`Plant::close`] before the session.
 #[derive(Debug)]
-pub struct Plant {
+pub(crate) struct Plant {
     server: v1::PlantServer,
     discovery: Discovery,
     replication: Replication,
@@ -59,7 +59,7 @@ pub struct Plant {
 }
 
 /// The version clock of a plant's store: the session's HLC time, NTP64.
-pub fn version_clock(session: &Session) -> VersionClock {
+pub(crate) fn version_clock(session: &Session) -> VersionClock {
     let session = session.clone();
     Arc::new(move || session.new_timestamp().get_time().as_u64())
 }
@@ -69,7 +69,7 @@ impl Plant {
     /// address) with the cells it serves: returns `store` stamped with the plant's version clock, and the plant.
     /// Without a server id the store is returned as it is, and there is no plant. A taken cell's scene is applied
     /// through `sink` (the Zenoh bridge's).
-    pub async fn join(
+    pub(crate) async fn join(
         config: &Config,
         zenoh: (Option<&Session>, Option<ObstacleSink>),
         advertised: String,
@@ -106,7 +106,7 @@ impl Plant {
     /// replicates `store` (stamped by [`version_clock`]) with the other servers, catching up with them now and
     /// whenever one (re)appears. Incoming primitives are checked against `limits`. Takes the cells of dead servers
     /// into `cells` as [`failover`] says, their scenes applied through `scene`.
-    pub async fn start(
+    pub(crate) async fn start(
         session: &Session,
         server: v1::PlantServer,
         (directory, cells, scene): (Directory, Cells, ObstacleSink),
@@ -121,23 +121,15 @@ impl Plant {
         Ok(Self { server, discovery, replication, failover })
     }
 
-    /// This server as the plant knows it.
-    pub fn server(&self) -> &v1::PlantServer {
-        &self.server
-    }
-
     /// What puts the versions this server stores (the primitive service holds it).
-    pub fn replicator(&self) -> self::replication::Replicator {
+    pub(crate) fn replicator(&self) -> self::replication::Replicator {
         self.replication.replicator()
     }
 
-    /// Versions received from other servers and stored so far, and those refused.
-    pub fn replicated(&self) -> (u64, u64) {
-        self.replication.counts()
-    }
-
     /// Leaves the plant: the token and queryables go (the others forget this server), the tasks stop.
-    pub async fn close(self) {
+    pub(crate) async fn close(self) {
+        let (stored, refused) = self.replication.counts();
+        info!(server = %self.server.server_id, stored, refused, "plant: leaving; replicated versions received");
         self.failover.close().await;
         self.replication.close().await;
         self.discovery.close().await;
@@ -145,6 +137,6 @@ impl Plant {
 }
 
 /// The cells a server of the plant announces: those it serves, or its default cell when it serves any.
-pub fn announced_cells(cells: &Cells) -> Vec<String> {
+pub(crate) fn announced_cells(cells: &Cells) -> Vec<String> {
     cells.served().unwrap_or_else(|| vec![cells.default_cell().to_owned()])
 }

@@ -39,13 +39,13 @@ const QUERY_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// Puts the versions this server stores, for the others. Cheap to clone.
 #[derive(Debug, Clone)]
-pub struct Replicator {
+pub(crate) struct Replicator {
     session: Session,
 }
 
 /// The replication of one server's store: its subscriber, queryable and tasks.
 #[derive(Debug)]
-pub struct Replication {
+pub(crate) struct Replication {
     replicator: Replicator,
     subscriber: Subscriber<()>,
     queryable: Queryable<zenoh::handlers::FifoChannelHandler<Query>>,
@@ -104,12 +104,12 @@ impl Replication {
     }
 
     /// What puts this server's versions.
-    pub fn replicator(&self) -> Replicator {
+    pub(crate) fn replicator(&self) -> Replicator {
         self.replicator.clone()
     }
 
     /// Versions received from other servers and stored so far, and those refused.
-    pub fn counts(&self) -> (u64, u64) {
+    pub(crate) fn counts(&self) -> (u64, u64) {
         (self.stored.load(Ordering::Relaxed), self.refused.load(Ordering::Relaxed))
     }
 
@@ -130,7 +130,7 @@ impl Replication {
 impl Replicator {
     /// Puts a version this server stored; the others store it. A Zenoh error is logged: the version is durable
     /// here, and the others get it when they next catch up.
-    pub async fn publish(&self, record: &v1::PrimitiveRecord) {
+    pub(crate) async fn publish(&self, record: &v1::PrimitiveRecord) {
         let key = primitive_version_key(&record.robot_id, &record.name, record.version);
         let sent = self
             .session
@@ -145,7 +145,7 @@ impl Replicator {
     }
 
     /// Tells the others that every version of the tombstone's name up to its `up_to` was deleted here.
-    pub async fn publish_delete(&self, t: &Tombstone) {
+    pub(crate) async fn publish_delete(&self, t: &Tombstone) {
         let key = primitive_version_key(&t.robot_id, &t.name, t.up_to);
         if let Err(e) = self.session.delete(&key).allowed_destination(Locality::Remote).await {
             warn!(key, error = %e, "plant: primitive delete not replicated");

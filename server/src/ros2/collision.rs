@@ -33,14 +33,14 @@ struct Object {
 
 /// The collision objects taken from ROS 2, per cell.
 #[derive(Debug, Default)]
-pub struct Objects {
+pub(crate) struct Objects {
     by_cell: HashMap<String, HashMap<String, Object>>,
 }
 
 impl Objects {
     /// Applies `msg`, whose frame is `frame` (to the cell's frame), to `cell` at `now_unix_s`. Nothing changes when
     /// the message is refused (a field breaks a rule); a put the scene refuses (a limit) stops there.
-    pub fn apply(
+    pub(crate) fn apply(
         &mut self,
         cell: &Cell,
         msg: &CollisionObject,

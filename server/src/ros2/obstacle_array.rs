@@ -14,18 +14,18 @@ use crate::error::ServerError;
 
 /// The obstacles of each (cell, topic) from its last array.
 #[derive(Debug, Default)]
-pub struct Tracks {
+pub(crate) struct Tracks {
     by_topic: HashMap<(String, String), HashSet<String>>,
 }
 
 /// The obstacle id of a track.
-pub fn track_id(uuid: &[u8; 16]) -> String {
+pub(crate) fn track_id(uuid: &[u8; 16]) -> String {
     format!("track-{}", hex::encode(uuid))
 }
 
 impl Tracks {
     /// Applies the array of `topic` (its frame to the cell's `frame`) to `cell`. A refused array changes nothing.
-    pub fn apply(
+    pub(crate) fn apply(
         &mut self,
         cell: &Cell,
         topic: &str,

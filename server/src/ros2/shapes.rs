@@ -11,7 +11,7 @@ use crate::error::ServerError;
 
 /// A shape and where its centre is in the frame of the ROS shape it stands for.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Placed {
+pub(crate) struct Placed {
     /// The server's shape.
     pub shape: Shape,
     /// Its centre in the ROS shape's frame (not zero for a cone, a mesh, a prism).
@@ -26,7 +26,7 @@ pub struct Placed {
 /// which touches its tip and its base's rim. Of the ellipsoids through the tip and the rim, centred on the axis
 /// at `z = -h/2 + t` (`c = h - t`, `a² = r² / (1 - t² / c²)`), the volume `∝ a² c ∝ (h - t)³ / (h - 2t)` is least at
 /// `t = h / 4`. A prism is the box around its polygon and height.
-pub fn solid(p: &SolidPrimitive, field: &str) -> Result<Placed, ServerError> {
+pub(crate) fn solid(p: &SolidPrimitive, field: &str) -> Result<Placed, ServerError> {
     let dims = &p.dimensions;
     let want = |n: usize| -> Result<(), ServerError> {
         if dims.len() != n {
@@ -88,7 +88,7 @@ pub fn solid(p: &SolidPrimitive, field: &str) -> Result<Placed, ServerError> {
 
 /// The server's shape of a mesh: the box superquadric around the box that holds its vertices (in the mesh's
 /// frame), so the whole mesh is inside. Fields named from `field`, e.g. `meshes[0]`.
-pub fn mesh(m: &Mesh, field: &str) -> Result<Placed, ServerError> {
+pub(crate) fn mesh(m: &Mesh, field: &str) -> Result<Placed, ServerError> {
     let points: Vec<[f64; 3]> = m.vertices.iter().map(|Point { x, y, z }| [*x, *y, *z]).collect();
     bounding_box(&points, &format!("{field}.vertices"))
 }

@@ -23,7 +23,7 @@ use crate::runs::outbox::Event;
 
 /// What the task needs.
 #[derive(Debug)]
-pub struct Trajectories {
+pub(crate) struct Trajectories {
     /// The node.
     pub graph: Arc<Graph>,
     /// The cells' frame.
@@ -38,7 +38,7 @@ pub struct Trajectories {
 
 impl Trajectories {
     /// Publishes what arrives on `rx` until `stop` or until every handle is gone.
-    pub fn spawn(self, mut rx: mpsc::Receiver<Event>, stop: CancellationToken) -> JoinHandle<()> {
+    pub(crate) fn spawn(self, mut rx: mpsc::Receiver<Event>, stop: CancellationToken) -> JoinHandle<()> {
         tokio::spawn(async move {
             let mut publishers: HashMap<String, RosPublisher> = HashMap::new();
             loop {

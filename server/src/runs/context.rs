@@ -16,7 +16,7 @@ use crate::connections::stream_permits::StreamPermits;
 
 /// The server's parts a run uses.
 #[derive(Debug)]
-pub struct RunContext {
+pub(crate) struct RunContext {
     /// Wall time and pacing instants.
     pub clock: Clock,
     /// The compute pools and their admission budgets.
@@ -37,14 +37,14 @@ pub struct RunContext {
 
 impl RunContext {
     /// Executions open now (what real-time pacing scales with).
-    pub fn open_streams(&self) -> usize {
+    pub(crate) fn open_streams(&self) -> usize {
         self.streams.open_executions()
     }
 }
 
 /// What the server has done so far.
 #[derive(Debug)]
-pub struct Counters {
+pub(crate) struct Counters {
     /// When the server started.
     pub started: Instant,
     /// Segments sent (a group segment counts once per member).

@@ -6,7 +6,7 @@ use dmp_proto::v1::warning::Kind;
 
 /// A command of a session.
 #[derive(Debug, Clone)]
-pub enum Control {
+pub(crate) enum Control {
     /// New goal: the position (empty keeps it) and a pose run's orientation (`[x, y, z, w]`, `None` keeps it).
     SetGoal(Vec<f64>, Option<[f64; 4]>),
     /// New tau.
@@ -24,11 +24,11 @@ pub enum Control {
 }
 
 /// The warning of a refused command: `field` of `command` (`command.field`), for `reason`.
-pub fn command_rejected(command: &str, field: &str, reason: &str) -> v1::Warning {
+pub(crate) fn command_rejected(command: &str, field: &str, reason: &str) -> v1::Warning {
     warning(Kind::CommandRejected, format!("{command}.{field}"), reason.to_owned())
 }
 
 /// A warning of `kind` on `field`, for `reason`.
-pub fn warning(kind: Kind, field: String, reason: String) -> v1::Warning {
+pub(crate) fn warning(kind: Kind, field: String, reason: String) -> v1::Warning {
     v1::Warning { kind: kind as i32, field, reason, obstacle_id: String::new() }
 }

@@ -14,11 +14,11 @@ use tokio_util::sync::CancellationToken;
 use crate::error::ServerError;
 
 /// How long a stream that takes over waits for the stream it ends to let go of its robots.
-pub const TAKE_OVER_WAIT: Duration = Duration::from_secs(5);
+pub(crate) const TAKE_OVER_WAIT: Duration = Duration::from_secs(5);
 
 /// The registry of executing robots. Cheap to clone.
 #[derive(Debug, Clone, Default)]
-pub struct Executing {
+pub(crate) struct Executing {
     /// The lock is held only to look up, insert or remove, never across an await.
     inner: Arc<Mutex<Registry>>,
 }
@@ -42,7 +42,7 @@ struct Holder {
 
 /// A stream's hold on its robots; dropping it lets them go.
 #[derive(Debug)]
-pub struct Claim {
+pub(crate) struct Claim {
     executing: Executing,
     id: u64,
     keys: Vec<(String, String)>,
@@ -54,7 +54,12 @@ impl Executing {
     /// Claims `robots` of `cell` for one stream. A robot held by another stream: refused with `AlreadyExists`
     /// naming it, or with `take_over` that stream is told to end and this waits (at most [`TAKE_OVER_WAIT`]) until
     /// it has let go.
-    pub async fn claim(&self, cell: &str, robots: &[&str], take_over: bool) -> Result<Claim, ServerError> {
+    pub(crate) async fn claim(
+        &self,
+        cell: &str,
+        robots: &[&str],
+        take_over: bool,
+    ) -> Result<Claim, ServerError> {
         let mut keys: Vec<(String, String)> =
             robots.iter().map(|r| (cell.to_owned(), (*r).to_owned())).collect();
         keys.sort();
@@ -106,20 +111,20 @@ impl Executing {
 
     /// How many robots are held now (in every cell).
     #[cfg(test)]
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.inner.lock().unwrap_or_else(|p| p.into_inner()).robots.len()
     }
 
     /// True when no robot is held.
     #[cfg(test)]
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.len() == 0
     }
 }
 
 impl Claim {
     /// Completes when another stream takes the robots over: the stream holding this claim must end (and drop it).
-    pub fn taken_over(&self) -> tokio_util::sync::WaitForCancellationFutureOwned {
+    pub(crate) fn taken_over(&self) -> tokio_util::sync::WaitForCancellationFutureOwned {
         self.take_over.clone().cancelled_owned()
     }
 }

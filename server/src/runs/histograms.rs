@@ -6,7 +6,7 @@ use prometheus_client::metrics::histogram::Histogram;
 
 /// The histograms that only the streams can measure (every other metric is read from counters kept elsewhere).
 #[derive(Debug)]
-pub struct Histograms {
+pub(crate) struct Histograms {
     /// `dmp_segment_lateness_seconds`.
     pub segment_lateness: Histogram,
     /// `dmp_obstacle_update_to_segment_seconds`.
@@ -28,7 +28,12 @@ impl Default for Histograms {
 impl Histograms {
     /// A real-time stream handed a segment to its gRPC stream at `now_unix_s`: its first point was due at
     /// `first_point_unix_s`, and it is the first computed with an obstacle update received at `update_unix_s`.
-    pub fn handed_over(&self, now_unix_s: f64, first_point_unix_s: Option<f64>, update_unix_s: Option<f64>) {
+    pub(crate) fn handed_over(
+        &self,
+        now_unix_s: f64,
+        first_point_unix_s: Option<f64>,
+        update_unix_s: Option<f64>,
+    ) {
         if let Some(due) = first_point_unix_s {
             self.segment_lateness.observe((now_unix_s - due).max(0.0));
         }

@@ -5,7 +5,7 @@ use dmp::execution::IgnoredObstacle;
 use dmp_proto::v1;
 
 /// The warning of an obstacle a run does not avoid.
-pub fn obstacle_warning(ignored: IgnoredObstacle) -> v1::Warning {
+pub(crate) fn obstacle_warning(ignored: IgnoredObstacle) -> v1::Warning {
     v1::Warning {
         kind: v1::warning::Kind::ObstacleIgnored as i32,
         field: String::new(),
@@ -15,7 +15,7 @@ pub fn obstacle_warning(ignored: IgnoredObstacle) -> v1::Warning {
 }
 
 /// Moves a stretch's ignored obstacles into `warnings`, as warnings.
-pub fn push_obstacle_warnings(ignored: &mut Vec<IgnoredObstacle>, warnings: &mut Vec<v1::Warning>) {
+pub(crate) fn push_obstacle_warnings(ignored: &mut Vec<IgnoredObstacle>, warnings: &mut Vec<v1::Warning>) {
     warnings.extend(ignored.drain(..).map(obstacle_warning));
 }
 

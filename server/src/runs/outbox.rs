@@ -10,7 +10,7 @@ use dmp_proto::v1;
 use tokio::sync::mpsc;
 
 /// How many hand-overs wait for the publisher at most.
-pub const CAPACITY: usize = 256;
+pub(crate) const CAPACITY: usize = 256;
 
 /// What a stream hands over.
 #[derive(Debug)]

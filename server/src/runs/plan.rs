@@ -12,7 +12,7 @@ const CHUNK_POINTS: usize = 2000;
 
 /// The next `n` points of `e`, as one stretch: the same points, contacts, stalls and outcome as one
 /// `e.advance(n)`, computed `CHUNK_POINTS` at a time. Fails with `Cancelled` once the job is.
-pub fn advance_cancellable(
+pub(crate) fn advance_cancellable(
     e: &mut Execution,
     n: usize,
     job: &JobContext<'_>,

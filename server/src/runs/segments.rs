@@ -6,11 +6,11 @@ use dmp_proto::v1;
 use super::served_run::ServedRun;
 
 /// What the loop sends: one segment per member, all covering the same times.
-pub type Batch = Vec<v1::Segment>;
+pub(crate) type Batch = Vec<v1::Segment>;
 
 /// One segment per member out of a stretch of the run (a single robot's run moves the points, without a copy).
 /// `start_unix` is the wall time of run time zero (real time).
-pub fn member_segments(
+pub(crate) fn member_segments(
     run: &ServedRun,
     mut p: Stretch,
     sequence: u64,

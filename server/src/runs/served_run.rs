@@ -15,7 +15,7 @@ use crate::runs::compute::cost::{Avoided, Workload};
 
 /// How a request asked its run to avoid things.
 #[derive(Debug, Clone)]
-pub struct RunAvoidance {
+pub(crate) struct RunAvoidance {
     /// Method for obstacles and its boundary sample count.
     pub obstacles: (Avoidance, usize),
     /// Method for other robots (of the group and of the cell) and its sample count.
@@ -28,7 +28,7 @@ pub struct RunAvoidance {
 
 /// A served run.
 #[derive(Debug)]
-pub struct ServedRun {
+pub(crate) struct ServedRun {
     /// The engine's run.
     pub execution: Execution,
     /// The run does not avoid the cell's obstacles (only its own and the robots).
@@ -57,7 +57,7 @@ struct Costing {
 impl ServedRun {
     /// A run of `primitive` with `motion` for `members` (their footprints as sent alongside), avoiding as asked,
     /// stepping as asked, keeping `history` output points for rollbacks.
-    pub fn new(
+    pub(crate) fn new(
         primitive: Primitive,
         motion: Motion,
         members: Vec<(Agent, Option<v1::Superquadric>)>,
@@ -87,7 +87,7 @@ impl ServedRun {
     }
 
     /// What the run costs to compute in a cell of `cell_obstacles` obstacles and `cell_robots` other robots.
-    pub fn workload(&self, cell_obstacles: usize, cell_robots: usize) -> Workload {
+    pub(crate) fn workload(&self, cell_obstacles: usize, cell_robots: usize) -> Workload {
         let c = &self.costing;
         // A held tool feels every obstacle and robot at each of its control points.
         let points = self.execution.tool().map_or(1, |t| t.control_points().len());
@@ -103,7 +103,7 @@ impl ServedRun {
 
     /// Sets the cell's obstacles (as they are at wall time `now_unix_s`, which is the run's current time) and its
     /// other robots.
-    pub fn apply_scene(
+    pub(crate) fn apply_scene(
         &mut self,
         snapshot: &ObstacleSet,
         others: &[Arc<SeenRobot>],
@@ -120,7 +120,11 @@ impl ServedRun {
     }
 
     /// Updates the cell's other robots from their last states (robots without a footprint are invisible).
-    pub fn set_cellmates(&mut self, others: &[Arc<SeenRobot>], now_unix_s: f64) -> Result<(), ServerError> {
+    pub(crate) fn set_cellmates(
+        &mut self,
+        others: &[Arc<SeenRobot>],
+        now_unix_s: f64,
+    ) -> Result<(), ServerError> {
         let mates = others.iter().filter_map(|r| {
             Some(CellMate {
                 id: &r.state.robot_id,

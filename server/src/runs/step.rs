@@ -19,7 +19,7 @@ use crate::runs::compute::pool::JobContext;
 
 /// What one wake-up asks of the run.
 #[derive(Debug)]
-pub struct Step {
+pub(crate) struct Step {
     /// Real time: roll back to this run time first (a change applies from the robot's time).
     pub rollback_to: Option<f64>,
     /// The cell's scene, when it changed (or at the start).
@@ -49,7 +49,7 @@ pub struct Step {
 
 /// A segment computed, ready to send.
 #[derive(Debug)]
-pub struct Computed {
+pub(crate) struct Computed {
     /// The members' segments.
     pub batch: Batch,
     /// What the segment came to.
@@ -60,7 +60,7 @@ pub struct Computed {
 
 /// What a wake-up computed.
 #[derive(Debug, Default)]
-pub struct Stepped {
+pub(crate) struct Stepped {
     /// Segments, in order; the last may end the run ([`end_reason`] of its outcome).
     pub segments: Vec<Computed>,
     /// The members' states at the first point computed, to publish to the cell (with each member's footprint).
@@ -78,7 +78,7 @@ impl Step {
 
 /// Applies `step`'s changes to `run` and computes its segments. Stops early (with what it has) when nobody waits
 /// for the result any more.
-pub fn compute(run: &mut ServedRun, step: Step, job: &JobContext<'_>) -> Result<Stepped, ServerError> {
+pub(crate) fn compute(run: &mut ServedRun, step: Step, job: &JobContext<'_>) -> Result<Stepped, ServerError> {
     let mut out = Stepped::default();
     if let Some(t) = step.rollback_to {
         run.execution.rollback_to(t);

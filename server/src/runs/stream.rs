@@ -33,7 +33,7 @@ const REMOTE_MAX_AGE_S: f64 = 0.5;
 
 /// What a stream was admitted with, held until it ends.
 #[derive(Debug, Default)]
-pub struct Admitted {
+pub(crate) struct Admitted {
     /// Real time: its compute reservation.
     pub budget: Option<ComputeReservation>,
     /// What the access file allows it (none: nothing to check again).
@@ -42,7 +42,7 @@ pub struct Admitted {
 
 /// Runs `run` until the goal, a stop, `max_duration`, the client leaving or shutdown. Items go to `tx` (mapped by
 /// the caller's stream); errors end the stream with a status.
-pub async fn run_stream(
+pub(crate) async fn run_stream(
     app: Arc<RunContext>,
     mut run: ServedRun,
     cell: Cell,

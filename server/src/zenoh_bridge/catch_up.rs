@@ -27,7 +27,7 @@ use super::SceneUpdater;
 use crate::error::ServerError;
 
 /// How long a catch-up query waits for replies.
-pub const QUERY_TIMEOUT: Duration = Duration::from_secs(5);
+pub(crate) const QUERY_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// Declares the querier and spawns the task that queries on start and on every return of a queryable, until
 /// `stop`.

@@ -23,7 +23,7 @@ use zenoh::sample::SampleKind;
 use crate::error::ServerError;
 
 /// How often reachability is checked between events.
-pub const RECHECK_PERIOD: Duration = Duration::from_secs(1);
+pub(crate) const RECHECK_PERIOD: Duration = Duration::from_secs(1);
 
 /// What an event just removed: left out of the links listed.
 #[derive(Debug, Clone, Default)]
@@ -79,7 +79,7 @@ impl Targets {
 
 /// Sets the scene service's health from the reachability of `connect` now, and spawns the task that follows it
 /// until `stop`. `None` when `connect` is empty.
-pub async fn spawn(
+pub(crate) async fn spawn(
     session: &Session,
     connect: &[String],
     client_mode: bool,

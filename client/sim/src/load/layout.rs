@@ -1,14 +1,14 @@
 //! The world of the load: cells of robots whose paths cross, and five fixed obstacles per cell.
 //!
 //! Every cell is the same picture (cells are separate scenes, so they may share coordinates). Its `m` robots start
-//! on a circle of radius [`START_RADIUS`] at angles `2 pi i / m`, and go to the far side, turned by [`SKEW`]: ten
+//! on a circle of radius `START_RADIUS` at angles `2 pi i / m`, and go to the far side, turned by `SKEW`: ten
 //! chords that all pass 0.12 m from the centre, so every robot meets its nine cell-mates (as moving obstacles,
 //! each a ball of radius [`FOOTPRINT_RADIUS`]) near the centre, turning the same way round. In 3-D the robots also
-//! climb from `z = 0` to `z = `[`CLIMB`]. The fixed obstacles are spheres on a ring of radius [`OBSTACLE_RING`],
+//! climb from `z = 0` to `z = ``CLIMB`. The fixed obstacles are spheres on a ring of radius `OBSTACLE_RING`,
 //! between the starts, in the robots' way.
 //!
 //! The primitive is a null-weight DMP (a straight line driven by the phase) with a soft spring
-//! ([`STIFFNESS`]): a critically damped leg to a new goal takes about `9.2 tau / sqrt(K)` = 1.8 tau to settle
+//! (`STIFFNESS`): a critically damped leg to a new goal takes about `9.2 tau / sqrt(K)` = 1.8 tau to settle
 //! within 1 mm, so a robot retargeted every `tau` seconds never arrives (a run ends when the goal is reached at
 //! rest; a goal change does not restart the phase).
 
@@ -19,11 +19,11 @@ use dmp_proto::v1;
 use crate::error::SimError;
 
 /// Radius of the circle the robots start on, metres.
-pub const START_RADIUS: f64 = 0.6;
+pub(crate) const START_RADIUS: f64 = 0.6;
 /// A goal is the start's antipode turned by this angle, radians (no head-on pairs: no symmetric deadlock).
-pub const SKEW: f64 = 0.4;
+pub(crate) const SKEW: f64 = 0.4;
 /// 3-D: height of the first goal, metres (the second goal is the start).
-pub const CLIMB: f64 = 0.2;
+pub(crate) const CLIMB: f64 = 0.2;
 /// A robot's footprint: a ball of this radius, metres.
 pub const FOOTPRINT_RADIUS: f64 = 0.1;
 /// Fixed obstacles per cell.
@@ -31,22 +31,22 @@ pub const FIXED_OBSTACLES: usize = 5;
 /// Radius of a fixed obstacle (a sphere), metres.
 pub const OBSTACLE_RADIUS: f64 = 0.06;
 /// Distance of the fixed obstacles from the cell's centre, metres.
-pub const OBSTACLE_RING: f64 = 0.3;
+pub(crate) const OBSTACLE_RING: f64 = 0.3;
 /// How far a scene update moves an obstacle, metres.
-pub const OBSTACLE_SHIFT: f64 = 0.02;
+pub(crate) const OBSTACLE_SHIFT: f64 = 0.02;
 /// The primitive's stiffness K (every dimension); damping is critical.
-pub const STIFFNESS: f64 = 25.0;
+pub(crate) const STIFFNESS: f64 = 25.0;
 /// The primitive's N (N + 1 Gaussians, all weights zero).
-pub const N_BASIS: usize = 50;
+pub(crate) const N_BASIS: usize = 50;
 /// The primitive's canonical decay.
-pub const ALPHA: f64 = 4.0;
+pub(crate) const ALPHA: f64 = 4.0;
 /// The primitive's name (one per robot).
-pub const PRIMITIVE: &str = "load";
+pub(crate) const PRIMITIVE: &str = "load";
 
 /// One robot of the load.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RobotPlan {
-    /// Its id: `<prefix>.c<cell>.r<k>` ([`robot_id`]).
+    /// Its id: `<prefix>.c<cell>.r<k>` (`robot_id`).
     pub id: String,
     /// Index of its cell.
     pub cell: usize,
@@ -63,12 +63,12 @@ pub fn cell_name(prefix: &str, c: usize) -> String {
 
 /// The id of robot `k` of cell `c`: `<prefix>.c<c>.r<k>` (`load.c3.r7`). The load's robots are its own, named
 /// apart from any real robot's (`.` is allowed in robot ids, `[A-Za-z0-9_.-]`), and deleted when it ends.
-pub fn robot_id(prefix: &str, c: usize, k: usize) -> String {
+pub(crate) fn robot_id(prefix: &str, c: usize, k: usize) -> String {
     format!("{prefix}.c{c}.r{k}")
 }
 
 /// Cells for `robots` robots in cells of `cell_size`.
-pub fn cell_count(robots: usize, cell_size: usize) -> usize {
+pub(crate) fn cell_count(robots: usize, cell_size: usize) -> usize {
     robots.div_ceil(cell_size.max(1))
 }
 
@@ -116,7 +116,7 @@ pub fn footprint(dim: usize) -> v1::Superquadric {
 }
 
 /// The id of fixed obstacle `k`.
-pub fn obstacle_id(k: usize) -> String {
+pub(crate) fn obstacle_id(k: usize) -> String {
     format!("fixed-{k}")
 }
 
