@@ -13,6 +13,8 @@
 //! | transports | [`grpc`], [`zenoh_bridge`], [`ros2`], [`metrics`], [`telemetry`] | the gRPC services, the Zenoh bridge that feeds the scenes, ROS 2 over rmw_zenoh, Prometheus, OpenTelemetry |
 //! | assembly | [`server`] | starting the parts above in order, and running until shutdown |
 
+// The server's docs are for its maintainers: they link to the crate's private modules on purpose.
+#![allow(rustdoc::private_intra_doc_links)]
 #![warn(missing_docs)]
 #![warn(unreachable_pub)]
 

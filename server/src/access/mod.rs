@@ -1,6 +1,6 @@
 //! Who may do what: identities from the access file (`--access FILE`), recognised by a bearer token or a TLS
 //! client certificate, each with a role and the cells and robots it acts on. Every gRPC request is authenticated
-//! by one layer ([`layer`]) before any handler runs, and authorised by its handler with the [`Action`] it
+//! by one layer ([`crate::grpc::authentication`]) before any handler runs, and authorised by its handler with the [`Action`] it
 //! performs; streams are authorised again whenever the file is reloaded (SIGHUP), and end with PERMISSION_DENIED
 //! once it no longer allows them. Every change is logged on the tracing target `audit` with its identity.
 //!

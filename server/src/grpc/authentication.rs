@@ -1,5 +1,5 @@
 //! The one layer every gRPC request passes before any handler: it finds who calls (a bearer token, else the
-//! verified TLS client certificate) and puts the [`Caller`] in the request's extensions for the handlers to
+//! verified TLS client certificate) and puts the [`crate::access::Caller`] in the request's extensions for the handlers to
 //! authorise. Health answers everyone (probes carry no credentials); reflection follows the observer role. A
 //! request without a known identity ends here with UNAUTHENTICATED.
 //!

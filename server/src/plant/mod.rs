@@ -5,9 +5,9 @@
 //! | --- | --- | --- |
 //! | a server is alive: its liveliness token, and a queryable answering `dmp.v1.PlantServer` (id, gRPC address, cells) | `dmp/@servers/<server-id>` | [`discovery`] |
 //! | which server serves a cell: a queryable per cell served, answering `dmp.v1.PlantServer` | `dmp/@cells/<cell>` | [`discovery`] |
-//! | the live servers this one knows, to name the server of a cell it does not serve | `dmp/@servers/*` (liveliness, with history) | [`directory`] |
+//! | the live servers this one knows, to name the server of a cell it does not serve | `dmp/@servers/*` (liveliness, with history) | [`crate::cells::directory`] |
 //! | replicated primitives: every version stored is put, the others store it; a queryable over the store answers a server that (re)starts | `dmp/@primitives/<robot>/<name>/<version>` | [`replication`] |
-//! | fail-over: a dead server's cells served by one survivor each (rendezvous hashing over the live set), given back when it returns | `dmp/@cells/<cell>` (the taker's), `dmp/<cell>/obstacles/**` (queried) | [`failover`], [`taken`] |
+//! | fail-over: a dead server's cells served by one survivor each (rendezvous hashing over the live set), given back when it returns | `dmp/@cells/<cell>` (the taker's), `dmp/<cell>/obstacles/**` (queried) | [`failover`], [`crate::cells::taken`] |
 //! | replicated deletes: a tombstone, a Zenoh delete of every version up to `N`, answered by the same queryable | `dmp/@primitives/<robot>/<name>/<N>` (delete) | [`replication`], `store/tombstones.rs` |
 //!
 //! The order of versions: a version stored on a server of a plant is numbered with that server's HLC time (NTP64,

@@ -1,4 +1,4 @@
-//! The task that publishes what the streams hand over ([`super::outbox`]): each segment as a
+//! The task that publishes what the streams hand over ([`crate::runs::outbox`]): each segment as a
 //! `trajectory_msgs/msg/MultiDOFJointTrajectory` on its robot's topic `/dmp/<robot>/trajectory`
 //! ([`super::trajectory`]; a group run's members each on their own), and the positions into the robots' paths
 //! ([`super::paths`]) for the markers. A robot's publisher (and its liveliness token) is declared at its first

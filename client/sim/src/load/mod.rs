@@ -169,7 +169,7 @@ pub async fn run_with(
 
 /// Deletes what the load with `args` stored on its servers (`server`, or each cell's found through Zenoh at
 /// `zenoh_connect`): each robot's primitive and each cell's fixed obstacles, on the cell's server (the robots are
-/// the load's own, [`layout::robot_id`]).
+/// the load's own, `layout::robot_id`).
 pub async fn clean_up(
     args: &LoadArgs,
     server: &str,

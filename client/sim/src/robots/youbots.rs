@@ -36,7 +36,7 @@
 //! - `line`: null weights (a straight line). Such a DMP is fastest at its start: `tau` is chosen so that the
 //!   longest drive peaks at [`NULL_PEAK_SPEED`] without obstacles.
 //! - `constant-speed`: learned by the server from a synthetic demonstration per robot, a straight line at constant
-//!   speed between smooth ramps ([`ramped_line`](super::demonstration::ramped_line), [`RAMP_S`]), all three of
+//!   speed between smooth ramps ([`ramped_line`], [`RAMP_S`]), all three of
 //!   the same duration so that they share `tau`; the longest drive cruises at [`CRUISE_SPEED`].
 //!
 //! The youBot's top speed is 0.8 m/s; the speeds are lower so that avoiding at speed stays within a plausible
