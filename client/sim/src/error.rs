@@ -43,17 +43,17 @@ impl SimError {
     }
 
     /// An argument error.
-    pub fn argument(field: impl Into<String>, message: impl Into<String>) -> Self {
+    pub(crate) fn argument(field: impl Into<String>, message: impl Into<String>) -> Self {
         SimError::Argument { field: field.into(), message: message.into() }
     }
 
     /// The server's answers break what the run expects ([`ClientError::Protocol`]).
-    pub fn protocol(message: String) -> Self {
+    pub(crate) fn protocol(message: String) -> Self {
         SimError::Client(ClientError::Protocol(message))
     }
 
     /// A stream or session already ended ([`ClientError::Closed`]).
-    pub fn closed(what: String) -> Self {
+    pub(crate) fn closed(what: String) -> Self {
         SimError::Client(ClientError::Closed(what))
     }
 }

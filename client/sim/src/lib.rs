@@ -4,8 +4,11 @@
 //! | concept | module |
 //! | --- | --- |
 //! | simulated robots (`dmpctl sim`): controllers, true shapes, reports and figures | [`robots`] |
-//! | many robots at once (`dmpctl load`), and the accuracy study of its integration step | [`load`] |
+//! | many robots at once (`dmpctl load`) | [`load`] |
 //! | errors | [`error`] |
+
+#![warn(missing_docs)]
+#![warn(unreachable_pub)]
 
 pub mod error;
 pub mod load;

@@ -14,18 +14,18 @@ const DEFAULT_DIM: usize = 3;
 const DEFAULT_TAU: f64 = 2.0;
 const DEFAULT_PREFIX: &str = "load";
 /// Worker threads of the generator by default.
-pub const DEFAULT_THREADS: usize = 1;
+pub(crate) const DEFAULT_THREADS: usize = 1;
 /// Most connections by default (one per cell up to this, and at least one per 125 robots): fewer connections kept
 /// more setpoints on time at 1,000 robots (BENCHMARKS.md).
-pub const MAX_DEFAULT_CONNECTIONS: usize = 8;
+pub(crate) const MAX_DEFAULT_CONNECTIONS: usize = 8;
 /// Robots per connection the default aims at most (HTTP/2 servers often allow 100 to 250 concurrent streams).
-pub const STREAMS_PER_CONNECTION: usize = 125;
+pub(crate) const STREAMS_PER_CONNECTION: usize = 125;
 /// The largest internal step the load asks the server for by default, milliseconds (its adaptive step; a fixed
 /// RK4 step is at most one segment).
 pub const DEFAULT_INTEGRATION_STEP_S: f64 = 0.03;
 /// The local error tolerance of the server's adaptive step the load asks for by default: a load robot stays within
 /// 1e-3 of the engine's RK4 at 1 ms with it, for fewer evaluations of the field than a fixed 5 ms RK4 step
-/// (`accuracy.rs` checks both; the deviations measured are in BENCHMARKS.md).
+/// (the server's `runs/accuracy_tests.rs` checks both; the deviations measured are in BENCHMARKS.md).
 pub const DEFAULT_INTEGRATION_TOLERANCE: f64 = 3e-6;
 
 /// `dmpctl load`: the server is `--server` (default http://127.0.0.1:50051), its Zenoh endpoint `--zenoh-connect`
@@ -67,7 +67,8 @@ pub struct LoadArgs {
     pub tau: f64,
     /// The server's largest internal step, seconds, with the output points interpolated exactly (quintic
     /// Hermite) in between. With `--integration-tolerance 0` it is a fixed RK4 step (at most one segment; 0.005 s
-    /// keeps a load robot within 1e-3 of RK4 at 1 ms, `load/accuracy.rs`); 0 asks for the server's default.
+    /// keeps a load robot within 1e-3 of RK4 at 1 ms, the server's `runs/accuracy_tests.rs`); 0 asks for the
+    /// server's default.
     #[arg(
         long = "integration-step-s",
         default_value_t = DEFAULT_INTEGRATION_STEP_S,
@@ -85,8 +86,8 @@ pub struct LoadArgs {
     )]
     pub integration_step_ms: Option<f64>,
     /// The server's adaptive internal step: the local error tolerance of its Dormand–Prince 5(4) steps, with
-    /// `--integration-step-s` the largest step (`load/accuracy.rs` checks the default against RK4 at 1 ms);
-    /// 0 asks for a fixed RK4 step of `--integration-step-s`. At most 0.01.
+    /// `--integration-step-s` the largest step (the server's `runs/accuracy_tests.rs` checks the default against
+    /// RK4 at 1 ms); 0 asks for a fixed RK4 step of `--integration-step-s`. At most 0.01.
     #[arg(
         long = "integration-tolerance",
         default_value_t = DEFAULT_INTEGRATION_TOLERANCE,
@@ -290,7 +291,7 @@ impl LoadArgs {
 
 impl Params {
     /// The load's cells: the first of `--cells`, else `<prefix>-<c>`.
-    pub fn cell_names(&self) -> Vec<String> {
+    pub(crate) fn cell_names(&self) -> Vec<String> {
         match &self.args.cell_names[..] {
             [] => (0..self.cells).map(|c| layout::cell_name(&self.args.prefix, c)).collect(),
             named => named[..self.cells].to_vec(),

@@ -20,9 +20,9 @@
 //! # The run
 //! 1. Connect (`--connections` HTTP/2 connections; a cell's robots share one), open the Zenoh publisher and wait
 //!    until the server's subscriber is matched (a put before that would be lost).
-//! 2. Set up, at most [`setup::SETUP_CONCURRENCY`] calls at once: five fixed obstacles per cell (gRPC, in the cell) and a
+//! 2. Set up, at most `setup::SETUP_CONCURRENCY` calls at once: five fixed obstacles per cell (gRPC, in the cell) and a
 //!    primitive per robot (primitives are stored per robot).
-//! 3. Start the robots spread over the first [`MAX_STAGGER_S`] seconds (a quarter of the run if shorter): each opens
+//! 3. Start the robots spread over the first `MAX_STAGGER_S` seconds (a quarter of the run if shorter): each opens
 //!    a session (real-time pacing, its cell, its footprint), changes its goal every `tau` seconds, and sends a stop
 //!    at the end of the measurement, `--duration` seconds after the first start.
 //! 4. Meanwhile the scene updater moves one obstacle of one cell at a time at `--scene-updates` Hz, and the server
@@ -32,17 +32,17 @@
 //! times are the server's wall clock (`start_unix_s`), arrivals this machine's: run both on one machine (or with
 //! synchronised clocks).
 
-pub mod args;
+mod args;
 pub mod layout;
-pub mod monitor;
-pub mod per_second;
-pub mod pose;
+mod monitor;
+mod per_second;
+mod pose;
 pub mod report;
-pub mod robot;
-pub mod scene;
-pub mod servers;
+mod robot;
+mod scene;
+mod servers;
 pub mod setup;
-pub mod stats;
+mod stats;
 
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
@@ -54,10 +54,7 @@ use dmp_client::zenoh_pub::ObstaclePublisher;
 use tokio::task::JoinSet;
 use tokio::time::Instant;
 
-pub use self::args::{
-    DEFAULT_INTEGRATION_STEP_S, DEFAULT_INTEGRATION_TOLERANCE, DEFAULT_THREADS, LoadArgs,
-    MAX_DEFAULT_CONNECTIONS, Params, STREAMS_PER_CONNECTION,
-};
+pub use self::args::{DEFAULT_INTEGRATION_STEP_S, DEFAULT_INTEGRATION_TOLERANCE, LoadArgs, Params};
 use self::report::{ErrorCount, LATENESS_DEFINITION, LoadReport, ServerPart, percent};
 use self::robot::{Ledger, RobotOutcome, RobotTask, STOP_TIMEOUT, Shared};
 use self::scene::{CellProbe, Updates};
@@ -66,11 +63,11 @@ use self::stats::{Percentiles, SignedPercentiles};
 use crate::error::SimError;
 
 /// The Zenoh endpoint of a server on this machine.
-pub const DEFAULT_ZENOH: &str = "tcp/127.0.0.1:7447";
+pub(crate) const DEFAULT_ZENOH: &str = "tcp/127.0.0.1:7447";
 /// The robots' starts are spread over this long at most.
-pub const MAX_STAGGER_S: f64 = 1.0;
+pub(crate) const MAX_STAGGER_S: f64 = 1.0;
 /// Longest wait for the server's Zenoh subscriber.
-pub const ZENOH_MATCH_TIMEOUT: Duration = Duration::from_secs(10);
+pub(crate) const ZENOH_MATCH_TIMEOUT: Duration = Duration::from_secs(10);
 /// Between the setup and the first start.
 const LEAD_IN: Duration = Duration::from_millis(300);
 /// A stream's `max_duration_s` is the measurement plus this, a bound should the stop get lost.
@@ -78,25 +75,25 @@ pub(crate) const MAX_DURATION_SLACK_S: f64 = 10.0;
 
 /// Messages of what went wrong, counted (shared by every task; rare, so a mutex).
 #[derive(Debug, Default)]
-pub struct Errors {
+pub(crate) struct Errors {
     counts: Mutex<BTreeMap<String, (u64, Option<String>)>>,
 }
 
 impl Errors {
     /// Counts `message`.
-    pub fn add(&self, message: String) {
+    pub(crate) fn add(&self, message: String) {
         self.add_for(message, None);
     }
 
     /// Counts `message`, which happened to `robot`.
-    pub fn add_for(&self, message: String, robot: Option<&str>) {
+    pub(crate) fn add_for(&self, message: String, robot: Option<&str>) {
         let mut m = self.counts.lock().unwrap_or_else(|e| e.into_inner());
         let e = m.entry(message).or_insert((0, robot.map(str::to_string)));
         e.0 += 1;
     }
 
     /// Most frequent first.
-    pub fn sorted(&self) -> Vec<ErrorCount> {
+    pub(crate) fn sorted(&self) -> Vec<ErrorCount> {
         let m = self.counts.lock().unwrap_or_else(|e| e.into_inner());
         let mut v: Vec<ErrorCount> = m
             .iter()
@@ -125,17 +122,17 @@ fn robot_tokens(dir: &std::path::Path, robots: &[layout::RobotPlan]) -> Result<V
 }
 
 /// Wall clock, Unix seconds.
-pub fn unix_now() -> f64 {
+pub(crate) fn unix_now() -> f64 {
     std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64())
 }
 
 /// Wall clock, Unix nanoseconds.
-pub fn unix_now_ns() -> u64 {
+pub(crate) fn unix_now_ns() -> u64 {
     std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
 }
 
 /// Runs the load against the server at `server` (gRPC) and `zenoh_connect` (its Zenoh endpoints; empty:
-/// [`DEFAULT_ZENOH`]). Fails on bad flags, when the server cannot be reached, or when nothing could be set up;
+/// `DEFAULT_ZENOH`). Fails on bad flags, when the server cannot be reached, or when nothing could be set up;
 /// failed streams are in the report.
 pub async fn run(args: &LoadArgs, server: &str, zenoh_connect: &[String]) -> Result<LoadReport, SimError> {
     run_with(args, server, zenoh_connect, &ConnectOptions::default()).await

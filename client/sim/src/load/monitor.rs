@@ -11,45 +11,45 @@ use super::Errors;
 /// Longest wait for one GetStats.
 const CALL_TIMEOUT: Duration = Duration::from_secs(2);
 /// How often the server is sampled.
-pub const PERIOD: Duration = Duration::from_secs(1);
+pub(crate) const PERIOD: Duration = Duration::from_secs(1);
 
 /// What the monitor saw.
 #[derive(Debug, Clone, Default)]
-pub struct Watched {
+pub(crate) struct Watched {
     /// At the beginning of the measurement.
-    pub begin: Option<v1::ServerStats>,
+    pub(crate) begin: Option<v1::ServerStats>,
     /// At its end (before the stops).
-    pub end: Option<v1::ServerStats>,
+    pub(crate) end: Option<v1::ServerStats>,
     /// Every sample, beginning and end included.
-    pub samples: Vec<v1::ServerStats>,
+    pub(crate) samples: Vec<v1::ServerStats>,
     /// This process's CPU seconds at the beginning and the end (Linux only).
-    pub own_cpu_s: Option<(f64, f64)>,
+    pub(crate) own_cpu_s: Option<(f64, f64)>,
     /// Wall seconds between the two.
-    pub own_wall_s: f64,
+    pub(crate) own_wall_s: f64,
 }
 
 impl Watched {
     /// Server CPU over the measurement, percent of one core.
-    pub fn cpu_percent(&self) -> Option<f64> {
+    pub(crate) fn cpu_percent(&self) -> Option<f64> {
         let (b, e) = (self.begin.as_ref()?, self.end.as_ref()?);
         let wall = e.uptime_s - b.uptime_s;
         (wall > 0.0).then(|| round1(100.0 * (e.cpu_seconds - b.cpu_seconds) / wall))
     }
 
     /// This process's CPU over the measurement, percent of one core.
-    pub fn own_cpu_percent(&self) -> Option<f64> {
+    pub(crate) fn own_cpu_percent(&self) -> Option<f64> {
         let (b, e) = self.own_cpu_s?;
         (self.own_wall_s > 0.0).then(|| round1(100.0 * (e - b) / self.own_wall_s))
     }
 
     /// Resident memory of every sample, MiB.
-    pub fn rss_mib(&self) -> Vec<f64> {
+    pub(crate) fn rss_mib(&self) -> Vec<f64> {
         self.samples.iter().map(|s| mib(s.rss_bytes)).collect()
     }
 }
 
 /// Bytes to MiB, one decimal.
-pub fn mib(bytes: u64) -> f64 {
+pub(crate) fn mib(bytes: u64) -> f64 {
     round1(bytes as f64 / (1024.0 * 1024.0))
 }
 
@@ -72,7 +72,7 @@ async fn sample(client: &DmpClient, errors: &Errors) -> Option<v1::ServerStats> 
 }
 
 /// Samples the server from `begin` to `end`, every [`PERIOD`].
-pub async fn watch(client: &DmpClient, begin: Instant, end: Instant, errors: &Errors) -> Watched {
+pub(crate) async fn watch(client: &DmpClient, begin: Instant, end: Instant, errors: &Errors) -> Watched {
     let mut w = Watched::default();
     let mut tick = tokio::time::interval_at(begin, PERIOD);
     tick.set_missed_tick_behavior(MissedTickBehavior::Delay);
@@ -95,7 +95,7 @@ pub async fn watch(client: &DmpClient, begin: Instant, end: Instant, errors: &Er
 }
 
 /// This process's CPU time (user and system), seconds: `/proc/self/stat` on Linux, `None` elsewhere.
-pub fn process_cpu_seconds() -> Option<f64> {
+pub(crate) fn process_cpu_seconds() -> Option<f64> {
     let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
     // Fields after the command name (which may hold spaces) start with the state, field 3; utime and stime are
     // fields 14 and 15, in clock ticks of 1/100 s (USER_HZ).

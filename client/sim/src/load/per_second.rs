@@ -5,7 +5,7 @@ use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 /// Events counted by the second of the wall clock in which they happened, from an origin.
 #[derive(Debug)]
-pub struct PerSecond {
+pub(crate) struct PerSecond {
     /// The first second's start, Unix nanoseconds.
     origin_ns: u64,
     counts: Box<[AtomicU64]>,
@@ -14,18 +14,18 @@ pub struct PerSecond {
 impl PerSecond {
     /// `seconds` seconds from `origin_ns` (Unix nanoseconds); events before the origin count in the first second,
     /// events after the last in the last.
-    pub fn new(origin_ns: u64, seconds: usize) -> Self {
+    pub(crate) fn new(origin_ns: u64, seconds: usize) -> Self {
         Self { origin_ns, counts: (0..seconds.max(1)).map(|_| AtomicU64::new(0)).collect() }
     }
 
     /// One event at `at_ns` (Unix nanoseconds).
-    pub fn record(&self, at_ns: u64) {
+    pub(crate) fn record(&self, at_ns: u64) {
         let second = (at_ns.saturating_sub(self.origin_ns) / 1_000_000_000) as usize;
         self.counts[second.min(self.counts.len() - 1)].fetch_add(1, Relaxed);
     }
 
     /// The counts, second by second.
-    pub fn counts(&self) -> Vec<u64> {
+    pub(crate) fn counts(&self) -> Vec<u64> {
         self.counts.iter().map(|c| c.load(Relaxed)).collect()
     }
 }

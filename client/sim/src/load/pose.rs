@@ -18,15 +18,15 @@ use super::layout::{self, RobotPlan};
 use crate::error::SimError;
 
 /// The turn of each leg, radians.
-pub const TURN: f64 = 0.5 * PI;
+pub(crate) const TURN: f64 = 0.5 * PI;
 
 /// A unit quaternion, `[x, y, z, w]`.
-pub type Quaternion = [f64; 4];
+pub(crate) type Quaternion = [f64; 4];
 
 /// The robot's two orientations, in the order of its goals ([`RobotPlan::goals`]): turned by [`TURN`] about x,
 /// then back to its start's. The start's is a turn about z by the robot's angle on its circle, so that the robots
 /// of a cell face different ways.
-pub fn orientations(robot: &RobotPlan) -> [Quaternion; 2] {
+pub(crate) fn orientations(robot: &RobotPlan) -> [Quaternion; 2] {
     let a = robot.start[1].atan2(robot.start[0]);
     let (s, c) = (0.5 * a).sin_cos();
     let (u, v) = (0.5 * TURN).sin_cos();
@@ -36,7 +36,7 @@ pub fn orientations(robot: &RobotPlan) -> [Quaternion; 2] {
 }
 
 /// The pose primitive of a robot: the load's line in position, a null line in the chart at the identity.
-pub fn primitive(robot: &RobotPlan, tau: f64) -> Result<dmp::Primitive, SimError> {
+pub(crate) fn primitive(robot: &RobotPlan, tau: f64) -> Result<dmp::Primitive, SimError> {
     let mut line = layout::primitive(robot, tau)?;
     let dim = line.dim + 3;
     let (mut start, mut goal) = (line.start.clone(), line.goal.clone());
@@ -58,7 +58,7 @@ pub fn primitive(robot: &RobotPlan, tau: f64) -> Result<dmp::Primitive, SimError
 }
 
 /// Makes a session start a pose robot's: its start and goal orientations, and the Panda's limits.
-pub fn pose_start(motion: &mut v1::MotionSpec, robot: &RobotPlan) {
+pub(crate) fn pose_start(motion: &mut v1::MotionSpec, robot: &RobotPlan) {
     let [goal, start] = orientations(robot);
     motion.start_orientation = start.to_vec();
     motion.goal_orientation = goal.to_vec();

@@ -5,7 +5,7 @@ use serde::Serialize;
 use super::stats::{Percentiles, SignedPercentiles};
 
 /// How lateness is measured (said in the report).
-pub const LATENESS_DEFINITION: &str = "lateness_ms: per segment, arrival at the robot minus the due time of its \
+pub(crate) const LATENESS_DEFINITION: &str = "lateness_ms: per segment, arrival at the robot minus the due time of its \
      first point, clamped at 0 (an early segment counts 0); arrival_minus_due_ms: the same, signed (negative: \
      early). A setpoint is on time when the segment that carries it in the end (the latest one covering its \
      time) arrived before it was due; expected setpoints that never arrived are not on time.";
@@ -143,6 +143,6 @@ pub struct ServerPart {
 }
 
 /// A share in percent, floored to two decimals (0 of nothing).
-pub fn percent(part: u64, whole: u64) -> f64 {
+pub(crate) fn percent(part: u64, whole: u64) -> f64 {
     if whole > 0 { (1e4 * part as f64 / whole as f64).floor() / 1e2 } else { 0.0 }
 }

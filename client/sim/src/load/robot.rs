@@ -31,13 +31,13 @@ use super::{unix_now, unix_now_ns};
 use dmp_proto::segment_view::SegmentView;
 
 /// Runs whose points were all due this long before the latest arrival are final.
-pub const FINALIZE_AFTER_S: f64 = 1.0;
+pub(crate) const FINALIZE_AFTER_S: f64 = 1.0;
 /// Longest wait for a session to open.
-pub const OPEN_TIMEOUT: Duration = Duration::from_secs(10);
+pub(crate) const OPEN_TIMEOUT: Duration = Duration::from_secs(10);
 /// A stream with no segment for this long has failed (real time sends one every segment).
-pub const STALL_TIMEOUT: Duration = Duration::from_secs(5);
+pub(crate) const STALL_TIMEOUT: Duration = Duration::from_secs(5);
 /// Longest wait for the stream to close after the stop.
-pub const STOP_TIMEOUT: Duration = Duration::from_secs(5);
+pub(crate) const STOP_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// The points of one segment still in force.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -58,18 +58,18 @@ impl Run {
 
 /// What one segment was.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SegmentFacts {
+pub(crate) struct SegmentFacts {
     /// Arrival minus the due time of its first point, nanoseconds (negative: early).
-    pub lateness_ns: i64,
+    pub(crate) lateness_ns: i64,
     /// It replaced points of earlier segments.
-    pub superseding: bool,
+    pub(crate) superseding: bool,
     /// Its first point is due before the end of the measurement.
-    pub in_window: bool,
+    pub(crate) in_window: bool,
 }
 
 /// The setpoint accounting of one robot.
 #[derive(Debug)]
-pub struct Ledger {
+pub(crate) struct Ledger {
     runs: VecDeque<Run>,
     /// Wall time of run time 0, Unix seconds (from the first segment).
     origin_unix: Option<f64>,
@@ -85,7 +85,7 @@ pub struct Ledger {
 
 impl Ledger {
     /// A ledger for a measurement that ends at `end_unix` (Unix seconds).
-    pub fn new(end_unix: f64) -> Self {
+    pub(crate) fn new(end_unix: f64) -> Self {
         Self {
             runs: VecDeque::with_capacity(256),
             origin_unix: None,
@@ -99,7 +99,7 @@ impl Ledger {
 
     /// The same ledger for a pose robot (`pose`): a segment without the orientations, angular velocities and
     /// accelerations of its points ([`SegmentView::has_pose`]) cannot be placed, and ends the robot.
-    pub fn with_pose(mut self, pose: bool) -> Self {
+    pub(crate) fn with_pose(mut self, pose: bool) -> Self {
         self.pose = pose;
         self
     }
@@ -121,7 +121,7 @@ impl Ledger {
 
     /// Accounts for `seg`, which arrived at `arrival_unix`. Fails on a segment that cannot be placed in time (not
     /// real-time paced, or without a valid step).
-    pub fn push(&mut self, seg: &SegmentView, arrival_unix: f64) -> Result<SegmentFacts, String> {
+    pub(crate) fn push(&mut self, seg: &SegmentView, arrival_unix: f64) -> Result<SegmentFacts, String> {
         if !(seg.start_unix_s > 0.0 && seg.dt > 0.0 && seg.dt.is_finite()) {
             return Err(format!(
                 "segment {} has start_unix_s {} and dt {}: not real-time paced",
@@ -183,7 +183,7 @@ impl Ledger {
 
     /// Ends the accounting: `(expected, on_time)`. `scheduled_unix` is when the robot was to start, for a robot
     /// that never received a segment; `rate` its setpoints per second.
-    pub fn finish(mut self, scheduled_unix: f64, rate: f64) -> (u64, u64) {
+    pub(crate) fn finish(mut self, scheduled_unix: f64, rate: f64) -> (u64, u64) {
         while let Some(run) = self.runs.pop_front() {
             self.count(run);
         }
@@ -197,20 +197,20 @@ impl Ledger {
 
 /// The histograms every robot adds to.
 #[derive(Debug)]
-pub struct Shared {
+pub(crate) struct Shared {
     /// Arrival minus due time of each segment's first point.
-    pub lateness: SignedHistogram,
+    pub(crate) lateness: SignedHistogram,
     /// The same, of superseding segments only.
-    pub superseding_lateness: SignedHistogram,
+    pub(crate) superseding_lateness: SignedHistogram,
     /// Scene update to the first segment that accounts for it.
-    pub scene_latency: Histogram,
+    pub(crate) scene_latency: Histogram,
     /// Late segments by the second of their arrival.
-    pub late_per_second: PerSecond,
+    pub(crate) late_per_second: PerSecond,
 }
 
 impl Shared {
     /// Histograms, and `seconds` seconds of late segments from `origin_unix_s`.
-    pub fn new(origin_unix_s: f64, seconds: usize) -> Self {
+    pub(crate) fn new(origin_unix_s: f64, seconds: usize) -> Self {
         Self {
             lateness: SignedHistogram::new(),
             superseding_lateness: SignedHistogram::new(),
@@ -222,61 +222,61 @@ impl Shared {
 
 /// One robot's run.
 #[derive(Debug, Clone)]
-pub struct RobotTask {
+pub(crate) struct RobotTask {
     /// The robot.
-    pub plan: RobotPlan,
+    pub(crate) plan: RobotPlan,
     /// The session's start.
-    pub start: v1::ExecuteRequest,
+    pub(crate) start: v1::ExecuteRequest,
     /// When to open the session.
-    pub start_at: Instant,
+    pub(crate) start_at: Instant,
     /// When to stop.
-    pub end_at: Instant,
+    pub(crate) end_at: Instant,
     /// `start_at` and `end_at` on the wall clock, Unix seconds.
-    pub start_unix: f64,
+    pub(crate) start_unix: f64,
     /// End of the measurement, Unix seconds.
-    pub end_unix: f64,
+    pub(crate) end_unix: f64,
     /// Setpoints per second.
-    pub rate: f64,
+    pub(crate) rate: f64,
     /// A new goal this often.
-    pub retarget_every: Duration,
+    pub(crate) retarget_every: Duration,
     /// The lateness of its server's segments (with several servers, one per server; else `shared.lateness`'s
     /// twin).
-    pub server_lateness: Arc<SignedHistogram>,
+    pub(crate) server_lateness: Arc<SignedHistogram>,
     /// A pose robot's orientations, in the order of its goals (`--pose`); None for a position robot.
-    pub orientations: Option<[super::pose::Quaternion; 2]>,
+    pub(crate) orientations: Option<[super::pose::Quaternion; 2]>,
 }
 
 /// What one robot saw.
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct RobotOutcome {
+pub(crate) struct RobotOutcome {
     /// The robot.
-    pub id: String,
+    pub(crate) id: String,
     /// Setpoints due in the measurement.
-    pub expected: u64,
+    pub(crate) expected: u64,
     /// Of which on time.
-    pub on_time: u64,
+    pub(crate) on_time: u64,
     /// Segments whose first point was due in the measurement.
-    pub segments: u64,
+    pub(crate) segments: u64,
     /// Of which arrived after their first point was due.
-    pub late_segments: u64,
+    pub(crate) late_segments: u64,
     /// Whether segment 0 was late.
-    pub late_first_segment: bool,
+    pub(crate) late_first_segment: bool,
     /// Segments that replaced points of earlier ones.
-    pub superseding_segments: u64,
+    pub(crate) superseding_segments: u64,
     /// Segments with status STALLED.
-    pub stalled_segments: u64,
+    pub(crate) stalled_segments: u64,
     /// Segments with status COLLISION.
-    pub collision_segments: u64,
+    pub(crate) collision_segments: u64,
     /// The session opened.
-    pub started: bool,
+    pub(crate) started: bool,
     /// Goal changes sent.
-    pub retargets: u64,
+    pub(crate) retargets: u64,
     /// Why the stream failed.
-    pub error: Option<String>,
+    pub(crate) error: Option<String>,
 }
 
 /// Runs one robot to the end; never fails: an error ends the robot and is in its outcome.
-pub async fn run_robot(
+pub(crate) async fn run_robot(
     client: DmpClient,
     task: RobotTask,
     probe: Arc<CellProbe>,

@@ -26,7 +26,7 @@ const CALL_TIMEOUT: Duration = Duration::from_secs(2);
 
 /// The pending scene update of one cell (lock-free: the robots of the cell check it on every segment).
 #[derive(Debug)]
-pub struct CellProbe {
+pub(crate) struct CellProbe {
     /// The scene version before the update (`UNARMED`: none pending).
     baseline: AtomicU64,
     /// When the update was put, Unix nanoseconds.
@@ -42,7 +42,7 @@ impl Default for CellProbe {
 impl CellProbe {
     /// Arms the probe for an update put at `put_ns` on top of scene version `baseline`; true when the previous
     /// update was still unanswered.
-    pub fn arm(&self, baseline: u64, put_ns: u64) -> bool {
+    pub(crate) fn arm(&self, baseline: u64, put_ns: u64) -> bool {
         let previous = self.baseline.swap(UNARMED, Ordering::AcqRel);
         self.put_ns.store(put_ns, Ordering::Relaxed);
         self.baseline.store(baseline.min(UNARMED - 1), Ordering::Release);
@@ -51,7 +51,7 @@ impl CellProbe {
 
     /// A segment computed with `version` arrived at `arrival_ns`: the latency of the pending update, if this is
     /// the first segment that accounts for it.
-    pub fn answer(&self, version: u64, arrival_ns: u64) -> Option<u64> {
+    pub(crate) fn answer(&self, version: u64, arrival_ns: u64) -> Option<u64> {
         let baseline = self.baseline.load(Ordering::Acquire);
         if version <= baseline || baseline == UNARMED {
             return None;
@@ -61,38 +61,38 @@ impl CellProbe {
     }
 
     /// Disarms the probe; true when an update was pending.
-    pub fn disarm(&self) -> bool {
+    pub(crate) fn disarm(&self) -> bool {
         self.baseline.swap(UNARMED, Ordering::AcqRel) != UNARMED
     }
 }
 
 /// What the updater did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct UpdaterOutcome {
+pub(crate) struct UpdaterOutcome {
     /// Updates put.
-    pub sent: u64,
+    pub(crate) sent: u64,
     /// Updates no segment accounted for before the cell's next update or the end.
-    pub unanswered: u64,
+    pub(crate) unanswered: u64,
 }
 
 /// The updater's schedule and world.
 #[derive(Debug, Clone)]
-pub struct Updates {
+pub(crate) struct Updates {
     /// Updates per second.
-    pub hz: f64,
+    pub(crate) hz: f64,
     /// The cells (names), round-robin.
-    pub cells: Vec<String>,
+    pub(crate) cells: Vec<String>,
     /// Dimension of the obstacles.
-    pub dim: usize,
+    pub(crate) dim: usize,
     /// First update.
-    pub begin: Instant,
+    pub(crate) begin: Instant,
     /// No update at or after this instant.
-    pub end: Instant,
+    pub(crate) end: Instant,
 }
 
 /// Puts updates until `u.end`, then waits `settle` for the last answers and disarms every probe. `clients[c]`
 /// lists cell `c`'s obstacles (a client `with_cell`); `probes[c]` is its probe, which the robots answer.
-pub async fn run_updater(
+pub(crate) async fn run_updater(
     publisher: &ObstaclePublisher,
     clients: &[DmpClient],
     probes: &[Arc<CellProbe>],

@@ -13,33 +13,33 @@ use crate::error::SimError;
 
 /// One server of the load.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Target {
+pub(crate) struct Target {
     /// Its plant id (empty for `--server`).
-    pub server_id: String,
+    pub(crate) server_id: String,
     /// Its gRPC address.
-    pub url: String,
+    pub(crate) url: String,
     /// The indices of the load's cells it serves.
-    pub cells: Vec<usize>,
+    pub(crate) cells: Vec<usize>,
 }
 
 /// The servers of the load, and which serves each cell.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Servers {
+pub(crate) struct Servers {
     /// In the order their first cell comes.
-    pub targets: Vec<Target>,
+    pub(crate) targets: Vec<Target>,
     /// For each cell, the index of its server in `targets`.
-    pub of_cell: Vec<usize>,
+    pub(crate) of_cell: Vec<usize>,
 }
 
 impl Servers {
     /// Every cell on `url`.
-    pub fn one(url: &str, cells: usize) -> Self {
+    pub(crate) fn one(url: &str, cells: usize) -> Self {
         let target = Target { server_id: String::new(), url: url.to_owned(), cells: (0..cells).collect() };
         Self { targets: vec![target], of_cell: vec![0; cells] }
     }
 
     /// Groups the cells by the server each was found on (`found[c]`: its id and gRPC address).
-    pub fn grouped(found: &[(String, String)]) -> Self {
+    pub(crate) fn grouped(found: &[(String, String)]) -> Self {
         let mut targets: Vec<Target> = Vec::new();
         let mut of_cell = Vec::with_capacity(found.len());
         for (c, (id, url)) in found.iter().enumerate() {
@@ -57,13 +57,13 @@ impl Servers {
     }
 
     /// How many of `connections` each server gets: in proportion to its cells, at least one.
-    pub fn connections(&self, connections: usize) -> Vec<usize> {
+    pub(crate) fn connections(&self, connections: usize) -> Vec<usize> {
         let cells = self.of_cell.len().max(1);
         self.targets.iter().map(|t| (connections * t.cells.len()).div_ceil(cells).max(1)).collect()
     }
 
     /// Connects to every server and gives each cell its connection (`clients[c]` for cell `c`).
-    pub async fn connect(
+    pub(crate) async fn connect(
         &self,
         connections: usize,
         options: &ConnectOptions,
@@ -84,7 +84,7 @@ impl Servers {
 
 /// The servers of the load's `cells`: `server` for all, or with `via_zenoh` each cell's server asked through
 /// Zenoh (a client of `zenoh_connect`, default [`DEFAULT_ZENOH`]); an error names a cell no server serves.
-pub async fn find(
+pub(crate) async fn find(
     cells: &[String],
     server: &str,
     via_zenoh: bool,

@@ -1,5 +1,5 @@
 //! Setting up the world of the load on the server: each cell's fixed obstacles and each robot's primitive (both
-//! over gRPC, at most [`SETUP_CONCURRENCY`] calls at once), and the session start of each robot.
+//! over gRPC, at most `SETUP_CONCURRENCY` calls at once), and the session start of each robot.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -15,9 +15,9 @@ use super::{MAX_DURATION_SLACK_S, Params};
 use crate::error::SimError;
 
 /// Setup calls (puts of obstacles and primitives) in flight at once.
-pub const SETUP_CONCURRENCY: usize = 32;
+pub(crate) const SETUP_CONCURRENCY: usize = 32;
 /// Longest wait for one setup call.
-pub const SETUP_TIMEOUT: Duration = Duration::from_secs(30);
+pub(crate) const SETUP_TIMEOUT: Duration = Duration::from_secs(30);
 
 /// `f` under [`SETUP_TIMEOUT`], its error as a message.
 async fn setup_call<T>(what: &str, f: impl Future<Output = Result<T, ClientError>>) -> Result<T, String> {
@@ -30,7 +30,7 @@ async fn setup_call<T>(what: &str, f: impl Future<Output = Result<T, ClientError
 
 /// Puts every cell's fixed obstacles (a failure fails the run: a cell without them is not the load asked for) and
 /// every robot's primitive; returns, per robot, why it could not be set up (all failing fails the run).
-pub async fn set_up(
+pub(crate) async fn set_up(
     p: &Params,
     clients: &[DmpClient],
     cells: &[String],
@@ -115,7 +115,11 @@ pub fn start_request(p: &Params, r: &RobotPlan, cell: &str) -> v1::ExecuteReques
 
 /// Deletes each robot's primitive and each cell's fixed obstacles, at most [`SETUP_CONCURRENCY`] calls at once; a
 /// robot or obstacle that is not there (never set up, or deleted already) is no error.
-pub async fn clean_up(client: &DmpClient, cells: &[String], robots: &[RobotPlan]) -> Result<(), SimError> {
+pub(crate) async fn clean_up(
+    client: &DmpClient,
+    cells: &[String],
+    robots: &[RobotPlan],
+) -> Result<(), SimError> {
     let permits = Arc::new(Semaphore::new(SETUP_CONCURRENCY));
     let mut calls = JoinSet::new();
     for r in robots {

@@ -19,7 +19,7 @@ const BUCKETS: usize = (2 * SUB + (63 - SUB_BITS as u64) * SUB) as usize;
 
 /// A histogram of non-negative durations in nanoseconds.
 #[derive(Debug)]
-pub struct Histogram {
+pub(crate) struct Histogram {
     buckets: Box<[AtomicU64]>,
     count: AtomicU64,
     max: AtomicU64,
@@ -53,7 +53,7 @@ fn bounds(i: usize) -> (u64, u64) {
 
 impl Histogram {
     /// An empty histogram.
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self {
             buckets: (0..BUCKETS).map(|_| AtomicU64::new(0)).collect(),
             count: AtomicU64::new(0),
@@ -62,25 +62,25 @@ impl Histogram {
     }
 
     /// Records one value.
-    pub fn record(&self, ns: u64) {
+    pub(crate) fn record(&self, ns: u64) {
         self.buckets[index(ns)].fetch_add(1, Relaxed);
         self.count.fetch_add(1, Relaxed);
         self.max.fetch_max(ns, Relaxed);
     }
 
     /// Values recorded.
-    pub fn count(&self) -> u64 {
+    pub(crate) fn count(&self) -> u64 {
         self.count.load(Relaxed)
     }
 
     /// The largest value (0 when empty).
-    pub fn max(&self) -> u64 {
+    pub(crate) fn max(&self) -> u64 {
         self.max.load(Relaxed)
     }
 
     /// The value of rank `rank` (1 = the smallest), as its bucket's midpoint capped at the maximum; `None` when
     /// there are fewer values.
-    pub fn at_rank(&self, rank: u64) -> Option<u64> {
+    pub(crate) fn at_rank(&self, rank: u64) -> Option<u64> {
         if rank == 0 || rank > self.count() {
             return None;
         }
@@ -96,7 +96,7 @@ impl Histogram {
     }
 
     /// The `q`-quantile (`0 < q <= 1`, nearest rank), `None` when empty.
-    pub fn quantile(&self, q: f64) -> Option<u64> {
+    pub(crate) fn quantile(&self, q: f64) -> Option<u64> {
         self.at_rank(rank(q, self.count()))
     }
 }
@@ -108,7 +108,7 @@ fn rank(q: f64, n: u64) -> u64 {
 
 /// A histogram of signed durations (nanoseconds): negative values are kept apart by magnitude.
 #[derive(Debug, Default)]
-pub struct SignedHistogram {
+pub(crate) struct SignedHistogram {
     negative: Histogram,
     non_negative: Histogram,
     min: AtomicI64,
@@ -117,12 +117,12 @@ pub struct SignedHistogram {
 
 impl SignedHistogram {
     /// An empty histogram.
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self { min: AtomicI64::new(i64::MAX), max: AtomicI64::new(i64::MIN), ..Default::default() }
     }
 
     /// Records one value.
-    pub fn record(&self, ns: i64) {
+    pub(crate) fn record(&self, ns: i64) {
         if ns < 0 {
             self.negative.record(ns.unsigned_abs());
         } else {
@@ -133,17 +133,18 @@ impl SignedHistogram {
     }
 
     /// Values recorded.
-    pub fn count(&self) -> u64 {
+    pub(crate) fn count(&self) -> u64 {
         self.negative.count() + self.non_negative.count()
     }
 
     /// Values recorded that are greater than zero.
-    pub fn positive(&self) -> u64 {
+    #[cfg(test)]
+    pub(crate) fn positive(&self) -> u64 {
         self.non_negative.count() - self.non_negative.buckets[0].load(Relaxed)
     }
 
     /// The `q`-quantile of the signed values.
-    pub fn quantile(&self, q: f64) -> Option<i64> {
+    pub(crate) fn quantile(&self, q: f64) -> Option<i64> {
         let (neg, n) = (self.negative.count(), self.count());
         if n == 0 {
             return None;
@@ -158,23 +159,23 @@ impl SignedHistogram {
     }
 
     /// The `q`-quantile of `max(0, value)`.
-    pub fn quantile_clamped(&self, q: f64) -> Option<u64> {
+    pub(crate) fn quantile_clamped(&self, q: f64) -> Option<u64> {
         self.quantile(q).map(|v| v.max(0) as u64)
     }
 
     /// The smallest value.
-    pub fn min(&self) -> Option<i64> {
+    pub(crate) fn min(&self) -> Option<i64> {
         (self.count() > 0).then(|| self.min.load(Relaxed))
     }
 
     /// The largest value.
-    pub fn max(&self) -> Option<i64> {
+    pub(crate) fn max(&self) -> Option<i64> {
         (self.count() > 0).then(|| self.max.load(Relaxed))
     }
 }
 
 /// Nanoseconds to milliseconds, rounded to the microsecond.
-pub fn ms(ns: i64) -> f64 {
+pub(crate) fn ms(ns: i64) -> f64 {
     (ns as f64 / 1e3).round() / 1e3
 }
 
@@ -195,7 +196,7 @@ pub struct Percentiles {
 
 impl Percentiles {
     /// Of a histogram.
-    pub fn of(h: &Histogram) -> Self {
+    pub(crate) fn of(h: &Histogram) -> Self {
         let q = |q| h.quantile(q).map(|v| ms(v as i64));
         Self {
             count: h.count(),
@@ -207,7 +208,7 @@ impl Percentiles {
     }
 
     /// Of `max(0, value)` of a signed histogram.
-    pub fn clamped(h: &SignedHistogram) -> Self {
+    pub(crate) fn clamped(h: &SignedHistogram) -> Self {
         let q = |q| h.quantile_clamped(q).map(|v| ms(v as i64));
         Self {
             count: h.count(),
@@ -238,7 +239,7 @@ pub struct SignedPercentiles {
 
 impl SignedPercentiles {
     /// Of a signed histogram.
-    pub fn of(h: &SignedHistogram) -> Self {
+    pub(crate) fn of(h: &SignedHistogram) -> Self {
         let q = |q| h.quantile(q).map(ms);
         Self {
             count: h.count(),

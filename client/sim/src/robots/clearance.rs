@@ -8,12 +8,12 @@ use super::robot::Executed;
 use super::world::{Body, point3};
 
 /// Euclidean distance between two points.
-pub fn distance(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn distance(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt()
 }
 
 /// Trajectories of the same times side by side (the shared DMP's rows).
-pub fn side_by_side(parts: &[&Trajectory]) -> Trajectory {
+pub(crate) fn side_by_side(parts: &[&Trajectory]) -> Trajectory {
     let n = parts.iter().map(|p| p.len()).min().unwrap_or(0);
     let d: usize = parts.iter().map(|p| p.dim()).sum();
     let mut out = Trajectory::with_capacity(d, n);
@@ -33,14 +33,19 @@ pub fn side_by_side(parts: &[&Trajectory]) -> Trajectory {
 }
 
 /// Strides of the successive scans of [`clearance`], the last one every row.
-pub const STRIDES: [usize; 3] = [50, 10, 1];
+pub(crate) const STRIDES: [usize; 3] = [50, 10, 1];
 
 /// The smallest distance between `body` along `traj` and `other` (fixed, or moving along `other_traj`, row by
 /// row), exactly as a scan of every row would give it, with far fewer distance queries: a scan every
 /// `STRIDES[0]` rows, then finer scans only around the samples that could hide a smaller value. A distance
 /// changes from one row to the next by at most the two bodies' displacements (`lipschitz`), so the rows within
 /// `s` of a sample `d` are at least `d - s lipschitz` away.
-pub fn clearance(traj: &Trajectory, body: &Body, other: &Body, other_traj: Option<&Trajectory>) -> f64 {
+pub(crate) fn clearance(
+    traj: &Trajectory,
+    body: &Body,
+    other: &Body,
+    other_traj: Option<&Trajectory>,
+) -> f64 {
     let n = other_traj.map_or(traj.len(), |o| o.len().min(traj.len()));
     if n == 0 {
         return f64::INFINITY;
@@ -78,7 +83,7 @@ pub fn clearance(traj: &Trajectory, body: &Body, other: &Body, other_traj: Optio
 
 /// [`measure`] (rows `dt` apart) with [`clearance`]: the same report, with far fewer distance queries at 1 kHz.
 /// The other robots' rows have the same times (one group).
-pub fn measure_fast(
+pub(crate) fn measure_fast(
     exec: &Executed,
     dt: f64,
     goal: &[f64],
@@ -100,7 +105,7 @@ pub fn measure_fast(
 }
 
 /// The time at which two of `trajs` (of the same times) have their controlled points closest, and that distance.
-pub fn closest_approach(trajs: &[&Trajectory]) -> (f64, f64) {
+pub(crate) fn closest_approach(trajs: &[&Trajectory]) -> (f64, f64) {
     let mut best = (0.0, f64::INFINITY);
     let n = trajs.iter().map(|t| t.len()).min().unwrap_or(0);
     for k in 0..n {
@@ -119,7 +124,7 @@ pub fn closest_approach(trajs: &[&Trajectory]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::robots::world::{Solid, robot_body};
+    use crate::robots::world::{SolidShape, robot_body};
 
     #[test]
     fn clearance_is_the_exact_minimum() {
@@ -134,9 +139,9 @@ mod tests {
             a.push(t, &xa, &[0.0; 2], &[0.0; 2]);
             b.push(t, &xb, &[0.0; 2], &[0.0; 2]);
         }
-        let body = robot_body("a", Solid::rectangle(0.29, 0.19));
-        let other = robot_body("b", Solid::rectangle(0.29, 0.19));
-        let cube = Body::new("cube", Solid::rectangle(0.2, 0.2), &[1.0, -0.7]);
+        let body = robot_body("a", SolidShape::rectangle(0.29, 0.19));
+        let other = robot_body("b", SolidShape::rectangle(0.29, 0.19));
+        let cube = Body::new("cube", SolidShape::rectangle(0.2, 0.2), &[1.0, -0.7]);
         let brute = |o: &Body, t: Option<&Trajectory>| {
             (0..n)
                 .map(|k| {

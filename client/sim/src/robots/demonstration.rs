@@ -5,7 +5,7 @@
 /// two ramps of `ramp_s` (at most half the duration). On a ramp the speed follows `6u^5 - 15u^4 + 10u^3`,
 /// `u = t / ramp_s`, so the acceleration is continuous and zero at both ends of the ramp (peak acceleration
 /// `1.875 v / ramp_s` for the cruise speed `v`).
-pub fn ramped_way(t: f64, duration: f64, ramp_s: f64) -> f64 {
+pub(crate) fn ramped_way(t: f64, duration: f64, ramp_s: f64) -> f64 {
     let ramp = ramp_s.min(0.5 * duration);
     let v = 1.0 / (duration - ramp);
     let up = |t: f64| {
@@ -28,7 +28,7 @@ pub fn ramped_way(t: f64, duration: f64, ramp_s: f64) -> f64 {
 }
 
 /// The time at which a drive of [`ramped_way`] has covered the fraction `way` of its length.
-pub fn ramped_time_at(way: f64, duration: f64, ramp_s: f64) -> f64 {
+pub(crate) fn ramped_time_at(way: f64, duration: f64, ramp_s: f64) -> f64 {
     let (mut lo, mut hi) = (0.0, duration);
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);
@@ -42,13 +42,13 @@ pub fn ramped_time_at(way: f64, duration: f64, ramp_s: f64) -> f64 {
 }
 
 /// Duration of a ramped drive of `length` metres cruising at `speed`.
-pub const fn ramped_duration(length: f64, speed: f64, ramp_s: f64) -> f64 {
+pub(crate) const fn ramped_duration(length: f64, speed: f64, ramp_s: f64) -> f64 {
     length / speed + ramp_s
 }
 
 /// A synthetic demonstration: the straight line from `start` to `goal` driven as [`ramped_way`], sampled every
 /// `dt` (times, rows).
-pub fn ramped_line(
+pub(crate) fn ramped_line(
     start: &[f64],
     goal: &[f64],
     duration: f64,
@@ -71,7 +71,13 @@ pub fn ramped_line(
 /// covered follows `10u^3 - 15u^4 + 6u^5`, `u = t / duration` (at rest at both ends, peak speed `1.875 L / duration`
 /// and peak acceleration `5.77 L / duration^2` over a length `L`), and the last coordinate (`z`) is raised by
 /// `lift * 16u^2 (1 - u)^2` (the full lift half way).
-pub fn min_jerk(start: &[f64], goal: &[f64], duration: f64, lift: f64, dt: f64) -> (Vec<f64>, Vec<Vec<f64>>) {
+pub(crate) fn min_jerk(
+    start: &[f64],
+    goal: &[f64],
+    duration: f64,
+    lift: f64,
+    dt: f64,
+) -> (Vec<f64>, Vec<Vec<f64>>) {
     let n = (duration / dt).round().max(2.0) as usize;
     let last = start.len().saturating_sub(1);
     let mut t = Vec::with_capacity(n + 1);
@@ -91,7 +97,7 @@ pub fn min_jerk(start: &[f64], goal: &[f64], duration: f64, lift: f64, dt: f64) 
 
 /// The orientations of a minimum-jerk turn from `start` to `goal` (`[x, y, z, w]`) at the times of [`min_jerk`]
 /// of the same `duration` and `dt`: the angle covered follows `10u^3 - 15u^4 + 6u^5` about one fixed axis.
-pub fn min_jerk_turn(start: &[f64; 4], goal: &[f64; 4], duration: f64, dt: f64) -> Vec<[f64; 4]> {
+pub(crate) fn min_jerk_turn(start: &[f64; 4], goal: &[f64; 4], duration: f64, dt: f64) -> Vec<[f64; 4]> {
     let n = (duration / dt).round().max(2.0) as usize;
     (0..=n)
         .map(|k| {

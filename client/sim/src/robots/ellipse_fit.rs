@@ -12,21 +12,21 @@
 
 /// A fitted ellipse.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Ellipse {
+pub(crate) struct Ellipse {
     /// Centre.
-    pub center: [f64; 2],
+    pub(crate) center: [f64; 2],
     /// Semi-axes along the two axes (before any margin).
-    pub semi_axes: [f64; 2],
+    pub(crate) semi_axes: [f64; 2],
     /// Angle of the first axis from `x`, radians.
-    pub angle: f64,
+    pub(crate) angle: f64,
 }
 
 /// Smallest half-side of the bounding rectangle, metres (a cloud on a line still gives an ellipse).
-pub const MIN_HALF_SIDE: f64 = 1e-3;
+pub(crate) const MIN_HALF_SIDE: f64 = 1e-3;
 
 impl Ellipse {
     /// The PCA-aligned bounding ellipse of `points` (at least one).
-    pub fn fit(points: &[[f64; 2]]) -> Option<Self> {
+    pub(crate) fn fit(points: &[[f64; 2]]) -> Option<Self> {
         if points.is_empty() {
             return None;
         }
@@ -65,13 +65,14 @@ impl Ellipse {
     }
 
     /// The rotation `R` (rows; its columns are the axes).
-    pub fn rotation(&self) -> Vec<Vec<f64>> {
+    pub(crate) fn rotation(&self) -> Vec<Vec<f64>> {
         let (c, s) = (self.angle.cos(), self.angle.sin());
         vec![vec![c, -s], vec![s, c]]
     }
 
     /// `(x/a)^2 + (y/b)^2 - 1` in the ellipse's frame, inflated by `margin`: negative inside.
-    pub fn value(&self, p: [f64; 2], margin: f64) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn value(&self, p: [f64; 2], margin: f64) -> f64 {
         let (c, s) = (self.angle.cos(), self.angle.sin());
         let (dx, dy) = (p[0] - self.center[0], p[1] - self.center[1]);
         let (u, w) = (c * dx + s * dy, -s * dx + c * dy);

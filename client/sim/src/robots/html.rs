@@ -5,19 +5,8 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::report::{RobotReport, SimReport};
+use super::report::{CartesianLimits, RobotReport, SimReport};
 use crate::error::SimError;
-
-/// Cartesian limits a robot must stay within (a row of the table, and checks).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Limits {
-    /// Speed, m/s.
-    pub speed: f64,
-    /// Acceleration, m/s².
-    pub acceleration: f64,
-    /// Jerk, m/s³.
-    pub jerk: f64,
-}
 
 const STYLE: &str = "body{font-family:sans-serif;margin:2em;color:#222}\
 table{border-collapse:collapse;margin:1em 0}\
@@ -39,7 +28,7 @@ fn verdict(ok: bool) -> &'static str {
 type Check = (&'static str, bool, String);
 
 /// The checks of one robot.
-fn checks(r: &RobotReport, realtime: bool, limits: Option<&Limits>) -> Vec<Check> {
+fn checks(r: &RobotReport, realtime: bool, limits: Option<&CartesianLimits>) -> Vec<Check> {
     let mut c = vec![
         ("goal reached", r.reached_goal, format!("{:.4} m away, {}", r.final_error_m, r.final_status)),
         (
@@ -94,7 +83,7 @@ fn checks(r: &RobotReport, realtime: bool, limits: Option<&Limits>) -> Vec<Check
 }
 
 /// The page of `report`, with the figures read from `dir`.
-pub fn render_html(report: &SimReport, dir: &Path) -> Result<String, SimError> {
+pub(crate) fn render_html(report: &SimReport, dir: &Path) -> Result<String, SimError> {
     let limits = report.limits.as_ref();
     let all: Vec<(String, Vec<Check>)> =
         report.robots.iter().map(|(id, r)| (id.clone(), checks(r, report.realtime, limits))).collect();
@@ -228,7 +217,7 @@ fn pose_table(h: &mut String, report: &SimReport) {
 }
 
 /// Writes `dir/report.html` (the figures of `report` must be in `dir` already).
-pub fn write_html(report: &SimReport, dir: &Path) -> Result<(), SimError> {
+pub(crate) fn write_html(report: &SimReport, dir: &Path) -> Result<(), SimError> {
     let page = render_html(report, dir)?;
     let path = dir.join("report.html");
     std::fs::write(&path, page).map_err(|source| SimError::Io { path, source })

@@ -8,35 +8,37 @@
 //! | the command line's arguments, the entry point, shared helpers | `mod.rs` |
 //! | a robot's controller: supersession, clock, lateness, continuity | `robot.rs` |
 //! | true shapes and distances (parry3d-f64) | `world.rs` |
-//! | `report.json` and figures | `report.rs` |
+//! | `report.json`: what each robot did, measured against the true shapes; the figures | `report.rs` |
 //! | each robot's limit profile: its robot record, finite differences against it | `profile.rs` |
 //! | `report.html`: the figures, clearances, limits, pass or fail per check | `html.rs` |
 //! | clearance along a whole run, robots side by side, closest approach | `clearance.rs` |
+//! | the Panda arm: its profile, its pose primitives, one pose run executed, measured and drawn | `panda_arm.rs` |
 //! | the Panda pick and place, carrying the ring with its orientation | `panda.rs` |
 //! | the Panda carrying a 0.6 m bar through a 0.3 m gap, turning it (a held tool) | `panda_bar.rs` |
 //! | a pose robot's orientation in its report: goal angle, angular finite differences | `pose.rs` |
-//! | two da Vinci PSMs: ring transfer with a handover, the jaws turning | `psm.rs` |
-//! | a PSM stage: on one 6-D phase, or as two pose runs | `psm_stage.rs` |
+//! | two da Vinci PSMs' ring transfer with a handover: the cell, its geometry and gains | `psm.rs` |
+//! | its stages (on one 6-D phase, or as two pose runs), run one after the other and recorded | `psm_stage.rs` |
 //! | the youBot with a perception node over Zenoh | `perception.rs` |
 //! | three youBots on one phase, walls and cubes | `youbots.rs` |
 //! | fitting an ellipse to a point cloud | `ellipse_fit.rs` |
 //! | synthetic demonstrations: constant-speed line, minimum jerk | `demonstration.rs` |
 
-pub mod clearance;
-pub mod demonstration;
-pub mod ellipse_fit;
-pub mod html;
+mod clearance;
+mod demonstration;
+mod ellipse_fit;
+mod html;
 pub mod panda;
+mod panda_arm;
 pub mod panda_bar;
-pub mod perception;
+mod perception;
 pub mod pose;
-pub mod profile;
+mod profile;
 pub mod psm;
 pub mod psm_stage;
-pub mod report;
+mod report;
 pub mod robot;
-pub mod world;
-pub mod youbots;
+mod world;
+mod youbots;
 
 use std::future::Future;
 use std::path::{Path, PathBuf};
@@ -54,7 +56,7 @@ use crate::error::SimError;
 pub use self::report::{RobotReport, SimReport};
 
 /// A still superquadric obstacle (no rotation) inflated by `margin`, as the scene takes it.
-pub fn superquadric(
+pub(crate) fn superquadric(
     id: &str,
     center: &[f64],
     semi_axes: Vec<f64>,
@@ -75,22 +77,22 @@ pub fn superquadric(
 
 /// The simulations' learning parameters: `N = 50` basis functions, `alpha = 4`, stiffness `k` (the paper's 3050 for
 /// the arms) and critical damping `D = 2 sqrt(K)` (the server's default).
-pub fn learn_parameters(k: f64) -> v1::LearnParameters {
+pub(crate) fn learn_parameters(k: f64) -> v1::LearnParameters {
     v1::LearnParameters { n_basis: 50, k: vec![k], d: Vec::new(), alpha: 4.0 }
 }
 
 /// The namespace of the simulations' robots on the server: the Panda of `dmpctl sim panda` is `sim.panda`, never
 /// the quick start's `panda`, so a simulation neither reads nor bumps a real robot's primitives. `.` is allowed in
 /// robot ids (`[A-Za-z0-9_.-]`) and in no name of the simulations, so the prefix cannot be mistaken for part of one.
-pub const ROBOT_PREFIX: &str = "sim.";
+pub(crate) const ROBOT_PREFIX: &str = "sim.";
 
 /// The id the server knows a simulated robot by: [`ROBOT_PREFIX`] and its local name (`panda` is `sim.panda`).
-pub fn server_robot(local: &str) -> String {
+pub(crate) fn server_robot(local: &str) -> String {
     format!("{ROBOT_PREFIX}{local}")
 }
 
 /// Longest wait for any one answer of the server (a segment, a put).
-pub const STEP_TIMEOUT: Duration = Duration::from_secs(30);
+pub(crate) const STEP_TIMEOUT: Duration = Duration::from_secs(30);
 
 /// The simulations.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -119,7 +121,7 @@ impl SimName {
     /// The robots it stores primitives for, as the server knows them (`sim.<name>`).
     pub fn robot_ids(self) -> Vec<String> {
         let local = match self {
-            SimName::Panda => panda::ROBOT_IDS,
+            SimName::Panda => panda_arm::ROBOT_IDS,
             SimName::YoubotPerception => &perception::ROBOT_IDS[..],
             SimName::Youbots => youbots::ROBOT_IDS,
             SimName::Psm => psm::ROBOT_IDS,
@@ -129,9 +131,9 @@ impl SimName {
 
     /// The obstacles it puts into the cell's scene (each run removes its own; [`clean_up`] removes what an
     /// interrupted run left).
-    pub fn obstacle_ids(self) -> Vec<&'static str> {
+    pub(crate) fn obstacle_ids(self) -> Vec<&'static str> {
         match self {
-            SimName::YoubotPerception => perception::events().iter().map(|e| e.id).collect(),
+            SimName::YoubotPerception => perception::unknown_boxes().iter().map(|b| b.id).collect(),
             _ => Vec::new(),
         }
     }
@@ -187,7 +189,7 @@ pub struct SimOptions {
 
 impl SimOptions {
     /// The client robot `id` streams with: `client` with the robot's own token under [`SimOptions::tokens`].
-    pub fn robot_client(&self, client: &DmpClient, id: &str) -> Result<DmpClient, SimError> {
+    pub(crate) fn robot_client(&self, client: &DmpClient, id: &str) -> Result<DmpClient, SimError> {
         let Some(dir) = &self.tokens else { return Ok(client.clone()) };
         let path = dir.join(format!("{id}.token"));
         let token = std::fs::read_to_string(&path)
@@ -237,7 +239,7 @@ pub async fn run_with(
         SimName::Panda => panda::run(&client, options).await,
         SimName::YoubotPerception => perception::run(&client, options).await,
         SimName::Youbots => youbots::run(&client, options).await,
-        SimName::Psm => psm::run(&client, options).await,
+        SimName::Psm => psm_stage::run(&client, options).await,
     };
     let cleaned = if options.keep { Ok(0) } else { clean_up(&client, name).await };
     // The simulation's own error first: a clean-up that failed after it says less.
@@ -247,13 +249,14 @@ pub async fn run_with(
             .notes
             .push(format!("clean-up: the primitives of {} may be left: {e}", name.robot_ids().join(", ")));
     }
-    report.write(&options.out)?;
+    report.write_json(&options.out)?;
+    html::write_html(&report, &options.out)?;
     Ok(report)
 }
 
 /// Deletes every primitive and the record of the simulation's robots and the obstacles it may have left in
 /// `client`'s cell; returns how many primitive versions were deleted. Each robot's primitives are all the simulation's: its ids are
-/// its own ([`server_robot`]).
+/// its own (`server_robot`).
 pub async fn clean_up(client: &DmpClient, name: SimName) -> Result<u64, SimError> {
     let mut deleted = 0;
     for robot in name.robot_ids() {
@@ -274,20 +277,20 @@ pub async fn clean_up(client: &DmpClient, name: SimName) -> Result<u64, SimError
 }
 
 /// `f`, failing after [`STEP_TIMEOUT`].
-pub async fn within<F: Future>(what: &str, f: F) -> Result<F::Output, SimError> {
+pub(crate) async fn within<F: Future>(what: &str, f: F) -> Result<F::Output, SimError> {
     tokio::time::timeout(STEP_TIMEOUT, f)
         .await
         .map_err(|_| SimError::protocol(format!("timed out after {STEP_TIMEOUT:?}: {what}")))
 }
 
 /// The pacing of `options`.
-pub fn pacing(realtime: bool) -> i32 {
+pub(crate) fn pacing(realtime: bool) -> i32 {
     if realtime { v1::Pacing::Realtime as i32 } else { v1::Pacing::AsFastAsRead as i32 }
 }
 
 /// Streams one robot's execution to its end through a [`Controller`]; `on_segment` sees the controller after each
 /// segment (e.g. to trigger perception events at the robot's time).
-pub async fn execute(
+pub(crate) async fn execute(
     client: &DmpClient,
     request: v1::ExecuteRequest,
     realtime: bool,
@@ -304,18 +307,22 @@ pub async fn execute(
 }
 
 /// The obstacle-free trajectory of a motion (the server's plan, no avoidance, no scene).
-pub async fn free_plan(client: &DmpClient, motion: &v1::MotionSpec, dt: f64) -> Result<Trajectory, SimError> {
+pub(crate) async fn free_plan(
+    client: &DmpClient,
+    motion: &v1::MotionSpec,
+    dt: f64,
+) -> Result<Trajectory, SimError> {
     Ok(free_pose_plan(client, motion, dt).await?.0)
 }
 
 /// [`free_plan`] with a pose run's orientations, `[x, y, z, w]` per row (empty for a position run).
-pub async fn free_pose_plan(
+pub(crate) async fn free_pose_plan(
     client: &DmpClient,
     motion: &v1::MotionSpec,
     dt: f64,
 ) -> Result<(Trajectory, Vec<[f64; 4]>), SimError> {
     let mut m = motion.clone();
-    m.avoidance = Some(avoidance(Method::None));
+    m.avoidance = Some(avoidance(dmp::Method::None));
     m.ignore_scene = true;
     m.extra_obstacles.clear();
     let plan = within("plan", client.plan(v1::PlanRequest { motion: Some(m), dt, duration: 0.0 })).await??;
@@ -326,55 +333,13 @@ pub async fn free_pose_plan(
     Ok((s.into_trajectory(), q))
 }
 
-/// The avoidance methods the simulations use.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Method {
-    /// No repulsion.
-    None,
-    /// Static volumetric potential (`eq:static_potential_volume`).
-    Static {
-        /// Gain A.
-        a: f64,
-        /// Decay eta.
-        eta: f64,
-    },
-    /// Dynamic volumetric potential (`eq:dynamic_potential_volume`).
-    Dynamic {
-        /// Gain lambda.
-        lambda: f64,
-        /// Exponent beta.
-        beta: f64,
-        /// Exponent eta.
-        eta: f64,
-    },
-}
-
-impl Method {
-    /// Its name in the scenario format.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Method::None => "none",
-            Method::Static { .. } => "static_volumetric",
-            Method::Dynamic { .. } => "dynamic_volumetric",
-        }
-    }
-}
-
-/// The message of a method.
-pub fn avoidance(m: Method) -> v1::Avoidance {
-    use v1::avoidance as a;
-    let method = match m {
-        Method::None => a::Method::None(a::None {}),
-        Method::Static { a, eta } => a::Method::StaticVolumetric(a::StaticVolumetric { a, eta }),
-        Method::Dynamic { lambda, beta, eta } => {
-            a::Method::DynamicVolumetric(a::DynamicVolumetric { lambda, beta, eta })
-        }
-    };
-    v1::Avoidance { method: Some(method), ..Default::default() }
+/// The message of an avoidance method (relative velocity on, the server's default boundary samples).
+pub(crate) fn avoidance(method: dmp::Method) -> v1::Avoidance {
+    dmp_proto::avoidance::avoidance_to_proto(&dmp::Avoidance::new(method), 0)
 }
 
 /// Streams a group's execution to its end, one [`Controller`] per member (in request order).
-pub async fn execute_group(
+pub(crate) async fn execute_group(
     client: &DmpClient,
     request: v1::ExecuteGroupRequest,
     realtime: bool,

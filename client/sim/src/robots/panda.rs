@@ -6,11 +6,11 @@
 //! - Board: a box of centre `(0.5, 0, 0.01)` and half-extents `(0.15, 0.25, 0.01)` (top at `z = 0.02`).
 //! - Red peg: a cylinder of radius 0.01 and height 0.12 standing on the board at `(0.5, 0)` (top at `z = 0.14`).
 //! - Green peg: the same at `(0.55, 0.17)`.
-//! - Ring: outer radius [`RING_RADIUS`], on a stand, grasped at its centre `(0.45, -0.17, 0.06)`.
+//! - Ring: outer radius `RING_RADIUS`, on a stand, grasped at its centre `(0.45, -0.17, 0.06)`.
 //! - Home: `(0.30, -0.40, 0.35)`; place: `(0.55, 0.17, 0.20)`, above the green peg.
 //!
 //! # Orientation (the gripper's frame in the base's, `[x, y, z, w]`)
-//! - Home: [`Q_HOME`], the base's frame.
+//! - Home: `Q_HOME`, the base's frame.
 //! - The ring stands upright on its stand, its axis (the tool's `z`) along `-y`: the gripper grasps it turned a
 //!   quarter about `x` ([`Q_GRASP`]).
 //! - To go onto the green peg the ring lies flat, its axis along the peg's (`z`), here turned 30° about `z`
@@ -27,67 +27,59 @@
 //! The pegs are superquadrics of exponents `(1, 1, 2)`, the smallest-volume one through the cylinder's rims
 //! (`(r/a)^2 + (h/c)^4 = 1` with `a^2 c` least: `a = r / sqrt(0.8)`, `c = h / 0.2^(1/4)`); the board a rounded box
 //! of exponent 2 through its corners (`a_i = h_i 3^(1/4)`). While moving to the ring they are inflated by
-//! [`GRIPPER_MARGIN`]; while carrying, by the ring's radius, and the green peg (the target, which the ring goes onto)
+//! `GRIPPER_MARGIN`; while carrying, by the ring's radius, and the green peg (the target, which the ring goes onto)
 //! is left out. Primitives: `K = 3050`, `alpha = 4`, `D = 2 sqrt(K)` (the paper's), learned by the server from
-//! straight minimum-jerk demonstrations of [`TAU_REACH`] and [`TAU_CARRY`] seconds. (The paper's null weights give a
+//! straight minimum-jerk demonstrations of `TAU_REACH` and `TAU_CARRY` seconds. (The paper's null weights give a
 //! straight line whose speed peaks right at its start; these start and end at rest.)
 //! Moving to the ring uses the dynamic potential (`lambda = 10, eta = 2, beta = 2`); carrying is run twice, with
 //! the static (`A = 10, eta = 2`) and the dynamic potential.
 //!
 //! # The true world
 //! The gripper's centre is a point while moving to the ring; while carrying, the ring is its disc, a cylinder of
-//! radius [`RING_RADIUS`] and half-thickness [`RING_HALF_THICKNESS`] along the tool's `z`, turned with the
+//! radius `RING_RADIUS` and half-thickness `RING_HALF_THICKNESS` along the tool's `z`, turned with the
 //! orientation at every setpoint. The planner inflates the obstacles by the ring's radius, which holds the disc in
 //! any orientation, so the orientation follows the DMP (no tool). Clearance is measured with parry against the true
 //! box and cylinders. The setpoints must also stay within the Panda's Cartesian limits ([`MAX_SPEED`],
-//! [`MAX_ACCELERATION`], [`MAX_JERK`]) and angular ones ([`PROFILE`]), which the report's peaks are checked against
-//! (`super::pose`).
+//! [`MAX_ACCELERATION`], [`MAX_JERK`]) and angular ones (the arm's profile, `super::panda_arm`), which the
+//! report's peaks are checked against (`super::pose`).
 
+use dmp::Method;
+use dmp::avoidance::{DynamicVolumetric, StaticVolumetric};
 use dmp_client::grpc::DmpClient;
-use dmp_plot::PoseTrace;
 use dmp_proto::obstacle_json::JsonObstacle;
-use dmp_proto::v1;
 
-use super::demonstration::{min_jerk, min_jerk_turn};
-use super::pose::{add_pose, outline_samples, rows};
+use super::panda_arm::{PROFILE, PoseRun, ROBOT, learn};
 use super::profile::put_profile;
-use super::report::{Figure, SimReport, measure, write_figure};
-use super::robot::Executed;
-use super::world::{Body, Solid, robot_body};
-use super::{
-    Method, SimOptions, avoidance, execute, free_pose_plan, pacing, server_robot, superquadric, within,
-};
+use super::report::{CartesianLimits, SimReport};
+use super::world::{Body, SolidShape};
+use super::{SimOptions, server_robot, superquadric};
 use crate::error::SimError;
 
-/// Control period: 1 kHz.
-pub const DT: f64 = 1e-3;
 /// Outer radius of the ring.
-pub const RING_RADIUS: f64 = 0.025;
+pub(crate) const RING_RADIUS: f64 = 0.025;
 /// Half the ring's thickness.
-pub const RING_HALF_THICKNESS: f64 = 0.004;
+pub(crate) const RING_HALF_THICKNESS: f64 = 0.004;
 /// The gripper's orientation at home (the frame of the base).
-pub const Q_HOME: [f64; 4] = [0.0, 0.0, 0.0, 1.0];
+pub(crate) const Q_HOME: [f64; 4] = [0.0, 0.0, 0.0, 1.0];
 /// The gripper's orientation grasping the ring upright on its stand: a quarter turn about `x` (the ring's axis,
 /// the tool's `z`, along `-y`).
 pub const Q_GRASP: [f64; 4] = [std::f64::consts::FRAC_1_SQRT_2, 0.0, 0.0, std::f64::consts::FRAC_1_SQRT_2];
 /// The orientation placing it: flat (its axis along `z`, the peg's), turned 30° about `z`.
 pub const Q_PLACE: [f64; 4] = [0.0, 0.0, 0.258_819_045_102_520_74, 0.965_925_826_289_068_3];
 /// Inflation of the obstacles while the bare gripper moves.
-pub const GRIPPER_MARGIN: f64 = 0.01;
+pub(crate) const GRIPPER_MARGIN: f64 = 0.01;
 /// Time scale of the move to the ring (the duration of its demonstration), seconds.
-pub const TAU_REACH: f64 = 2.0;
+pub(crate) const TAU_REACH: f64 = 2.0;
 /// Time scale of the carry, seconds: slow enough that going round the red peg stays within the Panda's limits.
 /// The path hardly depends on `tau` and accelerations scale about as `1 / tau^2`: the carry with the dynamic
 /// potential peaked at 49 m/s^2 with a 2 s carry, 20 m/s^2 with 3 s and 9.7 m/s^2 with 4.5 s.
-pub const TAU_CARRY: f64 = 4.5;
+pub(crate) const TAU_CARRY: f64 = 4.5;
 /// The Panda's Cartesian limits of its end effector (Franka Control Interface): speed, m/s.
 pub const MAX_SPEED: f64 = 1.7;
 /// Acceleration, m/s^2.
 pub const MAX_ACCELERATION: f64 = 13.0;
 /// Jerk, m/s^3.
 pub const MAX_JERK: f64 = 6500.0;
-/// The arm's limits, in its robot record: every run keeps them, and the report counts setpoints over them.
-pub const PROFILE: dmp::Limits = dmp::Limits::PANDA;
 
 const HOME: [f64; 3] = [0.30, -0.40, 0.35];
 const RING: [f64; 3] = [0.45, -0.17, 0.06];
@@ -98,10 +90,6 @@ const PEG_R: f64 = 0.01;
 const PEG_HH: f64 = 0.06;
 const RED: [f64; 3] = [0.5, 0.0, 0.08];
 const GREEN: [f64; 3] = [0.55, 0.17, 0.08];
-
-pub(super) const ROBOT: &str = "panda";
-/// The robots of this simulation (the server knows them as [`server_robot`] of these).
-pub const ROBOT_IDS: &[&str] = &[ROBOT];
 
 /// A z-axis cylinder's superquadric of exponents (1, 1, 2) (module documentation).
 fn peg(id: &str, center: &[f64], margin: f64) -> JsonObstacle {
@@ -118,141 +106,20 @@ fn board(margin: f64) -> JsonObstacle {
 /// The true shapes.
 pub(super) fn world() -> Vec<Body> {
     vec![
-        Body::new("board", Solid::Cuboid { half: BOARD_H }, &BOARD_C),
-        Body::new("red-peg", Solid::CylinderZ { radius: PEG_R, half_height: PEG_HH }, &RED),
-        Body::new("green-peg", Solid::CylinderZ { radius: PEG_R, half_height: PEG_HH }, &GREEN),
+        Body::new("board", SolidShape::Cuboid { half: BOARD_H }, &BOARD_C),
+        Body::new("red-peg", SolidShape::CylinderZ { radius: PEG_R, half_height: PEG_HH }, &RED),
+        Body::new("green-peg", SolidShape::CylinderZ { radius: PEG_R, half_height: PEG_HH }, &GREEN),
     ]
-}
-
-/// Learns the pose primitive `name` on the server from a straight minimum-jerk demonstration from `start` to `goal`,
-/// `tau` long, turning from `start_q` to `goal_q` on the same minimum-jerk profile, with stiffness `k`.
-#[allow(clippy::too_many_arguments)]
-pub(super) async fn learn(
-    client: &DmpClient,
-    name: &str,
-    start: &[f64],
-    goal: &[f64],
-    (start_q, goal_q): ([f64; 4], [f64; 4]),
-    tau: f64,
-    k: f64,
-) -> Result<(), SimError> {
-    let (t, rows) = min_jerk(start, goal, tau, 0.0, 0.01);
-    let q = min_jerk_turn(&start_q, &goal_q, tau, 0.01);
-    let parameters = super::learn_parameters(k);
-    within("learn", client.learn_pose(&server_robot(ROBOT), name, &t, &rows, &q, parameters)).await??;
-    Ok(())
-}
-
-/// One motion of the Panda: a pose run from `start` to `goal`, turning from `start_q` to `goal_q`.
-pub(super) struct Motion {
-    pub key: &'static str,
-    pub title: &'static str,
-    pub primitive: &'static str,
-    pub tau: f64,
-    pub start: Vec<f64>,
-    pub goal: Vec<f64>,
-    pub start_q: [f64; 4],
-    pub goal_q: [f64; 4],
-    pub method: Method,
-    pub obstacles: Vec<JsonObstacle>,
-    /// The true shape around the controlled point (turned with the orientation).
-    pub body: Solid,
-    /// What the body is, for the report.
-    pub body_name: &'static str,
-    /// The held tool the server turns around the obstacles (none: the orientation only follows the DMP).
-    pub tool: Option<v1::Tool>,
-    /// The shape outlined along the path in the figure (tool frame): none, or a superquadric's semi-axes and
-    /// exponents.
-    pub outline: Option<(Vec<f64>, Vec<f64>)>,
-    /// The true world.
-    pub world: fn() -> Vec<Body>,
-}
-
-impl Motion {
-    fn spec(&self) -> v1::MotionSpec {
-        v1::MotionSpec {
-            robot_id: server_robot(ROBOT),
-            primitive: self.primitive.into(),
-            start: self.start.clone(),
-            goal: self.goal.clone(),
-            start_orientation: self.start_q.to_vec(),
-            goal_orientation: self.goal_q.to_vec(),
-            avoidance: Some(avoidance(self.method)),
-            extra_obstacles: self.obstacles.iter().map(JsonObstacle::to_proto).collect(),
-            // The scene is known in advance: it travels with the request.
-            ignore_scene: true,
-            tool: self.tool.clone(),
-            ..Default::default()
-        }
-    }
-
-    pub(super) async fn run(&self, client: &DmpClient, options: &SimOptions) -> Result<Executed, SimError> {
-        let request = v1::ExecuteRequest {
-            motion: Some(self.spec()),
-            dt: DT,
-            segment_s: 0.01,
-            pacing: pacing(options.realtime),
-            max_duration_s: 4.0 * self.tau,
-            ..Default::default()
-        };
-        execute(&options.robot_client(client, &server_robot(ROBOT))?, request, options.realtime, |_| {}).await
-    }
-
-    pub(super) async fn record(
-        &self,
-        client: &DmpClient,
-        options: &SimOptions,
-        exec: &Executed,
-        report: &mut SimReport,
-    ) -> Result<(), SimError> {
-        let body = robot_body(ROBOT, self.body);
-        let world = (self.world)();
-        let mut r = measure(exec, DT, &self.goal, Some(&PROFILE), &body, &world, &[]);
-        add_pose(&mut r, exec, self.goal_q, Some(&PROFILE), self.body_name);
-        report.add(&format!("{ROBOT}/{}", self.key), r);
-        let (free, free_q) = free_pose_plan(client, &self.spec(), DT).await?;
-        let engine: Vec<dmp::Obstacle> = self
-            .obstacles
-            .iter()
-            .map(JsonObstacle::to_engine)
-            .collect::<Result<_, _>>()
-            .map_err(|e| SimError::Plot(e.to_string()))?;
-        let adapted_q = exec.orientations.as_ref().map(|o| rows(&o.q)).unwrap_or_default();
-        let surface = match &self.outline {
-            Some((semi, exponents)) => outline_samples(semi, exponents)?,
-            None => Vec::new(),
-        };
-        let pose = PoseTrace { orientations: &adapted_q, free_orientations: &free_q, tool_surface: &surface };
-        let name = format!("{}.svg", self.key);
-        let fig = Figure {
-            title: self.title,
-            line: (&self.start, &self.goal),
-            free: &free,
-            adapted: &exec.traj,
-            obstacles: &engine,
-            robots: &[],
-            time: 0.0,
-            world: &world,
-            seen: &[],
-            body: Some(&body),
-            method: self.method.name(),
-            events: &[],
-            pose: (adapted_q.len() == exec.traj.len() && free_q.len() == free.len()).then_some(pose),
-        };
-        write_figure(&options.out, &name, &fig)?;
-        report.plots.push(name);
-        Ok(())
-    }
 }
 
 /// Runs the pick and place: the move to the ring, then both carries (at once: they are alternatives), then the bar
 /// through the gap ([`super::panda_bar`]).
-pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
+pub(crate) async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     learn(client, "move-to-ring", &HOME, &RING, (Q_HOME, Q_GRASP), TAU_REACH, 3050.0).await?;
     learn(client, "carry", &RING, &PLACE, (Q_GRASP, Q_PLACE), TAU_CARRY, 3050.0).await?;
     put_profile(client, &server_robot(ROBOT), &PROFILE).await?;
-    let dynamic = Method::Dynamic { lambda: 10.0, beta: 2.0, eta: 2.0 };
-    let to_ring = Motion {
+    let dynamic = Method::DynamicVolumetric(DynamicVolumetric { lambda: 10.0, beta: 2.0, eta: 2.0 });
+    let to_ring = PoseRun {
         key: "move-to-ring",
         title: "Panda: move to ring, turning the gripper (dynamic potential)",
         primitive: "move-to-ring",
@@ -267,7 +134,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
             peg("red-peg", &RED, GRIPPER_MARGIN),
             peg("green-peg", &GREEN, GRIPPER_MARGIN),
         ],
-        body: Solid::Point,
+        body: SolidShape::Point,
         body_name: "the gripper's centre (a point)",
         tool: None,
         outline: None,
@@ -275,7 +142,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     };
     let mut report = SimReport::new("panda", options.realtime);
     report.limits =
-        Some(super::html::Limits { speed: MAX_SPEED, acceleration: MAX_ACCELERATION, jerk: MAX_JERK });
+        Some(CartesianLimits { speed: MAX_SPEED, acceleration: MAX_ACCELERATION, jerk: MAX_JERK });
     report.notes.push(
         "geometry and gains: see client/sim/src/robots/panda.rs (board box, red and green pegs as cylinders; \
          pegs planned as superquadrics (1, 1, 2), board as a rounded box of exponent 2) and panda_bar.rs"
@@ -304,7 +171,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
         .as_ref()
         .and_then(|o| o.q.rchunks_exact(4).next())
         .map_or(Q_GRASP, |q| [q[0], q[1], q[2], q[3]]);
-    let carry = |key, title, method| Motion {
+    let carry = |key, title, method| PoseRun {
         key,
         title,
         primitive: "carry",
@@ -315,7 +182,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
         goal_q: Q_PLACE,
         method,
         obstacles: vec![board(RING_RADIUS), peg("red-peg", &RED, RING_RADIUS)],
-        body: Solid::CylinderZ { radius: RING_RADIUS, half_height: RING_HALF_THICKNESS },
+        body: SolidShape::CylinderZ { radius: RING_RADIUS, half_height: RING_HALF_THICKNESS },
         body_name: "the ring's disc (a cylinder of its outer radius and thickness)",
         tool: None,
         outline: Some((vec![RING_RADIUS, RING_RADIUS, RING_HALF_THICKNESS], vec![1.0, 1.0, 4.0])),
@@ -324,7 +191,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     let carry_static = carry(
         "carry-static",
         "Panda: carry the ring past the red peg, laying it flat (static potential)",
-        Method::Static { a: 10.0, eta: 2.0 },
+        Method::StaticVolumetric(StaticVolumetric { a: 10.0, eta: 2.0 }),
     );
     let carry_dynamic = carry(
         "carry-dynamic",

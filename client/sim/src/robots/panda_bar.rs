@@ -18,32 +18,34 @@
 //! - Tool: a superquadric of semi-axes `(0.3, 0.01, 0.01)` and exponents `(4, 4, 4)`, sampled on its axis
 //!   (`MotionSpec.tool.axis`).
 //! - Static volumetric potential, `A = 10`, `eta = 1`; `K = 1050`, `N = 50`, `alpha = 4`, learned from a straight
-//!   minimum-jerk demonstration of [`TAU_BAR`] seconds at a fixed orientation.
+//!   minimum-jerk demonstration of `TAU_BAR` seconds at a fixed orientation.
 //! - The Panda's profile in its robot record: where the avoidance would exceed it, the server slows the phase.
 
+use dmp::Method;
+use dmp::avoidance::StaticVolumetric;
 use dmp_client::grpc::DmpClient;
 use dmp_proto::obstacle_json::JsonObstacle;
 use dmp_proto::v1;
 
-use super::panda::{Motion, ROBOT, learn};
+use super::panda_arm::{PoseRun, ROBOT, learn};
 use super::pose::about;
 use super::report::SimReport;
-use super::world::{Body, Solid};
-use super::{Method, SimOptions, superquadric};
+use super::world::{Body, SolidShape};
+use super::{SimOptions, superquadric};
 use crate::error::SimError;
 
 /// Half-extents of the true rails.
 pub const RAIL_HALF: [f64; 3] = [0.04, 0.185, 0.04];
 /// Distance of each rail's axis from the middle of the gap.
-pub const RAIL_OFFSET: f64 = 0.2;
+pub(crate) const RAIL_OFFSET: f64 = 0.2;
 /// The free gap between the true rails.
 pub const GAP: f64 = 2.0 * (RAIL_OFFSET - RAIL_HALF[0]);
 /// Half the bar's length.
-pub const BAR_HALF_LENGTH: f64 = 0.3;
+pub(crate) const BAR_HALF_LENGTH: f64 = 0.3;
 /// Half the bar's thickness.
 pub const BAR_HALF_THICKNESS: f64 = 0.01;
 /// Time scale of the carry (the duration of its demonstration), seconds.
-pub const TAU_BAR: f64 = 3.0;
+pub(crate) const TAU_BAR: f64 = 3.0;
 
 const START: [f64; 3] = [0.5, -0.45, 0.4];
 const GOAL: [f64; 3] = [0.5, 0.45, 0.4];
@@ -55,17 +57,21 @@ fn rail_centers() -> [[f64; 3]; 2] {
 /// The true rails.
 fn world() -> Vec<Body> {
     let [a, b] = rail_centers();
-    let rail = Solid::Cuboid { half: RAIL_HALF };
+    let rail = SolidShape::Cuboid { half: RAIL_HALF };
     vec![Body::new("rail-left", rail, &a), Body::new("rail-right", rail, &b)]
 }
 
 /// The bar's orientation at the start and the goal: across the gap, tilted 10° about `y`.
-pub fn bar_orientation() -> [f64; 4] {
+pub(crate) fn bar_orientation() -> [f64; 4] {
     about([0.0, 1.0, 0.0], 10f64.to_radians())
 }
 
 /// Carries the bar through the gap and adds the run (`panda/carry-bar`) to `report`.
-pub async fn run(client: &DmpClient, options: &SimOptions, report: &mut SimReport) -> Result<(), SimError> {
+pub(crate) async fn run(
+    client: &DmpClient,
+    options: &SimOptions,
+    report: &mut SimReport,
+) -> Result<(), SimError> {
     let q = bar_orientation();
     learn(client, "carry-bar", &START, &GOAL, (q, q), TAU_BAR, 1050.0).await?;
     let [a, b] = rail_centers();
@@ -81,7 +87,7 @@ pub async fn run(client: &DmpClient, options: &SimOptions, report: &mut SimRepor
         axis: true,
         control_points: 0,
     };
-    let bar = Motion {
+    let bar = PoseRun {
         key: "carry-bar",
         title: "Panda: carry a 0.6 m bar between two rails, turning it (static potential)",
         primitive: "carry-bar",
@@ -90,9 +96,9 @@ pub async fn run(client: &DmpClient, options: &SimOptions, report: &mut SimRepor
         goal: GOAL.to_vec(),
         start_q: q,
         goal_q: q,
-        method: Method::Static { a: 10.0, eta: 1.0 },
+        method: Method::StaticVolumetric(StaticVolumetric { a: 10.0, eta: 1.0 }),
         obstacles: rails,
-        body: Solid::Cuboid { half: [BAR_HALF_LENGTH, BAR_HALF_THICKNESS, BAR_HALF_THICKNESS] },
+        body: SolidShape::Cuboid { half: [BAR_HALF_LENGTH, BAR_HALF_THICKNESS, BAR_HALF_THICKNESS] },
         body_name: "the bar (a 0.6 x 0.02 x 0.02 m box)",
         tool: Some(tool),
         outline: Some((semi, exponents)),

@@ -25,7 +25,7 @@
 //!   `temporary`: a box at `(1.6, 0.08)` is published when the robot has covered 30 % of the way, and deleted
 //!   (Zenoh delete) at 42 % (`x` near 0.84, still short of the box's inflated ellipse, which starts near
 //!   `x = 1.1`); the path then returns to the straight line. The times follow from the demonstration's profile
-//!   ([`events`]).
+//!   ([`unknown_boxes`]).
 //!
 //! The server paces these runs in real time whatever the options say: a perception event happens at a time of the
 //! run, and as fast as read the server would have computed the segments around that time before the event.
@@ -35,6 +35,8 @@
 
 use std::time::Duration;
 
+use dmp::Method;
+use dmp::avoidance::{DynamicVolumetric, StaticVolumetric};
 use dmp::scenario::ObstacleSpec;
 use dmp_client::grpc::DmpClient;
 use dmp_client::zenoh_pub::ObstaclePublisher;
@@ -47,58 +49,58 @@ use super::ellipse_fit::Ellipse;
 use super::profile::put_profile;
 use super::report::{Figure, SimReport, measure, position, write_figure};
 use super::robot::Executed;
-use super::world::{Body, Solid, robot_body};
-use super::{Method, SimOptions, avoidance, execute, free_plan, server_robot, within};
+use super::world::{Body, SolidShape, robot_body};
+use super::{SimOptions, avoidance, execute, free_plan, server_robot, within};
 use crate::error::SimError;
 
 /// Control period (and integration step): 1 kHz.
-pub const DT: f64 = 1e-3;
+pub(crate) const DT: f64 = 1e-3;
 /// The limit profile of the youBot base, in each robot's record.
-pub const PROFILE: dmp::Limits = dmp::Limits::YOUBOT_BASE;
+pub(crate) const PROFILE: dmp::Limits = dmp::Limits::YOUBOT_BASE;
 /// Cruise speed of the drive, m/s (the youBot's top speed is 0.8 m/s).
-pub const CRUISE_SPEED: f64 = 0.4;
+pub(crate) const CRUISE_SPEED: f64 = 0.4;
 /// Duration of each ramp of the demonstration, seconds.
-pub const RAMP_S: f64 = 0.8;
+pub(crate) const RAMP_S: f64 = 0.8;
 /// Stiffness `K` of the primitive (module documentation: why not the paper's 3050).
-pub const STIFFNESS: f64 = 700.0;
+pub(crate) const STIFFNESS: f64 = 700.0;
 /// Time scale of the 2 m drive (the demonstration's duration), seconds.
-pub const TAU: f64 = ramped_duration(2.0, CRUISE_SPEED, RAMP_S);
+pub(crate) const TAU: f64 = ramped_duration(2.0, CRUISE_SPEED, RAMP_S);
 /// Radius of the circle around the youBot's rectangle.
-pub const ROBOT_RADIUS: f64 = 0.35;
+pub(crate) const ROBOT_RADIUS: f64 = 0.35;
 /// Half-sides of the youBot.
-pub const ROBOT_HALF: [f64; 2] = [0.29, 0.19];
+pub(crate) const ROBOT_HALF: [f64; 2] = [0.29, 0.19];
 /// The robots of this simulation, one per potential (the server knows them as [`server_robot`] of these).
-pub const ROBOT_IDS: [&str; 2] = ["youbot-static", "youbot-dynamic"];
+pub(crate) const ROBOT_IDS: [&str; 2] = ["youbot-static", "youbot-dynamic"];
 /// Half-side of the unknown box.
-pub const BOX_HALF: f64 = 0.1;
+pub(crate) const BOX_HALF: f64 = 0.1;
 
 const START: [f64; 2] = [0.0, 0.0];
 const GOAL: [f64; 2] = [2.0, 0.0];
 const WALL_HALF: [f64; 2] = [1.6, 0.05];
 const WALLS: [(&str, [f64; 2]); 2] = [("wall-left", [1.0, 1.2]), ("wall-right", [1.0, -1.2])];
 
-/// One perception scenario.
+/// One perception scenario: the unknown box, and when the perception node publishes and deletes it.
 #[derive(Debug, Clone, Copy)]
-pub struct Event {
+pub(crate) struct UnknownBox {
     /// Its name in the report.
-    pub key: &'static str,
+    pub(crate) key: &'static str,
     /// The obstacle's id.
-    pub id: &'static str,
+    pub(crate) id: &'static str,
     /// Centre of the box.
-    pub center: [f64; 2],
+    pub(crate) center: [f64; 2],
     /// Published at this time of the run, seconds.
-    pub add_at: f64,
+    pub(crate) add_at: f64,
     /// Deleted at this time of the run, if ever.
-    pub remove_at: Option<f64>,
+    pub(crate) remove_at: Option<f64>,
 }
 
 /// The two scenarios: the box that stays is published 0.05 s after the start; the temporary one when the robot
 /// has covered 30 % of its way, and deleted at 42 % (times of the demonstration).
-pub fn events() -> [Event; 2] {
+pub(crate) fn unknown_boxes() -> [UnknownBox; 2] {
     let at = |way| ramped_time_at(way, TAU, RAMP_S);
     [
-        Event { key: "added", id: "box", center: [1.0, 0.08], add_at: 0.05, remove_at: None },
-        Event {
+        UnknownBox { key: "added", id: "box", center: [1.0, 0.08], add_at: 0.05, remove_at: None },
+        UnknownBox {
             key: "temporary",
             id: "box-temporary",
             center: [1.6, 0.08],
@@ -129,7 +131,7 @@ fn walls(margin: f64) -> Vec<JsonObstacle> {
 }
 
 /// What the depth camera sees of the box: its outline, 1 cm apart, with a deterministic jitter of up to 3 mm.
-pub fn point_cloud(center: [f64; 2], half: f64) -> Vec<[f64; 2]> {
+pub(crate) fn point_cloud(center: [f64; 2], half: f64) -> Vec<[f64; 2]> {
     let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
     let mut jitter = || {
         seed ^= seed << 13;
@@ -149,7 +151,7 @@ pub fn point_cloud(center: [f64; 2], half: f64) -> Vec<[f64; 2]> {
 }
 
 /// The obstacle the perception node publishes for a cloud.
-pub fn fitted_obstacle(id: &str, cloud: &[[f64; 2]]) -> Result<JsonObstacle, SimError> {
+pub(crate) fn fitted_obstacle(id: &str, cloud: &[[f64; 2]]) -> Result<JsonObstacle, SimError> {
     let e = Ellipse::fit(cloud).ok_or_else(|| SimError::argument("cloud", "no finite ellipse fits"))?;
     Ok(JsonObstacle {
         spec: ObstacleSpec {
@@ -203,19 +205,19 @@ async fn sleep_until_run_time(origin: f64, t: f64) {
 /// The perception node of one run: waits for the run's origin, then publishes and removes the box at its times.
 async fn perceive(
     publisher: &ObstaclePublisher,
-    event: Event,
+    unknown: UnknownBox,
     mut origin: watch::Receiver<Option<f64>>,
 ) -> Result<(), SimError> {
     let origin = within("the run's start", origin.wait_for(Option::is_some))
         .await?
         .map_err(|_| SimError::closed("the robot".into()))?
         .unwrap_or_default();
-    sleep_until_run_time(origin, event.add_at).await;
-    let obstacle = fitted_obstacle(event.id, &point_cloud(event.center, BOX_HALF))?;
+    sleep_until_run_time(origin, unknown.add_at).await;
+    let obstacle = fitted_obstacle(unknown.id, &point_cloud(unknown.center, BOX_HALF))?;
     within("zenoh put", publisher.put_obstacle(&obstacle)).await??;
-    if let Some(t) = event.remove_at {
+    if let Some(t) = unknown.remove_at {
         sleep_until_run_time(origin, t).await;
-        within("zenoh delete", publisher.delete(event.id)).await??;
+        within("zenoh delete", publisher.delete(unknown.id)).await??;
     }
     Ok(())
 }
@@ -244,7 +246,7 @@ async fn open_publisher(options: &SimOptions) -> Result<ObstaclePublisher, dmp_c
 }
 
 /// Runs both scenarios, each with both potentials.
-pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
+pub(crate) async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     let (t, rows) = ramped_line(&START, &GOAL, TAU, RAMP_S, DT);
     let parameters = super::learn_parameters(STIFFNESS);
     let robots = ROBOT_IDS.map(server_robot);
@@ -260,11 +262,11 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
     let mut report = SimReport::new("youbot-perception", true);
     report.notes.push("set-up: see client/sim/src/robots/perception.rs; always paced in real time".into());
     let methods = [
-        ("static", Method::Static { a: 10.0, eta: 2.0 }),
-        ("dynamic", Method::Dynamic { lambda: 1.0, beta: 2.0, eta: 2.0 }),
+        ("static", Method::StaticVolumetric(StaticVolumetric { a: 10.0, eta: 2.0 })),
+        ("dynamic", Method::DynamicVolumetric(DynamicVolumetric { lambda: 1.0, beta: 2.0, eta: 2.0 })),
     ];
     let result = async {
-        for event in events() {
+        for unknown in unknown_boxes() {
             let (tx, rx) = watch::channel(None);
             let robots = async {
                 let (tx0, tx1) = (tx.clone(), tx.clone());
@@ -284,14 +286,14 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
                     )),
                 )
             };
-            let (robots, seen) = tokio::join!(robots, perceive(&publisher, event, rx));
+            let (robots, seen) = tokio::join!(robots, perceive(&publisher, unknown, rx));
             seen?;
             let runs: [(&str, Executed); 2] = [(methods[0].0, robots.0?), (methods[1].0, robots.1?)];
             // Leave the scene as it was.
-            within("zenoh delete", publisher.delete(event.id)).await??;
-            wait_absent(client, event.id).await?;
+            within("zenoh delete", publisher.delete(unknown.id)).await??;
+            wait_absent(client, unknown.id).await?;
             for ((name, exec), (_, method)) in runs.iter().zip(methods) {
-                record(client, options, event, name, method, exec, &mut report).await?;
+                record(client, options, unknown, name, method, exec, &mut report).await?;
             }
         }
         Ok::<_, SimError>(())
@@ -305,26 +307,29 @@ pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, 
 async fn record(
     client: &DmpClient,
     options: &SimOptions,
-    event: Event,
+    unknown: UnknownBox,
     name: &str,
     method: Method,
     exec: &Executed,
     report: &mut SimReport,
 ) -> Result<(), SimError> {
-    let mut world: Vec<Body> =
-        WALLS.iter().map(|(id, c)| Body::new(*id, Solid::rectangle(WALL_HALF[0], WALL_HALF[1]), c)).collect();
-    let until = event.remove_at.unwrap_or(f64::INFINITY);
+    let mut world: Vec<Body> = WALLS
+        .iter()
+        .map(|(id, c)| Body::new(*id, SolidShape::rectangle(WALL_HALF[0], WALL_HALF[1]), c))
+        .collect();
+    let until = unknown.remove_at.unwrap_or(f64::INFINITY);
     world.push(
-        Body::new(event.id, Solid::rectangle(BOX_HALF, BOX_HALF), &event.center).during(event.add_at, until),
+        Body::new(unknown.id, SolidShape::rectangle(BOX_HALF, BOX_HALF), &unknown.center)
+            .during(unknown.add_at, until),
     );
-    let body = robot_body("youbot", Solid::rectangle(ROBOT_HALF[0], ROBOT_HALF[1]));
-    let key = format!("youbot/{}-{name}", event.key);
+    let body = robot_body("youbot", SolidShape::rectangle(ROBOT_HALF[0], ROBOT_HALF[1]));
+    let key = format!("youbot/{}-{name}", unknown.key);
     report.add(&key, measure(exec, DT, &GOAL, Some(&PROFILE), &body, &world, &[]));
     // How far the path left the straight line `y = 0`: over the whole run, and once past the box's centre.
     let traj = &exec.traj;
     let ys = (0..traj.len()).map(|k| (position(traj, k)[0], position(traj, k)[1].abs()));
     let (all, past) = ys.fold((0.0f64, 0.0f64), |(all, past), (x, y)| {
-        (all.max(y), if x >= event.center[0] { past.max(y) } else { past })
+        (all.max(y), if x >= unknown.center[0] { past.max(y) } else { past })
     });
     report.metrics.insert(format!("{key}/max_abs_y_m"), all);
     report.metrics.insert(format!("{key}/max_abs_y_past_box_m"), past);
@@ -335,20 +340,20 @@ async fn record(
         .collect::<Result<_, _>>()
         .map_err(|e| SimError::Plot(e.to_string()))?;
     // What the perception node saw and published (for the time the events say).
-    let cloud = point_cloud(event.center, BOX_HALF);
-    let o = fitted_obstacle(event.id, &cloud)?;
+    let cloud = point_cloud(unknown.center, BOX_HALF);
+    let o = fitted_obstacle(unknown.id, &cloud)?;
     planned.push(o.to_engine().map_err(|e| SimError::Plot(e.to_string()))?);
     let mut seen = dmp_plot::Solid::new(
-        format!("{} (points seen)", event.id),
+        format!("{} (points seen)", unknown.id),
         dmp_plot::SolidShape::Points(cloud.iter().map(|p| p.to_vec()).collect()),
         vec![0.0, 0.0],
     );
-    (seen.from, seen.until) = (event.add_at, event.remove_at.unwrap_or(f64::INFINITY));
-    let title = format!("youBot: {} obstacle, {name} potential", event.key);
-    let file = format!("{}-{name}.svg", event.key);
-    let mut events = vec![dmp_plot::Event::new(event.add_at, format!("{} appears", event.id))];
-    if let Some(t) = event.remove_at {
-        events.push(dmp_plot::Event::new(t, format!("{} removed", event.id)));
+    (seen.from, seen.until) = (unknown.add_at, unknown.remove_at.unwrap_or(f64::INFINITY));
+    let title = format!("youBot: {} obstacle, {name} potential", unknown.key);
+    let file = format!("{}-{name}.svg", unknown.key);
+    let mut events = vec![dmp_plot::Event::new(unknown.add_at, format!("{} appears", unknown.id))];
+    if let Some(t) = unknown.remove_at {
+        events.push(dmp_plot::Event::new(t, format!("{} removed", unknown.id)));
     }
     let fig = Figure {
         title: &title,

@@ -10,45 +10,19 @@
 //! way would be ambiguous.
 
 use dmp::Limits;
-use serde::Serialize;
 
 use super::profile::{ROUNDING, over_rows};
-use super::report::RobotReport;
+use super::report::{PoseReport, RobotReport};
 use super::robot::Executed;
 use crate::error::SimError;
 
 /// A pose robot reaches its goal orientation when its last orientation is within this angle of it, degrees (the
 /// server's own goal tolerance is 0.057° by default).
-pub const ORIENTATION_TOLERANCE_DEG: f64 = 0.5;
-
-/// A pose robot's orientation figures.
-#[derive(Debug, Clone, Serialize, PartialEq)]
-pub struct PoseReport {
-    /// Angle between the last executed orientation and the goal orientation, degrees.
-    pub final_orientation_error_deg: f64,
-    /// The goal orientation, `[x, y, z, w]`.
-    pub goal_orientation: [f64; 4],
-    /// Largest rotation away from the first executed orientation, degrees.
-    pub max_turn_from_start_deg: f64,
-    /// Largest angular speed, finite differences of the executed orientations, rad/s.
-    pub peak_angular_speed: f64,
-    /// Largest angular acceleration (second differences), rad/s².
-    pub peak_angular_acceleration: f64,
-    /// Largest angular jerk (third differences), rad/s³.
-    pub peak_angular_jerk: f64,
-    /// Largest angular speed the server streamed (its `angular_velocities`), rad/s.
-    pub streamed_peak_angular_speed: f64,
-    /// Setpoints over the profile's angular limits (also counted in the robot's `limit_violations`).
-    pub angular_limit_violations: u64,
-    /// The true shape whose clearance `min_clearance_m` gives (the held tool, posed at every setpoint).
-    pub body: String,
-    /// Smallest clearance of that shape to any true obstacle, metres.
-    pub min_body_clearance_m: f64,
-}
+pub(crate) const ORIENTATION_TOLERANCE_DEG: f64 = 0.5;
 
 /// The peaks of the angular finite differences of `q` (4 per row at times `t`) and, per row, whether it is over
 /// the angular limits of `limits` (by more than [`ROUNDING`]; 0 is no limit).
-pub fn angular_differences(t: &[f64], q: &[f64], limits: &Limits) -> ([f64; 3], Vec<bool>) {
+pub(crate) fn angular_differences(t: &[f64], q: &[f64], limits: &Limits) -> ([f64; 3], Vec<bool>) {
     let n = t.len().min(q.len() / 4);
     let (mut peaks, mut over) = ([0.0f64; 3], vec![false; n]);
     let (mut w_prev, mut a_prev) = ([0.0; 3], [0.0; 3]);
@@ -111,7 +85,13 @@ pub fn angle_deg(a: &[f64], b: &[f64]) -> f64 {
 /// [`ORIENTATION_TOLERANCE_DEG`] of `goal`, and `limit_violations` counts the setpoints over the linear or the
 /// angular limits of `profile` (each setpoint once). `body` names the shape `r.min_clearance_m` measured. A run
 /// without orientations is left as it is.
-pub fn add_pose(r: &mut RobotReport, exec: &Executed, goal: [f64; 4], profile: Option<&Limits>, body: &str) {
+pub(crate) fn add_pose(
+    r: &mut RobotReport,
+    exec: &Executed,
+    goal: [f64; 4],
+    profile: Option<&Limits>,
+    body: &str,
+) {
     let Some(o) = &exec.orientations else { return };
     let limits = profile.unwrap_or(&Limits::NONE);
     let (peaks, angular) = angular_differences(&exec.traj.t, &o.q, limits);
@@ -141,18 +121,18 @@ pub fn add_pose(r: &mut RobotReport, exec: &Executed, goal: [f64; 4], profile: O
 }
 
 /// `[x, y, z, w]` of the rotation by `angle` (radians) about the unit `axis`.
-pub fn about(axis: [f64; 3], angle: f64) -> [f64; 4] {
+pub(crate) fn about(axis: [f64; 3], angle: f64) -> [f64; 4] {
     let (s, c) = (angle / 2.0).sin_cos();
     [axis[0] * s, axis[1] * s, axis[2] * s, c]
 }
 
 /// The product `a b` of quaternions `[x, y, z, w]`.
-pub fn mul(a: &[f64], b: &[f64]) -> [f64; 4] {
+pub(crate) fn mul(a: &[f64], b: &[f64]) -> [f64; 4] {
     times_conjugate(a, &[-b[0], -b[1], -b[2], b[3]])
 }
 
 /// The orientation a fraction `s` of the shorter way from `from` to `to` (spherical linear interpolation).
-pub fn slerp(from: &[f64; 4], to: &[f64; 4], s: f64) -> [f64; 4] {
+pub(crate) fn slerp(from: &[f64; 4], to: &[f64; 4], s: f64) -> [f64; 4] {
     let r = rotation_vector(to, from);
     let angle = norm(&r);
     if angle < 1e-300 {
@@ -162,12 +142,12 @@ pub fn slerp(from: &[f64; 4], to: &[f64; 4], s: f64) -> [f64; 4] {
 }
 
 /// The orientations of `o` as `[x, y, z, w]` rows (for the figures).
-pub fn rows(q: &[f64]) -> Vec<[f64; 4]> {
+pub(crate) fn rows(q: &[f64]) -> Vec<[f64; 4]> {
     q.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect()
 }
 
 /// Samples of the surface of the superquadric `(semi, exponents)` (tool frame), for its outline in a figure.
-pub fn outline_samples(semi: &[f64], exponents: &[f64]) -> Result<Vec<[f64; 3]>, SimError> {
+pub(crate) fn outline_samples(semi: &[f64], exponents: &[f64]) -> Result<Vec<[f64; 3]>, SimError> {
     let plot = |e: dmp::DmpError| SimError::Plot(e.to_string());
     let shape =
         dmp::Shape::Superquadric(dmp::Superquadric::new(semi.to_vec(), exponents.to_vec()).map_err(plot)?);

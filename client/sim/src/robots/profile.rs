@@ -11,11 +11,11 @@ use crate::error::SimError;
 
 /// Relative slack of the check: the server keeps the limits on its own finite differences, which the robot's
 /// (of the same setpoints) match to rounding.
-pub const ROUNDING: f64 = 1e-6;
+pub(crate) const ROUNDING: f64 = 1e-6;
 
 /// Stores `limits` as the limits of `robot`'s record (its footprint and tool left unset: the simulations send
 /// their footprints with each request).
-pub async fn put_profile(client: &DmpClient, robot: &str, limits: &Limits) -> Result<(), SimError> {
+pub(crate) async fn put_profile(client: &DmpClient, robot: &str, limits: &Limits) -> Result<(), SimError> {
     within("put robot", client.put_robot_limits(robot, limits)).await??;
     Ok(())
 }
@@ -34,13 +34,13 @@ pub struct Peaks {
 /// Backward differences of the positions of `traj` (at rest before its first setpoint), each over its own time
 /// step: their peaks, and how many setpoints have a speed, acceleration or jerk over `limits` (by more than
 /// [`ROUNDING`]; a field 0 is no limit).
-pub fn finite_differences(traj: &Trajectory, limits: &Limits) -> (Peaks, u64) {
+pub(crate) fn finite_differences(traj: &Trajectory, limits: &Limits) -> (Peaks, u64) {
     let (peaks, over) = over_rows(traj, limits);
     (peaks, over.iter().filter(|o| **o).count() as u64)
 }
 
 /// [`finite_differences`] with, per setpoint, whether it is over the linear limits.
-pub fn over_rows(traj: &Trajectory, limits: &Limits) -> (Peaks, Vec<bool>) {
+pub(crate) fn over_rows(traj: &Trajectory, limits: &Limits) -> (Peaks, Vec<bool>) {
     let d = traj.dim();
     let (mut k, mut violations) = (Peaks::default(), vec![false; traj.len()]);
     let (mut v_prev, mut a_prev) = (vec![0.0; d], vec![0.0; d]);

@@ -6,17 +6,17 @@
 //!
 //! # Geometry (metres, a frame common to both arms, `x` right, `y` away from the camera, `z` up)
 //! - Board: a box of centre `(0, 0, -0.003)` and half-extents `(0.08, 0.06, 0.003)` (top at `z = 0`).
-//! - Pegs: cylinders of radius [`PEG_RADIUS`] and height `2` [`PEG_HALF_HEIGHT`] (top at `z = 0.03`) standing
+//! - Pegs: cylinders of radius [`PEG_RADIUS`] and height `2 PEG_HALF_HEIGHT` (top at `z = 0.03`) standing
 //!   on the board: `peg-1` at `(0.0264, -0.0141)`, on PSM1's way from the ring to the centre; `peg-2` at
 //!   `(-0.0073, -0.0195)`, on PSM2's way from the centre to the target; `target-peg` at `(-0.02, -0.04)`.
 //!   `peg-1` and `peg-2` sit 3 mm beside the straight lines, so that the way around is not a tie.
-//! - Ring: outer radius [`RING_RADIUS`], inner radius [`RING_INNER_RADIUS`], on a stand, grasped at its centre
+//! - Ring: outer radius `RING_RADIUS`, inner radius [`RING_INNER_RADIUS`], on a stand, grasped at its centre
 //!   `(0.05, -0.03, 0.015)`.
-//! - Each arm's controlled point is the centre of its jaws; the jaws are a cylinder of radius [`JAW_RADIUS`] and
-//!   length `2` [`JAW_HALF_LENGTH`] along the jaws' `z`, upright at home, turned with the jaws' orientation
+//! - Each arm's controlled point is the centre of its jaws; the jaws are a cylinder of radius `JAW_RADIUS` and
+//!   length `2 JAW_HALF_LENGTH` along the jaws' `z`, upright at home, turned with the jaws' orientation
 //!   (`super::psm_stage`: PSM1 tilts them 20° about `y` and rolls them 45° to grasp the ring, both arms roll them a
 //!   quarter turn to open towards each other at the handover, PSM2 half of it at its standby point).
-//! - Handover: the centre [`CENTRE`]; PSM1 holds the ring [`HANDOVER_OFFSET`] in front of it, PSM2 grasps it the
+//! - Handover: the centre `CENTRE`; PSM1 holds the ring [`HANDOVER_OFFSET`] in front of it, PSM2 grasps it the
 //!   same distance behind (the jaws then have 4 mm between them).
 //!
 //! # Stages (each starts where the previous one ended; the first two as two pose runs, one per arm, the jaws
@@ -26,26 +26,26 @@
 //! 2. `transfer`: PSM1 carries the ring to the handover point in front of the centre, past `peg-1`; PSM2 approaches
 //!    the handover point behind the centre. At the end both are at rest there: the handover (PSM2 closes its
 //!    jaws, PSM1 opens its own) happens at that time.
-//! 3. `move-to-peg`: PSM2 carries the ring past `peg-2` to [`PLACE_HEIGHT`] above the target peg (the ring's hole
+//! 3. `move-to-peg`: PSM2 carries the ring past `peg-2` to `PLACE_HEIGHT` above the target peg (the ring's hole
 //!    centred on the peg: released, it drops onto it) while PSM1 retreats to `(0.02, 0.045, 0.05)`, behind and
 //!    above. The two cross each other's way (PSM1 goes back, PSM2 forward, from 9 mm apart): without the
 //!    robot term their jaws collide.
 //!
 //! # Primitives
 //! Every arm's motion of every stage is learned with `learn` from a human-like demonstration between the
-//! nominal start and goal: a minimum-jerk curve (Flash and Hogan) with a lift of [`LIFT`] (`16 u^2 (1 - u)^2`) in
-//! `z`, [`TAU`] long, sampled at 100 Hz; `N = 50`, `K = 3050`, `D = 2 sqrt(K)`, `alpha = 4`. The first two
+//! nominal start and goal: a minimum-jerk curve (Flash and Hogan) with a lift of `LIFT` (`16 u^2 (1 - u)^2`) in
+//! `z`, `TAU` long, sampled at 100 Hz; `N = 50`, `K = 3050`, `D = 2 sqrt(K)`, `alpha = 4`. The first two
 //! stages' are pose primitives: their demonstrations turn the jaws from the stage's start orientation to its goal's
 //! on the same minimum-jerk profile (`super::demonstration::min_jerk_turn`).
 //!
 //! # The planner's view
 //! Pegs are superquadrics of exponents `(1, 1, 2)` through the cylinders' rims, the board a rounded box of
-//! exponent 2 through its corners (as in `super::panda`), with the static potential (`A =` [`STATIC_A`], `eta = 2`;
+//! exponent 2 through its corners (as in `super::panda`), with the static potential (`A = STATIC_A`, `eta = 2`;
 //! the paper found that the dynamic one did not converge on the da Vinci). They are inflated by the jaws' half
-//! length [`JAW_HALF_LENGTH`] in `move-to-ring`, and by the ring's radius while a ring is carried; one inflation
+//! length `JAW_HALF_LENGTH` in `move-to-ring`, and by the ring's radius while a ring is carried; one inflation
 //! holds for the whole group, so the largest one. The target peg is left out of `move-to-peg` (the ring goes
 //! onto it). Each arm's footprint, which the other arm's controlled point avoids with the dynamic potential
-//! (`lambda =` [`ROBOT_LAMBDA`], `beta = 2`, `eta =` [`ROBOT_ETA`]: it acts only while the arms close in, so
+//! (`lambda = ROBOT_LAMBDA`, `beta = 2`, `eta = ROBOT_ETA`: it acts only while the arms close in, so
 //! that the handover still converges), is the smallest ellipsoid around the set of positions where the two jaws
 //! touch (a cylinder of twice the jaw's radius and length): semi-axes `sqrt(3/2) 2 r` and `sqrt(3) 2 h`.
 //!
@@ -55,65 +55,58 @@
 //!
 //! # The true world
 //! Clearance is measured with parry against the true board and cylinders: of the jaws (turned), or while carrying
-//! of the ring (a ball of [`RING_RADIUS`] around the controlled point, which also holds the jaws); between the arms,
+//! of the ring (a ball of `RING_RADIUS` around the controlled point, which also holds the jaws); between the arms,
 //! of the two jaws, both turned (at the handover the ring touches both on purpose). Each stage is also run without any avoidance
 //! (the free plan of the figures) and without the robot term only; their true clearances are reported as
 //! metrics (`<arm>/<stage>/free_min_clearance_m/<id>`, and `<arm>/<stage>/no_robot_term_min_clearance_m/<other
 //! arm>`): they show what avoidance prevented.
 
-use dmp::{Agent, Shape, Superquadric, Trajectory};
-use dmp_client::grpc::DmpClient;
+use dmp::Method;
+use dmp::avoidance::DynamicVolumetric;
 use dmp_proto::obstacle_json::JsonObstacle;
 use dmp_proto::v1;
 
-use super::clearance::{closest_approach, distance, side_by_side};
-use super::demonstration::{min_jerk, min_jerk_turn};
-use super::pose::add_pose;
-use super::profile::put_profile;
-use super::psm_stage::{Avoid, Q_HOME, Stage, arm_figure, stages};
-use super::report::{CONTACT_M, Figure, Other, RobotReport, SimReport, measure, position, write_figure};
-use super::robot::Executed;
-use super::world::{Body, Solid, robot_body};
-use super::{Method, SimOptions, server_robot, superquadric, within};
-use crate::error::SimError;
+use super::demonstration::min_jerk;
+use super::superquadric;
+use super::world::{Body, SolidShape, robot_body};
 
 /// Control period: 1 kHz.
-pub const DT: f64 = 1e-3;
+pub(crate) const DT: f64 = 1e-3;
 /// The limit profile of a PSM, in each arm's record.
-pub const PROFILE: dmp::Limits = dmp::Limits::DVRK_PSM;
+pub(crate) const PROFILE: dmp::Limits = dmp::Limits::DVRK_PSM;
 /// Duration of every demonstration (and time scale of every stage), seconds.
-pub const TAU: f64 = 1.5;
+pub(crate) const TAU: f64 = 1.5;
 /// Radius of the jaws' cylinder.
-pub const JAW_RADIUS: f64 = 0.0025;
+pub(crate) const JAW_RADIUS: f64 = 0.0025;
 /// Half length of the jaws' cylinder (1 cm jaws).
-pub const JAW_HALF_LENGTH: f64 = 0.005;
+pub(crate) const JAW_HALF_LENGTH: f64 = 0.005;
 /// Outer radius of the ring.
-pub const RING_RADIUS: f64 = 0.007;
+pub(crate) const RING_RADIUS: f64 = 0.007;
 /// Inner radius of the ring (its hole).
 pub const RING_INNER_RADIUS: f64 = 0.004;
 /// Radius of the pegs.
 pub const PEG_RADIUS: f64 = 0.002;
 /// Half height of the pegs.
-pub const PEG_HALF_HEIGHT: f64 = 0.015;
+pub(crate) const PEG_HALF_HEIGHT: f64 = 0.015;
 /// Height of the lift of the demonstrations.
-pub const LIFT: f64 = 0.006;
+pub(crate) const LIFT: f64 = 0.006;
 /// The centre of the board, where the ring changes hands.
-pub const CENTRE: [f64; 3] = [0.0, 0.0, 0.02];
-/// Distance of each arm's jaws from [`CENTRE`] at the handover (PSM1 in front, PSM2 behind).
+pub(crate) const CENTRE: [f64; 3] = [0.0, 0.0, 0.02];
+/// Distance of each arm's jaws from `CENTRE` at the handover (PSM1 in front, PSM2 behind).
 pub const HANDOVER_OFFSET: f64 = 0.0045;
 /// Height of the ring's centre above the target peg's top when it is released.
-pub const PLACE_HEIGHT: f64 = 0.009;
+pub(crate) const PLACE_HEIGHT: f64 = 0.009;
 /// Gain `A` of the static potential of the pegs and the board.
-pub const STATIC_A: f64 = 1.0;
+pub(crate) const STATIC_A: f64 = 1.0;
 /// Gain `lambda` of the dynamic potential between the arms.
-pub const ROBOT_LAMBDA: f64 = 0.5;
+pub(crate) const ROBOT_LAMBDA: f64 = 0.5;
 /// Exponent `eta` of the dynamic potential between the arms.
-pub const ROBOT_ETA: f64 = 2.0;
+pub(crate) const ROBOT_ETA: f64 = 2.0;
 
 pub(super) const PSM1: &str = "psm1";
 pub(super) const PSM2: &str = "psm2";
 /// The robots of this simulation (the server knows them as [`server_robot`] of these).
-pub const ROBOT_IDS: &[&str] = &[PSM1, PSM2];
+pub(crate) const ROBOT_IDS: &[&str] = &[PSM1, PSM2];
 pub(super) const HOME1: [f64; 3] = [0.07, 0.02, 0.05];
 pub(super) const HOME2: [f64; 3] = [-0.06, 0.04, 0.05];
 pub(super) const STANDBY2: [f64; 3] = [-0.02, 0.025, 0.03];
@@ -123,7 +116,7 @@ const BOARD_C: [f64; 3] = [0.0, 0.0, -0.003];
 const BOARD_H: [f64; 3] = [0.08, 0.06, 0.003];
 const PEG_1: [f64; 2] = [0.0264, -0.0141];
 const PEG_2: [f64; 2] = [-0.0073, -0.0195];
-const TARGET: [f64; 2] = [-0.02, -0.04];
+pub(super) const TARGET: [f64; 2] = [-0.02, -0.04];
 
 pub(super) fn handover(arm: usize) -> Vec<f64> {
     let dy = if arm == 0 { -HANDOVER_OFFSET } else { HANDOVER_OFFSET };
@@ -161,20 +154,20 @@ pub(super) fn planned(margin: f64, skip: Option<&str>) -> Vec<JsonObstacle> {
 
 /// The true shapes.
 pub(super) fn world() -> Vec<Body> {
-    let mut v = vec![Body::new("board", Solid::Cuboid { half: BOARD_H }, &BOARD_C)];
+    let mut v = vec![Body::new("board", SolidShape::Cuboid { half: BOARD_H }, &BOARD_C)];
     for (id, xy) in PEGS {
-        let solid = Solid::CylinderZ { radius: PEG_RADIUS, half_height: PEG_HALF_HEIGHT };
+        let solid = SolidShape::CylinderZ { radius: PEG_RADIUS, half_height: PEG_HALF_HEIGHT };
         v.push(Body::new(id, solid, &peg_center(xy)));
     }
     v
 }
 
-fn jaws(id: &str) -> Body {
-    robot_body(id, Solid::CylinderZ { radius: JAW_RADIUS, half_height: JAW_HALF_LENGTH })
+pub(super) fn jaws(id: &str) -> Body {
+    robot_body(id, SolidShape::CylinderZ { radius: JAW_RADIUS, half_height: JAW_HALF_LENGTH })
 }
 
 /// Semi-axes of each arm's footprint (module documentation).
-pub fn footprint_semi_axes() -> [f64; 3] {
+pub(crate) fn footprint_semi_axes() -> [f64; 3] {
     let (r, h) = (2.0 * JAW_RADIUS, 2.0 * JAW_HALF_LENGTH);
     [1.5f64.sqrt() * r, 1.5f64.sqrt() * r, 3f64.sqrt() * h]
 }
@@ -185,245 +178,19 @@ pub(super) fn footprint() -> v1::Superquadric {
 
 /// The demonstration of a motion from `start` to `goal`: minimum jerk with a lift of [`LIFT`], [`TAU`] long, at
 /// 100 Hz.
-pub fn demonstration(start: &[f64], goal: &[f64]) -> (Vec<f64>, Vec<Vec<f64>>) {
+pub(crate) fn demonstration(start: &[f64], goal: &[f64]) -> (Vec<f64>, Vec<Vec<f64>>) {
     min_jerk(start, goal, TAU, LIFT, 0.01)
 }
 
 /// How the arms avoid each other on a shared phase (module documentation).
 pub(super) fn robot_method() -> Method {
-    Method::Dynamic { lambda: ROBOT_LAMBDA, beta: 2.0, eta: ROBOT_ETA }
-}
-
-/// Row `k` of an execution (`usize::MAX`: the last row).
-fn row_of(exec: &Executed, k: usize) -> Result<Vec<f64>, SimError> {
-    if exec.traj.is_empty() {
-        return Err(SimError::protocol(format!("{} streamed no setpoint", exec.id)));
-    }
-    Ok(position(&exec.traj, k.min(exec.traj.len() - 1)).to_vec())
-}
-
-/// The last orientation of an execution (`held` if it has none).
-fn last_orientation(exec: &Executed, held: [f64; 4]) -> [f64; 4] {
-    exec.orientations
-        .as_ref()
-        .and_then(|o| o.q.rchunks_exact(4).next())
-        .map_or(held, |q| [q[0], q[1], q[2], q[3]])
-}
-
-/// How long a stage took: until both arms stopped.
-fn stage_duration(runs: &[Executed; 2]) -> f64 {
-    runs.iter().map(|r| r.traj.t.last().copied().unwrap_or(0.0)).fold(0.0, f64::max)
-}
-
-/// The last position of an execution.
-fn last(exec: &Executed) -> Result<Vec<f64>, SimError> {
-    row_of(exec, usize::MAX)
-}
-
-/// Largest distance between the executed and the free path at the same times.
-fn deviation(adapted: &Trajectory, free: &Trajectory) -> f64 {
-    (0..adapted.len().min(free.len()))
-        .map(|k| distance(position(adapted, k), position(free, k)))
-        .fold(0.0, f64::max)
-}
-
-/// Measures one arm: its body (or the ring) against the true shapes, its jaws against the other arm's jaws.
-fn measure_leg(stage: &Stage, i: usize, runs: &[Executed; 2]) -> RobotReport {
-    let leg = &stage.legs[i];
-    let other = &stage.legs[1 - i];
-    let body = if leg.carrying {
-        robot_body(leg.robot, Solid::Ball { radius: RING_RADIUS })
-    } else {
-        jaws(leg.robot)
-    };
-    let mut r = measure(&runs[i], DT, &leg.goal, Some(&PROFILE), &body, &world(), &[]);
-    if !stage.shared_phase {
-        let what =
-            if leg.carrying { "the ring (a ball of its outer radius)" } else { "the jaws (a cylinder)" };
-        add_pose(&mut r, &runs[i], leg.goal_q, Some(&PROFILE), what);
-    }
-    let other_jaws = jaws(other.robot);
-    let theirs = runs[1 - i].orientations.as_ref().map(|o| o.q.as_slice());
-    let with_arm =
-        Other { id: other.robot, traj: &runs[1 - i].traj, body: &other_jaws, orientations: theirs };
-    let arms = measure(&runs[i], DT, &leg.goal, None, &jaws(leg.robot), &[], &[with_arm]);
-    for (id, d) in arms.min_clearance_m {
-        if d <= CONTACT_M {
-            r.collisions.push(id.clone());
-        }
-        r.min_clearance_m.insert(id, d);
-    }
-    r
-}
-
-/// Runs the three stages and records them.
-pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
-    let stages = stages();
-    for stage in &stages {
-        for leg in &stage.legs {
-            let (t, rows) = demonstration(&leg.start, &leg.goal);
-            // A pose stage's jaws turn on the demonstration's minimum-jerk profile; a shared phase's hold.
-            let q = if stage.shared_phase {
-                Vec::new()
-            } else {
-                min_jerk_turn(&leg.start_q, &leg.goal_q, TAU, 0.01)
-            };
-            let parameters = super::learn_parameters(3050.0);
-            within(
-                "learn",
-                client.learn_pose(&server_robot(leg.robot), stage.key, &t, &rows, &q, parameters),
-            )
-            .await??;
-        }
-    }
-    for robot in ROBOT_IDS {
-        put_profile(client, &server_robot(robot), &PROFILE).await?;
-    }
-    let mut report = SimReport::new("psm", options.realtime);
-    report.notes.push(
-        "geometry, stages and gains: see client/sim/src/robots/psm.rs (two PSMs on one 6-D DMP; pegs planned as \
-         superquadrics (1, 1, 2) with the static potential, the arms avoid each other's jaws with the dynamic \
-         potential)"
-            .into(),
-    );
-    report.notes.push(
-        "orientation: the jaws turn in move-to-ring and transfer (PSM1 tilts and rolls them to grasp the ring, both \
-         arms roll them to open towards each other at the handover), as two pose runs each: the server runs a pose \
-         primitive alone, not in a group; move-to-peg, where the arms must avoid each other, runs on one phase, \
-         the jaws holding their handover orientation (see client/sim/src/robots/psm_stage.rs)"
-            .into(),
-    );
-    let mut starts = [HOME1.to_vec(), HOME2.to_vec()];
-    let mut orientations = [Q_HOME, Q_HOME];
-    let mut clock = 0.0;
-    for stage in &stages {
-        let from = (&starts, orientations);
-        // The runs are independent (each its own phase), one after the other: they move the same robots, and a
-        // robot executes one stream at a time.
-        let runs = stage.execute(client, options, from, Avoid::Everything).await?;
-        let without_robots = if stage.shared_phase {
-            stage.execute(client, options, from, Avoid::Obstacles).await?
-        } else {
-            // Two pose runs never avoid each other.
-            runs.clone()
-        };
-        let free = stage.execute(client, options, from, Avoid::Nothing).await?;
-        record(options, stage, &runs, &free, clock, &mut report)?;
-        // How close the jaws came without the robot term.
-        for i in 0..2 {
-            let (arm, other) = (stage.legs[i].robot, stage.legs[1 - i].robot);
-            let d = measure_leg(stage, i, &without_robots).min_clearance_m.get(other).copied();
-            let k = format!("{arm}/{}/no_robot_term_min_clearance_m/{other}", stage.key);
-            report.metrics.insert(k, d.unwrap_or(f64::INFINITY));
-        }
-        starts = [last(&runs[0])?, last(&runs[1])?];
-        orientations =
-            [last_orientation(&runs[0], orientations[0]), last_orientation(&runs[1], orientations[1])];
-        clock += stage_duration(&runs);
-    }
-    Ok(report)
-}
-
-fn record(
-    options: &SimOptions,
-    stage: &Stage,
-    runs: &[Executed; 2],
-    free: &[Executed; 2],
-    clock: f64,
-    report: &mut SimReport,
-) -> Result<(), SimError> {
-    let key = stage.key;
-    let starts = [row_of(&runs[0], 0)?, row_of(&runs[1], 0)?];
-    for i in 0..2 {
-        let leg = &stage.legs[i];
-        report.add(&format!("{}/{key}", leg.robot), measure_leg(stage, i, runs));
-        // What the free plan would have touched.
-        for (id, d) in measure_leg(stage, i, free).min_clearance_m {
-            report.metrics.insert(format!("{}/{key}/free_min_clearance_m/{id}", leg.robot), d);
-        }
-        report.metrics.insert(
-            format!("{}/{key}/max_deviation_from_free_m", leg.robot),
-            deviation(&runs[i].traj, &free[i].traj),
-        );
-    }
-    let (t_close, d_close) = closest_approach(&[&runs[0].traj, &runs[1].traj]);
-    report.metrics.insert(format!("{key}/closest_approach_m"), d_close);
-    report.metrics.insert(format!("{key}/closest_approach_time_s"), clock + t_close);
-    report.metrics.insert(format!("{key}/start_time_s"), clock);
-    match key {
-        "transfer" => {
-            report.metrics.insert("handover/time_s".into(), clock + stage_duration(runs));
-            for (i, arm) in [PSM1, PSM2].iter().enumerate() {
-                let d = distance(&last(&runs[i])?, &CENTRE);
-                report.metrics.insert(format!("handover/{arm}_to_centre_m"), d);
-            }
-        }
-        "move-to-peg" => {
-            let ring = last(&runs[1])?;
-            let offset = distance(&ring[..2], &TARGET);
-            report.metrics.insert("ring/offset_from_peg_axis_m".into(), offset);
-            report.metrics.insert("ring/height_above_peg_top_m".into(), ring[2] - 2.0 * PEG_HALF_HEIGHT);
-            report
-                .metrics
-                .insert("ring/released_at_s".into(), clock + runs[1].traj.t.last().copied().unwrap_or(0.0));
-        }
-        _ => {}
-    }
-    // The figure: both arms' paths in 3-D projections, with the pegs as the planner sees them.
-    let adapted = side_by_side(&[&runs[0].traj, &runs[1].traj]);
-    let free6 = side_by_side(&[&free[0].traj, &free[1].traj]);
-    let engine: Vec<dmp::Obstacle> = stage
-        .obstacles
-        .iter()
-        .map(JsonObstacle::to_engine)
-        .collect::<Result<_, _>>()
-        .map_err(|e| SimError::Plot(e.to_string()))?;
-    let shape = Superquadric::ellipsoid(footprint_semi_axes().to_vec())
-        .map(Shape::Superquadric)
-        .map_err(|e| SimError::Plot(e.to_string()))?;
-    let agents: Vec<Agent> = stage
-        .legs
-        .iter()
-        .enumerate()
-        .map(|(i, leg)| Agent {
-            id: leg.robot.into(),
-            dims: (3 * i..3 * i + 3).collect(),
-            footprint: Some(shape.clone()),
-        })
-        .collect();
-    let start = starts.concat();
-    let goal: Vec<f64> = stage.legs.iter().flat_map(|l| l.goal.clone()).collect();
-    let name = format!("{key}.svg");
-    let fig = Figure {
-        title: stage.title,
-        line: (&start, &goal),
-        free: &free6,
-        adapted: &adapted,
-        obstacles: &engine,
-        robots: &agents,
-        time: t_close,
-        world: &world(),
-        seen: &[],
-        body: None,
-        // The pegs and the board with the static potential, the other arm's jaws with the dynamic one.
-        method: "static_volumetric",
-        events: &[],
-        pose: None,
-    };
-    write_figure(&options.out, &name, &fig)?;
-    report.plots.push(name);
-    // Where the jaws turn on their own phases, each arm's figure shows them turning.
-    if !stage.shared_phase {
-        for i in 0..2 {
-            report.plots.push(arm_figure(options, stage, i, (&runs[i], &free[i]), &engine)?);
-        }
-    }
-    Ok(())
+    Method::DynamicVolumetric(DynamicVolumetric { lambda: ROBOT_LAMBDA, beta: 2.0, eta: ROBOT_ETA })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::robots::clearance::distance;
 
     #[test]
     fn demonstration_starts_and_ends_at_rest_with_a_lift() {

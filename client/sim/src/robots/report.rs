@@ -4,25 +4,25 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use dmp::{Agent, Trajectory};
-use dmp_plot::{Event, PlotInput, PoseTrace, Series, SolidShape, render_svg};
+use dmp_plot::{Event, PlotInput, PoseTrace, Series, render_svg};
 use dmp_proto::v1;
 use serde::Serialize;
 
 use super::profile::{Peaks, finite_differences};
 use super::robot::{Executed, check};
-use super::world::{Body, Solid, point3};
+use super::world::{Body, SolidShape, point3};
 use crate::error::SimError;
 
 /// A robot ends at its goal when its last setpoint is this close (metres) and the server said GOAL_REACHED.
-pub const GOAL_TOLERANCE_M: f64 = 1e-2;
+pub(crate) const GOAL_TOLERANCE_M: f64 = 1e-2;
 
 /// Clearance at or below this (metres) is a contact.
-pub const CONTACT_M: f64 = 1e-9;
+pub(crate) const CONTACT_M: f64 = 1e-9;
 
 /// One robot's figures.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct RobotReport {
-    /// At the goal (within [`GOAL_TOLERANCE_M`]) and the last segment said GOAL_REACHED.
+    /// At the goal (within `GOAL_TOLERANCE_M`) and the last segment said GOAL_REACHED.
     pub reached_goal: bool,
     /// Distance from the last setpoint to the goal, metres.
     pub final_error_m: f64,
@@ -60,9 +60,34 @@ pub struct RobotReport {
     pub non_finite: u64,
     /// Duration of the run, seconds.
     pub duration_s: f64,
-    /// A pose run's orientation figures (`super::pose`); none for a position run.
+    /// A pose run's orientation figures (`pose.rs`); none for a position run.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub pose: Option<super::pose::PoseReport>,
+    pub pose: Option<PoseReport>,
+}
+
+/// A pose robot's orientation figures.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct PoseReport {
+    /// Angle between the last executed orientation and the goal orientation, degrees.
+    pub final_orientation_error_deg: f64,
+    /// The goal orientation, `[x, y, z, w]`.
+    pub goal_orientation: [f64; 4],
+    /// Largest rotation away from the first executed orientation, degrees.
+    pub max_turn_from_start_deg: f64,
+    /// Largest angular speed, finite differences of the executed orientations, rad/s.
+    pub peak_angular_speed: f64,
+    /// Largest angular acceleration (second differences), rad/s².
+    pub peak_angular_acceleration: f64,
+    /// Largest angular jerk (third differences), rad/s³.
+    pub peak_angular_jerk: f64,
+    /// Largest angular speed the server streamed (its `angular_velocities`), rad/s.
+    pub streamed_peak_angular_speed: f64,
+    /// Setpoints over the profile's angular limits (also counted in the robot's `limit_violations`).
+    pub angular_limit_violations: u64,
+    /// The true shape whose clearance `min_clearance_m` gives (the held tool, posed at every setpoint).
+    pub body: String,
+    /// Smallest clearance of that shape to any true obstacle, metres.
+    pub min_body_clearance_m: f64,
 }
 
 /// The report of a simulation.
@@ -83,17 +108,29 @@ pub struct SimReport {
     /// What the set-up was (geometry, gains).
     pub notes: Vec<String>,
     /// The Cartesian limits every robot must stay within, if the simulation has them.
-    pub limits: Option<super::html::Limits>,
+    pub limits: Option<CartesianLimits>,
+}
+
+/// The Cartesian limits every robot of a simulation must stay within: a row of `report.html`'s table, and checks
+/// of the peaks (not [`dmp::Limits`], the profile the server keeps).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CartesianLimits {
+    /// Speed, m/s.
+    pub speed: f64,
+    /// Acceleration, m/s².
+    pub acceleration: f64,
+    /// Jerk, m/s³.
+    pub jerk: f64,
 }
 
 impl SimReport {
     /// An empty report.
-    pub fn new(sim: &str, realtime: bool) -> Self {
+    pub(crate) fn new(sim: &str, realtime: bool) -> Self {
         Self { sim: sim.into(), realtime, ..Default::default() }
     }
 
     /// Adds a robot.
-    pub fn add(&mut self, id: &str, r: RobotReport) {
+    pub(crate) fn add(&mut self, id: &str, r: RobotReport) {
         self.collision |= !r.collisions.is_empty();
         self.robots.insert(id.into(), r);
     }
@@ -145,17 +182,16 @@ impl SimReport {
         p
     }
 
-    /// Writes `report.json` and `report.html` in `dir` (the figures must be there already).
-    pub fn write(&self, dir: &Path) -> Result<(), SimError> {
+    /// Writes `report.json` in `dir` (`report.html` is its page, [`super::html::write_html`]).
+    pub(crate) fn write_json(&self, dir: &Path) -> Result<(), SimError> {
         let path = dir.join("report.json");
         let text = serde_json::to_string_pretty(self).map_err(|e| SimError::Plot(e.to_string()))?;
-        std::fs::write(&path, text + "\n").map_err(|source| SimError::Io { path, source })?;
-        super::html::write_html(self, dir)
+        std::fs::write(&path, text + "\n").map_err(|source| SimError::Io { path, source })
     }
 }
 
 /// Row `k` of the positions.
-pub fn position(t: &Trajectory, k: usize) -> &[f64] {
+pub(crate) fn position(t: &Trajectory, k: usize) -> &[f64] {
     let d = t.dim();
     &t.x[k * d..(k + 1) * d]
 }
@@ -170,15 +206,15 @@ fn row_at(t: &Trajectory, time: f64) -> Option<usize> {
 
 /// Another robot, for the robot-robot clearance.
 #[derive(Debug, Clone, Copy)]
-pub struct Other<'a> {
+pub(crate) struct Other<'a> {
     /// Its id.
-    pub id: &'a str,
+    pub(crate) id: &'a str,
     /// What it executed (same times).
-    pub traj: &'a Trajectory,
+    pub(crate) traj: &'a Trajectory,
     /// Its body around its controlled point.
-    pub body: &'a Body,
+    pub(crate) body: &'a Body,
     /// Its orientations, 4 per row of `traj` (a pose robot, or one holding its orientation); none: not turned.
-    pub orientations: Option<&'a [f64]>,
+    pub(crate) orientations: Option<&'a [f64]>,
 }
 
 /// The distance of `body` at `p` to `o`: turned by row `k` of the orientations `q` of a pose run.
@@ -193,7 +229,7 @@ fn posed_distance(body: &Body, p: parry3d_f64::math::Vector, q: Option<&[f64]>, 
 /// and clearance of `body` (around the controlled point) against the obstacles present at each time and the other
 /// robots at the same time. A pose run's body turns with its orientations (its clearance is its true shape's); its
 /// orientation figures are added by [`super::pose::add_pose`].
-pub fn measure(
+pub(crate) fn measure(
     exec: &Executed,
     dt: f64,
     goal: &[f64],
@@ -265,44 +301,46 @@ pub fn measure(
 
 /// One figure in the paper's style.
 #[derive(Debug, Clone, Copy)]
-pub struct Figure<'a> {
+pub(crate) struct Figure<'a> {
     /// Title.
-    pub title: &'a str,
+    pub(crate) title: &'a str,
     /// Start and goal of the straight line (drawn as the "demonstration").
-    pub line: (&'a [f64], &'a [f64]),
+    pub(crate) line: (&'a [f64], &'a [f64]),
     /// Obstacle-free rollout.
-    pub free: &'a Trajectory,
+    pub(crate) free: &'a Trajectory,
     /// What the robot executed.
-    pub adapted: &'a Trajectory,
+    pub(crate) adapted: &'a Trajectory,
     /// The obstacles the planner sees (superquadrics, inflated).
-    pub obstacles: &'a [dmp::Obstacle],
+    pub(crate) obstacles: &'a [dmp::Obstacle],
     /// Robots sharing the DMP (empty: one).
-    pub robots: &'a [Agent],
+    pub(crate) robots: &'a [Agent],
     /// When to draw moving obstacles and footprints.
-    pub time: f64,
+    pub(crate) time: f64,
     /// The true world: the obstacles' real shapes, drawn under the superquadrics the planner sees.
-    pub world: &'a [Body],
+    pub(crate) world: &'a [Body],
     /// Point clouds a perception node saw, drawn with the true shapes.
-    pub seen: &'a [dmp_plot::Solid],
+    pub(crate) seen: &'a [dmp_plot::Solid],
     /// The robot's body, for a single robot: its clearance to the world over time is measured with it (else the
     /// figure measures from the controlled point).
-    pub body: Option<&'a Body>,
+    pub(crate) body: Option<&'a Body>,
     /// The avoidance method of the run (its name in the scenario format).
-    pub method: &'a str,
+    pub(crate) method: &'a str,
     /// What happened during the run.
-    pub events: &'a [Event],
+    pub(crate) events: &'a [Event],
     /// A pose run's orientations and its held shape: a panel of the rotation from the start, the shape's outline
     /// along the path, and the clearance of the turned body.
-    pub pose: Option<PoseTrace<'a>>,
+    pub(crate) pose: Option<PoseTrace<'a>>,
 }
 
 /// A body of the world as the figure's true shape, in the robot's `sub` dimensions.
 fn plot_solid(b: &Body, sub: usize) -> dmp_plot::Solid {
     let shape = match b.solid() {
-        Solid::Ball { radius } => SolidShape::Ball { radius },
-        Solid::Cuboid { half } => SolidShape::Box { half: half[..sub].to_vec() },
-        Solid::CylinderZ { radius, half_height } => SolidShape::CylinderZ { radius, half_height },
-        Solid::Point => SolidShape::Points(vec![vec![0.0; sub]]),
+        SolidShape::Ball { radius } => dmp_plot::SolidShape::Ball { radius },
+        SolidShape::Cuboid { half } => dmp_plot::SolidShape::Box { half: half[..sub].to_vec() },
+        SolidShape::CylinderZ { radius, half_height } => {
+            dmp_plot::SolidShape::CylinderZ { radius, half_height }
+        }
+        SolidShape::Point => dmp_plot::SolidShape::Points(vec![vec![0.0; sub]]),
     };
     let mut s = dmp_plot::Solid::new(b.id.clone(), shape, b.center()[..sub].to_vec());
     s.from = b.from;
@@ -328,7 +366,7 @@ fn clearance_series(traj: &Trajectory, q: Option<&[f64]>, body: &Body, world: &[
 }
 
 /// Renders `fig` to `dir/name`.
-pub fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), SimError> {
+pub(crate) fn write_figure(dir: &Path, name: &str, fig: &Figure<'_>) -> Result<(), SimError> {
     let demo = vec![fig.line.0.to_vec(), fig.line.1.to_vec()];
     let sub = fig.robots.first().map_or(fig.line.0.len(), |r| r.dims.len()).min(3);
     let mut solids: Vec<dmp_plot::Solid> = fig.world.iter().map(|b| plot_solid(b, sub)).collect();

@@ -26,9 +26,9 @@ use dmp_proto::v1;
 use crate::error::SimError;
 
 /// Slack factor of the continuity bounds (the acceleration varies within a step).
-pub const CONT_FACTOR: f64 = 1.5;
+pub(crate) const CONT_FACTOR: f64 = 1.5;
 /// Absolute slack of the continuity bounds (rounding).
-pub const CONT_ABS: f64 = 1e-9;
+pub(crate) const CONT_ABS: f64 = 1e-9;
 
 /// Segments read by every simulated robot of this process so far: what `dmpctl sim` shows as its progress.
 static SEGMENTS_READ: AtomicU64 = AtomicU64::new(0);
@@ -40,24 +40,24 @@ pub fn segments_read() -> u64 {
 
 /// What one robot executed.
 #[derive(Debug, Clone)]
-pub struct Executed {
+pub(crate) struct Executed {
     /// The robot's id.
-    pub id: String,
+    pub(crate) id: String,
     /// Executed rows, in time order.
-    pub traj: Trajectory,
+    pub(crate) traj: Trajectory,
     /// A pose run's executed orientations, row for row with `traj` (none: a position run).
-    pub orientations: Option<OrientationPoints>,
+    pub(crate) orientations: Option<OrientationPoints>,
     /// Rows that arrived after their time.
-    pub late_setpoints: u64,
+    pub(crate) late_setpoints: u64,
     /// Segments read.
-    pub segments: u64,
+    pub(crate) segments: u64,
     /// Status of the last segment.
-    pub final_status: v1::SegmentStatus,
+    pub(crate) final_status: v1::SegmentStatus,
 }
 
 /// The controller of one robot.
 #[derive(Debug)]
-pub struct Controller {
+pub(crate) struct Controller {
     id: String,
     realtime: bool,
     setpoints: Setpoints,
@@ -78,7 +78,7 @@ fn unix_now() -> f64 {
 
 impl Controller {
     /// A robot that has read nothing yet.
-    pub fn new(id: impl Into<String>, realtime: bool) -> Self {
+    pub(crate) fn new(id: impl Into<String>, realtime: bool) -> Self {
         Self {
             id: id.into(),
             realtime,
@@ -94,13 +94,8 @@ impl Controller {
         }
     }
 
-    /// The robot's time now (seconds of the run).
-    pub fn clock(&self) -> f64 {
-        self.clock
-    }
-
     /// The run's origin on the wall clock, once a real-time segment was read.
-    pub fn origin_unix(&self) -> Option<f64> {
+    pub(crate) fn origin_unix(&self) -> Option<f64> {
         self.origin_unix
     }
 
@@ -126,7 +121,7 @@ impl Controller {
     }
 
     /// Reads one segment (arriving now).
-    pub fn push(&mut self, seg: &v1::Segment) -> Result<(), SimError> {
+    pub(crate) fn push(&mut self, seg: &v1::Segment) -> Result<(), SimError> {
         self.segments += 1;
         SEGMENTS_READ.fetch_add(1, Ordering::Relaxed);
         self.status = v1::SegmentStatus::try_from(seg.status).unwrap_or(v1::SegmentStatus::Unspecified);
@@ -155,7 +150,7 @@ impl Controller {
     }
 
     /// The run ended: executes what is left.
-    pub fn finish(mut self) -> Executed {
+    pub(crate) fn finish(mut self) -> Executed {
         self.advance(f64::INFINITY);
         let d = self.setpoints.trajectory().map_or(1, Trajectory::dim);
         Executed {
@@ -171,19 +166,19 @@ impl Controller {
 
 /// Checks of an executed trajectory.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Checks {
+pub(crate) struct Checks {
     /// Steps that break the continuity bounds (or the time step).
-    pub discontinuities: u64,
+    pub(crate) discontinuities: u64,
     /// Values that are NaN or infinite.
-    pub non_finite: u64,
+    pub(crate) non_finite: u64,
     /// Largest acceleration norm.
-    pub peak_acceleration: f64,
+    pub(crate) peak_acceleration: f64,
     /// Largest speed.
-    pub peak_speed: f64,
+    pub(crate) peak_speed: f64,
     /// Largest jerk norm, from the accelerations of consecutive rows (`|a_{k+1} - a_k| / (t_{k+1} - t_k)`).
-    pub peak_jerk: f64,
+    pub(crate) peak_jerk: f64,
     /// Time of the first discontinuous step, if any.
-    pub first_discontinuity_s: Option<f64>,
+    pub(crate) first_discontinuity_s: Option<f64>,
 }
 
 fn row(v: &[f64], d: usize, k: usize) -> &[f64] {
@@ -200,7 +195,7 @@ fn exceeds(err: f64, bound: f64) -> bool {
 }
 
 /// Checks `traj` (executed at step `dt`).
-pub fn check(traj: &Trajectory, dt: f64) -> Checks {
+pub(crate) fn check(traj: &Trajectory, dt: f64) -> Checks {
     let d = traj.dim();
     let n = traj.len();
     let mut c = Checks::default();

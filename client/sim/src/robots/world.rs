@@ -10,11 +10,11 @@ use parry3d_f64::query;
 use parry3d_f64::shape::{Ball, Cuboid, Cylinder, Shape};
 
 /// Half-height of the prisms that stand for 2-D shapes.
-pub const PLANAR_HALF_HEIGHT: f64 = 0.5;
+pub(crate) const PLANAR_HALF_HEIGHT: f64 = 0.5;
 
-/// A solid: what parry measures.
+/// The kind and size of a true shape: what parry measures (a [`Body`] places it in the world).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Solid {
+pub(crate) enum SolidShape {
     /// A ball of this radius.
     Ball {
         /// Radius, metres.
@@ -36,27 +36,22 @@ pub enum Solid {
     Point,
 }
 
-impl Solid {
+impl SolidShape {
     /// A 2-D rectangle of half-sides `(hx, hy)`, as a prism.
-    pub fn rectangle(hx: f64, hy: f64) -> Self {
-        Solid::Cuboid { half: [hx, hy, PLANAR_HALF_HEIGHT] }
-    }
-
-    /// A 2-D disc, as a prism.
-    pub fn disc(radius: f64) -> Self {
-        Solid::CylinderZ { radius, half_height: PLANAR_HALF_HEIGHT }
+    pub(crate) fn rectangle(hx: f64, hy: f64) -> Self {
+        SolidShape::Cuboid { half: [hx, hy, PLANAR_HALF_HEIGHT] }
     }
 
     /// The parry shape and the rotation (axis-angle) that puts its axis where this solid's is.
     fn parry(&self) -> (Box<dyn Shape>, Vector) {
         match *self {
-            Solid::Ball { radius } => (Box::new(Ball::new(radius)), Vector::ZERO),
-            Solid::Point => (Box::new(Ball::new(0.0)), Vector::ZERO),
-            Solid::Cuboid { half } => {
+            SolidShape::Ball { radius } => (Box::new(Ball::new(radius)), Vector::ZERO),
+            SolidShape::Point => (Box::new(Ball::new(0.0)), Vector::ZERO),
+            SolidShape::Cuboid { half } => {
                 (Box::new(Cuboid::new(Vector::new(half[0], half[1], half[2]))), Vector::ZERO)
             }
             // parry's cylinders stand along y; a quarter turn about x takes y to z.
-            Solid::CylinderZ { radius, half_height } => (
+            SolidShape::CylinderZ { radius, half_height } => (
                 Box::new(Cylinder::new(half_height, radius)),
                 Vector::new(std::f64::consts::FRAC_PI_2, 0.0, 0.0),
             ),
@@ -65,17 +60,17 @@ impl Solid {
 }
 
 /// A solid placed in the world, present during a time window of the run.
-pub struct Body {
+pub(crate) struct Body {
     /// Its name (an obstacle's id).
-    pub id: String,
-    solid: Solid,
+    pub(crate) id: String,
+    solid: SolidShape,
     shape: Box<dyn Shape>,
     center: Vector,
     axis_angle: Vector,
     /// Present from this time of the run on (seconds).
-    pub from: f64,
+    pub(crate) from: f64,
     /// Present until this time of the run (seconds; infinity: to the end).
-    pub until: f64,
+    pub(crate) until: f64,
 }
 
 impl std::fmt::Debug for Body {
@@ -91,13 +86,13 @@ impl std::fmt::Debug for Body {
 }
 
 /// A position of 2 or 3 coordinates as a 3-D point (`z = 0` in 2-D).
-pub fn point3(p: &[f64]) -> Vector {
+pub(crate) fn point3(p: &[f64]) -> Vector {
     Vector::new(p[0], p.get(1).copied().unwrap_or(0.0), p.get(2).copied().unwrap_or(0.0))
 }
 
 impl Body {
     /// A solid centred at `center` (2 or 3 coordinates), always present.
-    pub fn new(id: impl Into<String>, solid: Solid, center: &[f64]) -> Self {
+    pub(crate) fn new(id: impl Into<String>, solid: SolidShape, center: &[f64]) -> Self {
         let (shape, axis_angle) = solid.parry();
         Self {
             id: id.into(),
@@ -111,24 +106,24 @@ impl Body {
     }
 
     /// The same, present only in `[from, until)`.
-    pub fn during(mut self, from: f64, until: f64) -> Self {
+    pub(crate) fn during(mut self, from: f64, until: f64) -> Self {
         self.from = from;
         self.until = until;
         self
     }
 
     /// The solid.
-    pub fn solid(&self) -> Solid {
+    pub(crate) fn solid(&self) -> SolidShape {
         self.solid
     }
 
     /// The centre.
-    pub fn center(&self) -> [f64; 3] {
+    pub(crate) fn center(&self) -> [f64; 3] {
         [self.center.x, self.center.y, self.center.z]
     }
 
     /// Whether it exists at time `t`.
-    pub fn present_at(&self, t: f64) -> bool {
+    pub(crate) fn present_at(&self, t: f64) -> bool {
         t >= self.from && t < self.until
     }
 
@@ -138,7 +133,7 @@ impl Body {
 
     /// Distance between this body translated by `offset` and `other` translated by `other_offset` (0 when they
     /// touch or overlap).
-    pub fn distance(&self, offset: Vector, other: &Body, other_offset: Vector) -> f64 {
+    pub(crate) fn distance(&self, offset: Vector, other: &Body, other_offset: Vector) -> f64 {
         let (p1, p2) = (self.pose(offset), other.pose(other_offset));
         match query::distance(&p1, self.shape.as_ref(), &p2, other.shape.as_ref()) {
             Ok(d) => d.distance,
@@ -152,13 +147,13 @@ impl Body {
     /// Distance between this body carried by a pose, at `position` turned by the unit quaternion `q = [x, y, z,
     /// w]` (the body keeps its own placement in the carrying frame: a held tool's shape in the tool frame), and
     /// `other` where it stands (0 when they touch or overlap).
-    pub fn distance_posed(&self, position: Vector, q: &[f64], other: &Body) -> f64 {
+    pub(crate) fn distance_posed(&self, position: Vector, q: &[f64], other: &Body) -> f64 {
         self.distance_carried((position, Some(q)), other, (Vector::ZERO, None))
     }
 
     /// Distance between this body and `other`, each carried at a position and, for a pose robot, turned by a
     /// unit quaternion `[x, y, z, w]` (none: not turned).
-    pub fn distance_carried(
+    pub(crate) fn distance_carried(
         &self,
         (position, q): (Vector, Option<&[f64]>),
         other: &Body,
@@ -180,7 +175,7 @@ impl Body {
 }
 
 /// The robot's body relative to its controlled point: a point, a ball (a carried ring), a rectangle (a youBot).
-pub fn robot_body(id: &str, solid: Solid) -> Body {
+pub(crate) fn robot_body(id: &str, solid: SolidShape) -> Body {
     Body::new(id, solid, &[0.0, 0.0, 0.0])
 }
 
@@ -190,16 +185,17 @@ mod tests {
 
     #[test]
     fn distances_to_true_shapes() {
-        let peg = Body::new("peg", Solid::CylinderZ { radius: 0.01, half_height: 0.05 }, &[0.5, 0.0, 0.07]);
-        let ring = robot_body("ring", Solid::Ball { radius: 0.02 });
+        let peg =
+            Body::new("peg", SolidShape::CylinderZ { radius: 0.01, half_height: 0.05 }, &[0.5, 0.0, 0.07]);
+        let ring = robot_body("ring", SolidShape::Ball { radius: 0.02 });
         // Beside the peg, level with its middle: 0.1 - 0.01 - 0.02.
         let d = ring.distance(point3(&[0.6, 0.0, 0.07]), &peg, Vector::ZERO);
         assert!((d - 0.07).abs() < 1e-9, "{d}");
         // Above its top (z = 0.12): 0.2 - 0.12 - 0.02, which a y-axis cylinder would get wrong.
         let d = ring.distance(point3(&[0.5, 0.0, 0.2]), &peg, Vector::ZERO);
         assert!((d - 0.06).abs() < 1e-9, "{d}");
-        let wall = Body::new("wall", Solid::rectangle(1.0, 0.05), &[0.0, 1.0]);
-        let youbot = robot_body("youbot", Solid::rectangle(0.29, 0.19));
+        let wall = Body::new("wall", SolidShape::rectangle(1.0, 0.05), &[0.0, 1.0]);
+        let youbot = robot_body("youbot", SolidShape::rectangle(0.29, 0.19));
         let d = youbot.distance(point3(&[0.3, 0.2]), &wall, Vector::ZERO);
         assert!((d - (0.95 - 0.39)).abs() < 1e-9, "{d}");
         assert_eq!(youbot.distance(point3(&[0.0, 0.8]), &wall, Vector::ZERO), 0.0);
@@ -210,8 +206,9 @@ mod tests {
         // (parry measures a turned box or cylinder with GJK, to about 1e-8.)
         // A 0.6 m bar along the tool's x, 0.5 m from a peg's axis along y: across (unturned) it misses the peg by
         // 0.5 - 0.01 - 0.05; turned a quarter about z its tip comes 0.5 - 0.3 - 0.05 from it.
-        let peg = Body::new("peg", Solid::CylinderZ { radius: 0.05, half_height: 0.2 }, &[0.0, 0.5, 0.0]);
-        let bar = robot_body("bar", Solid::Cuboid { half: [0.3, 0.01, 0.01] });
+        let peg =
+            Body::new("peg", SolidShape::CylinderZ { radius: 0.05, half_height: 0.2 }, &[0.0, 0.5, 0.0]);
+        let bar = robot_body("bar", SolidShape::Cuboid { half: [0.3, 0.01, 0.01] });
         let d = bar.distance_posed(Vector::ZERO, &[0.0, 0.0, 0.0, 1.0], &peg);
         assert!((d - 0.44).abs() < 1e-6, "{d}");
         let s = std::f64::consts::FRAC_1_SQRT_2;
@@ -219,7 +216,7 @@ mod tests {
         assert!((d - 0.15).abs() < 1e-6, "{d}");
         // A ring's disc (a cylinder along the tool's z) flat: 0.5 - 0.05 - 0.025; turned a quarter about x, on
         // its side, it shows the peg its thickness: 0.5 - 0.05 - 0.004.
-        let ring = robot_body("ring", Solid::CylinderZ { radius: 0.025, half_height: 0.004 });
+        let ring = robot_body("ring", SolidShape::CylinderZ { radius: 0.025, half_height: 0.004 });
         let d = ring.distance_posed(Vector::ZERO, &[0.0, 0.0, 0.0, 1.0], &peg);
         assert!((d - 0.425).abs() < 1e-6, "{d}");
         let d = ring.distance_posed(Vector::ZERO, &[s, 0.0, 0.0, s], &peg);

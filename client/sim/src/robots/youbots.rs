@@ -36,7 +36,7 @@
 //! - `line`: null weights (a straight line). Such a DMP is fastest at its start: `tau` is chosen so that the
 //!   longest drive peaks at [`NULL_PEAK_SPEED`] without obstacles.
 //! - `constant-speed`: learned by the server from a synthetic demonstration per robot, a straight line at constant
-//!   speed between smooth ramps ([`ramped_line`], [`RAMP_S`]), all three of
+//!   speed between smooth ramps ([`ramped_line`](super::demonstration::ramped_line), [`RAMP_S`]), all three of
 //!   the same duration so that they share `tau`; the longest drive cruises at [`CRUISE_SPEED`].
 //!
 //! The youBot's top speed is 0.8 m/s; the speeds are lower so that avoiding at speed stays within a plausible
@@ -51,6 +51,8 @@
 //! Walls and cubes as boxes, each robot as its rectangle; clearances to the obstacles and to the other robots at
 //! the same time, with parry (2-D shapes as prisms, `super::world`).
 
+use dmp::Method;
+use dmp::avoidance::{DynamicVolumetric, StaticVolumetric};
 use dmp::scenario::ObstacleSpec;
 use dmp::{Agent, Integrator, Motion, NoPerturbation, Primitive, Shape, State, Superquadric, Trajectory};
 use dmp_client::grpc::DmpClient;
@@ -62,32 +64,34 @@ use super::demonstration::{ramped_duration, ramped_line};
 use super::profile::put_profile;
 use super::report::{Figure, Other, SimReport, write_figure};
 use super::robot::Executed;
-use super::world::{Body, Solid, robot_body};
-use super::{Method, SimOptions, avoidance, execute_group, free_plan, pacing, server_robot, within};
+use super::world::{Body, SolidShape, robot_body};
+use super::{SimOptions, avoidance, execute_group, free_plan, pacing, server_robot, within};
 use crate::error::SimError;
 
 /// Control period (and integration step): 1 kHz.
-pub const DT: f64 = 1e-3;
+pub(crate) const DT: f64 = 1e-3;
 /// Step of the obstacle-free plans (figures, and the clearances without avoidance): 100 Hz is plenty.
-pub const FREE_DT: f64 = 0.01;
+pub(crate) const FREE_DT: f64 = 0.01;
 /// Half-sides of the youBot.
-pub const ROBOT_HALF: [f64; 2] = [0.29, 0.19];
+pub(crate) const ROBOT_HALF: [f64; 2] = [0.29, 0.19];
 /// Air kept between a robot and a wall or cube, on top of the robot's size.
-pub const OBSTACLE_MARGIN: f64 = 0.05;
+pub(crate) const OBSTACLE_MARGIN: f64 = 0.05;
 /// Air kept between two robots, on top of the ellipse around the rectangle of contact.
-pub const FOOTPRINT_MARGIN: f64 = 0.05;
+pub(crate) const FOOTPRINT_MARGIN: f64 = 0.05;
 /// Obstacle-free peak speed of the longest null-weight drive, m/s.
-pub const NULL_PEAK_SPEED: f64 = 0.6;
+pub(crate) const NULL_PEAK_SPEED: f64 = 0.6;
 /// Cruise speed of the longest constant-speed drive, m/s.
-pub const CRUISE_SPEED: f64 = 0.4;
+pub(crate) const CRUISE_SPEED: f64 = 0.4;
 /// Duration of each ramp of the constant-speed demonstrations, seconds.
-pub const RAMP_S: f64 = 1.0;
+pub(crate) const RAMP_S: f64 = 1.0;
 /// Static volumetric potential for the walls and cubes.
-pub const STATIC: Method = Method::Static { a: 9.0, eta: 0.8 };
+pub(crate) const STATIC: Method = Method::StaticVolumetric(StaticVolumetric { a: 9.0, eta: 0.8 });
 /// Dynamic volumetric potential for the walls and cubes.
-pub const DYNAMIC: Method = Method::Dynamic { lambda: 3.2, beta: 2.0, eta: 1.7 };
+pub(crate) const DYNAMIC: Method =
+    Method::DynamicVolumetric(DynamicVolumetric { lambda: 3.2, beta: 2.0, eta: 1.7 });
 /// Dynamic volumetric potential between robots (on the relative velocity).
-pub const ROBOTS: Method = Method::Dynamic { lambda: 20.0, beta: 2.0, eta: 1.0 };
+pub(crate) const ROBOTS: Method =
+    Method::DynamicVolumetric(DynamicVolumetric { lambda: 20.0, beta: 2.0, eta: 1.0 });
 
 const K: f64 = 3050.0;
 const ALPHA: f64 = 4.0;
@@ -102,10 +106,10 @@ struct Bot {
 }
 
 /// The limit profile of every youBot base, in its robot record.
-pub const PROFILE: dmp::Limits = dmp::Limits::YOUBOT_BASE;
+pub(crate) const PROFILE: dmp::Limits = dmp::Limits::YOUBOT_BASE;
 
 /// The robots of this simulation (the server knows them as [`server_robot`] of these).
-pub const ROBOT_IDS: &[&str] = &["youbot1", "youbot2", "youbot3"];
+pub(crate) const ROBOT_IDS: &[&str] = &["youbot1", "youbot2", "youbot3"];
 
 const BOTS: [Bot; 3] = [
     Bot { id: ROBOT_IDS[0], start: [1.06, 1.56], goal: [4.34, 2.44] },
@@ -199,7 +203,7 @@ fn footprint() -> v1::Superquadric {
 
 /// The true shapes.
 fn world() -> Vec<Body> {
-    BLOCKS.iter().map(|b| Body::new(b.id, Solid::rectangle(b.half[0], b.half[1]), &b.center)).collect()
+    BLOCKS.iter().map(|b| Body::new(b.id, SolidShape::rectangle(b.half[0], b.half[1]), &b.center)).collect()
 }
 
 /// Stores both primitives of every robot; returns the `tau` of each.
@@ -267,7 +271,7 @@ async fn run_one(
     let key = format!("{}-{method_name}", kind.name());
     let world = world();
     let bodies: Vec<Body> =
-        BOTS.iter().map(|b| robot_body(b.id, Solid::rectangle(ROBOT_HALF[0], ROBOT_HALF[1]))).collect();
+        BOTS.iter().map(|b| robot_body(b.id, SolidShape::rectangle(ROBOT_HALF[0], ROBOT_HALF[1]))).collect();
     for (i, (b, exec)) in BOTS.iter().zip(&runs).enumerate() {
         let others: Vec<Other<'_>> = (0..BOTS.len())
             .filter(|&j| j != i)
@@ -359,7 +363,7 @@ async fn run_one(
 }
 
 /// Runs both primitives with both potentials, one group after the other.
-pub async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
+pub(crate) async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     let (tau_line, tau_constant) = store_primitives(client).await?;
     let mut report = SimReport::new("youbots", options.realtime);
     report.notes.push(format!(
