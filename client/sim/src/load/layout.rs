@@ -27,7 +27,7 @@ pub(crate) const CLIMB: f64 = 0.2;
 /// A robot's footprint: a ball of this radius, metres.
 pub const FOOTPRINT_RADIUS: f64 = 0.1;
 /// Fixed obstacles per cell.
-pub(crate) const FIXED_OBSTACLES: usize = 5;
+pub const FIXED_OBSTACLES: usize = 5;
 /// Radius of a fixed obstacle (a sphere), metres.
 pub const OBSTACLE_RADIUS: f64 = 0.06;
 /// Distance of the fixed obstacles from the cell's centre, metres.
@@ -96,7 +96,7 @@ pub fn robots(count: usize, cell_size: usize, dim: usize, prefix: &str) -> Vec<R
 }
 
 /// The primitive of a robot: from its start to its first goal in `tau` seconds.
-pub(crate) fn primitive(robot: &RobotPlan, tau: f64) -> Result<dmp::Primitive, SimError> {
+pub fn primitive(robot: &RobotPlan, tau: f64) -> Result<dmp::Primitive, SimError> {
     let dim = robot.start.len();
     dmp::Primitive::straight_line(
         N_BASIS,
@@ -111,7 +111,7 @@ pub(crate) fn primitive(robot: &RobotPlan, tau: f64) -> Result<dmp::Primitive, S
 }
 
 /// A robot's footprint.
-pub(crate) fn footprint(dim: usize) -> v1::Superquadric {
+pub fn footprint(dim: usize) -> v1::Superquadric {
     v1::Superquadric { semi_axes: vec![FOOTPRINT_RADIUS; dim], exponents: Vec::new() }
 }
 
@@ -121,7 +121,7 @@ pub(crate) fn obstacle_id(k: usize) -> String {
 }
 
 /// Fixed obstacle `k` of a cell, moved by `shift` metres along y.
-pub(crate) fn fixed_obstacle(dim: usize, k: usize, shift: f64) -> v1::Obstacle {
+pub fn fixed_obstacle(dim: usize, k: usize, shift: f64) -> v1::Obstacle {
     let angle = 2.0 * PI * k as f64 / FIXED_OBSTACLES as f64 + PI / 10.0;
     let mut center = point(dim, angle, OBSTACLE_RING, 0.5 * CLIMB);
     center[1] += shift;
