@@ -133,7 +133,7 @@ fn run(name: &str, pose: bool, limits: Limits, seconds: f64, lag: usize, every: 
                 age,
             });
             if seg % every == 0 {
-                r.e.set_cellmates(mates).unwrap();
+                r.e.set_cell_mates(mates).unwrap();
             }
             let delay = STAGGER * k as f64;
             r.e.set_holding(t < delay);
@@ -148,7 +148,7 @@ fn run(name: &str, pose: bool, limits: Limits, seconds: f64, lag: usize, every: 
             }
             let s = r.e.advance(SEGMENT).unwrap();
             actions[s.limit as usize] += 1;
-            if !s.contacts.is_empty() || !s.cellmate_contacts.is_empty() {
+            if !s.contacts.is_empty() || !s.cell_mate_contacts.is_empty() {
                 collisions += 1;
             }
             let d = r.e.dim();

@@ -101,11 +101,11 @@ impl Execution {
         // Contacts at every point handed out (each checked at its time); obstacles no point can reach are skipped
         // as a whole.
         self.field.contacts_along(p.start_time, dt, &p.x, n, &mut p.contacts);
-        self.cellmates.contacts_along(p.start_time, dt, &p.x, n, &mut p.cellmate_contacts);
+        self.cell_mates.contacts_along(p.start_time, dt, &p.x, n, &mut p.cell_mate_contacts);
         #[cfg(feature = "orientation")]
-        self.tool_contacts(p.start_time, &p.x, n, &mut p.contacts, &mut p.cellmate_contacts);
-        for (fi, contacts) in [&p.contacts, &p.cellmate_contacts].into_iter().enumerate() {
-            let f = if fi == 0 { &self.field } else { &self.cellmates };
+        self.tool_contacts(p.start_time, &p.x, n, &mut p.contacts, &mut p.cell_mate_contacts);
+        for (fi, contacts) in [&p.contacts, &p.cell_mate_contacts].into_iter().enumerate() {
+            let f = if fi == 0 { &self.field } else { &self.cell_mates };
             for (_, c) in contacts {
                 let id = match *c {
                     Contact::Obstacle { obstacle, .. } => f.scene().obstacles[obstacle].id(),
@@ -118,7 +118,7 @@ impl Execution {
         }
         p.ignored = self.ignored.take_pending();
         self.fill_orientations(&mut p);
-        let worst = if !p.contacts.is_empty() || !p.cellmate_contacts.is_empty() {
+        let worst = if !p.contacts.is_empty() || !p.cell_mate_contacts.is_empty() {
             Outcome::Collision
         } else if !p.stalls.is_empty() {
             Outcome::Stalled

@@ -2,7 +2,7 @@
 //! obstacles (updated in place while they are the same robots). Both change from the run's next output point (a
 //! rebase), never by a jump.
 
-use super::{CellMate, Execution, cellmate_field};
+use super::{CellMate, Execution, cell_mate_field};
 use crate::error::Result;
 use crate::field::{RepulsiveField, Scene};
 use crate::isopotential::Isopotential;
@@ -74,7 +74,7 @@ impl Execution {
 
     /// Updates the cell's other robots (moving obstacles with their footprints). Members of the run, robots of
     /// another dimension than the members' and robots dropped earlier in the run are left out.
-    pub fn set_cellmates<'a, I>(&mut self, mates: I) -> Result<()>
+    pub fn set_cell_mates<'a, I>(&mut self, mates: I) -> Result<()>
     where
         I: IntoIterator<Item = CellMate<'a>>,
         I::IntoIter: Clone,
@@ -83,13 +83,13 @@ impl Execution {
         let members = std::mem::take(&mut self.member_ids);
         let ignored = std::mem::take(&mut self.ignored);
         let mates = mates.into_iter().filter(|m| !ignored.is_dropped_robot(m.id, m.footprint));
-        let result = self.set_cellmates_except(&members, mates);
+        let result = self.set_cell_mates_except(&members, mates);
         self.member_ids = members;
         self.ignored = ignored;
         result
     }
 
-    fn set_cellmates_except<'a, I>(&mut self, members: &[String], mates: I) -> Result<()>
+    fn set_cell_mates_except<'a, I>(&mut self, members: &[String], mates: I) -> Result<()>
     where
         I: IntoIterator<Item = CellMate<'a>>,
         I::IntoIter: Clone,
@@ -109,7 +109,7 @@ impl Execution {
         };
         // The same robots with the same footprints as the field holds (the common case, every stretch): move them
         // in place instead of compiling a new field.
-        let current = &self.cellmates.scene().obstacles;
+        let current = &self.cell_mates.scene().obstacles;
         let same = mates.clone().count() == current.len()
             && mates.clone().zip(current).all(|(m, o)| o.id() == m.id && m.footprint == o.shape());
         if same {
@@ -120,7 +120,7 @@ impl Execution {
             let mut c0 = std::mem::take(&mut self.c0);
             for (i, m) in mates.enumerate() {
                 c0_into(&m, &mut c0);
-                self.cellmates.set_obstacle_motion(i, &c0, m.velocity);
+                self.cell_mates.set_obstacle_motion(i, &c0, m.velocity);
             }
             self.c0 = c0;
             return Ok(());
@@ -135,7 +135,7 @@ impl Execution {
         }
         self.rebase();
         let agents = self.field.agents().to_vec();
-        self.cellmates = cellmate_field(&agents, self.cellmate_avoidance, obstacles, self.primitive.dim)?;
+        self.cell_mates = cell_mate_field(&agents, self.cell_mate_avoidance, obstacles, self.primitive.dim)?;
         Ok(())
     }
 }

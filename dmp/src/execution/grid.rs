@@ -17,7 +17,7 @@ macro_rules! field_sum {
         FieldSum::new(
             &mut $run.field,
             &mut $run.blend,
-            &mut $run.cellmates,
+            &mut $run.cell_mates,
             $diagnosis,
             $run.tool.as_ref(),
             $run.chart.as_ref(),

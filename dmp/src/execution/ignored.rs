@@ -5,7 +5,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use super::diagnosis::Diagnosis;
-use super::{Execution, cellmate_field};
+use super::{Execution, cell_mate_field};
 use crate::field::{RepulsiveField, Scene};
 use crate::isopotential::Shape;
 use crate::obstacle::Obstacle;
@@ -76,7 +76,7 @@ impl Execution {
             && d.robots.is_empty()
         {
             all_obstacles = (0..self.field.scene().obstacles.len()).collect::<Vec<_>>();
-            all_robots = (0..self.cellmates.scene().obstacles.len()).collect::<Vec<_>>();
+            all_robots = (0..self.cell_mates.scene().obstacles.len()).collect::<Vec<_>>();
             let reason = "the robot's step was not finite with it, and no single obstacle's term was: every \
                               obstacle is dropped for the rest of this run"
                 .to_string();
@@ -114,7 +114,7 @@ impl Execution {
         }
         if !robots.is_empty() {
             let mut kept = Vec::new();
-            for (i, o) in self.cellmates.scene().obstacles.iter().enumerate() {
+            for (i, o) in self.cell_mates.scene().obstacles.iter().enumerate() {
                 if robots.contains(&i) {
                     self.ignored
                         .pending
@@ -125,8 +125,8 @@ impl Execution {
                 }
             }
             let agents = self.field.agents().to_vec();
-            match cellmate_field(&agents, self.cellmate_avoidance, kept, dim) {
-                Ok(f) => self.cellmates = f,
+            match cell_mate_field(&agents, self.cell_mate_avoidance, kept, dim) {
+                Ok(f) => self.cell_mates = f,
                 Err(_) => return false,
             }
         }
@@ -263,7 +263,7 @@ mod tests {
     }
 
     #[test]
-    fn a_cellmate_whose_term_is_not_finite_is_dropped() {
+    fn a_cell_mate_whose_term_is_not_finite_is_dropped() {
         let p = reach_primitive();
         let mates = CellMateAvoidance { method: avoidance(), point_samples: 0 };
         let mut e =
@@ -277,12 +277,12 @@ mod tests {
             velocity: &[0.0, 0.0],
             age: 0.0,
         };
-        e.set_cellmates([mate]).unwrap();
+        e.set_cell_mates([mate]).unwrap();
         let (_, ignored, outcome) = run_out(&mut e, 300);
         assert_eq!(outcome, Outcome::GoalReached);
         assert_eq!(ignored.iter().map(|i| i.id.as_str()).collect::<Vec<_>>(), ["ghost"]);
         // Seen again: still left out.
-        e.set_cellmates([mate]).unwrap();
+        e.set_cell_mates([mate]).unwrap();
         assert!(e.advance(1).unwrap().ignored.is_empty());
     }
 

@@ -144,7 +144,7 @@ pub struct Stretch {
     /// stretch); the indices are those of [`Execution::field`].
     pub contacts: Vec<(usize, Contact)>,
     /// Contacts with the cell-mates, with the index of the point.
-    pub cellmate_contacts: Vec<(usize, Contact)>,
+    pub cell_mate_contacts: Vec<(usize, Contact)>,
     /// Stalls detected, with the index of the member.
     pub stalls: Vec<(usize, Stall)>,
     /// Obstacles (and cell-mates) the run stopped avoiding since the last stretch, and why: each is reported once.
@@ -169,11 +169,11 @@ pub struct Execution {
     /// The fixed part of the field: the run's own obstacles, its members and their methods.
     scene: Scene,
     /// How the cell-mates are avoided.
-    cellmate_avoidance: CellMateAvoidance,
+    cell_mate_avoidance: CellMateAvoidance,
     /// Obstacles of the cell (set by [`Execution::set_obstacles`]) then the run's own, and the members.
     field: RepulsiveField,
     /// The cell's other robots.
-    cellmates: RepulsiveField,
+    cell_mates: RepulsiveField,
     /// The grid point the output is in, and the next one (None until computed after a change).
     knot0: Knot,
     knot1: Option<Knot>,
@@ -252,13 +252,13 @@ pub struct Execution {
 impl Execution {
     /// A run of `primitive` with `motion`, avoiding `scene` (the run's own obstacles, centred at time zero, and its
     /// members: a group on one phase when it names several robots, one implicit robot owning every dimension when
-    /// it names none) and the cell-mates ([`Execution::set_cellmates`]) with `cellmates`. Keeps the last
+    /// it names none) and the cell-mates ([`Execution::set_cell_mates`]) with `cell_mates`. Keeps the last
     /// `history` output points for rollbacks.
     pub fn new(
         primitive: Primitive,
         motion: Motion,
         scene: Scene,
-        cellmates: CellMateAvoidance,
+        cell_mates: CellMateAvoidance,
         stepping: Stepping,
         history: usize,
     ) -> Result<Self> {
@@ -286,7 +286,7 @@ impl Execution {
         *integrator.goal_filter_mut() = GoalFilter::new(DEFAULT_GOAL_ALPHA, &motion.goal);
         let dim = primitive.dim;
         let field = RepulsiveField::new(scene.clone(), dim)?;
-        let cellmate_field = cellmate_field(field.agents(), cellmates, Vec::new(), dim)?;
+        let cell_mate_field = cell_mate_field(field.agents(), cell_mates, Vec::new(), dim)?;
         let stall = field
             .agents()
             .iter()
@@ -312,9 +312,9 @@ impl Execution {
             integrator,
             motion,
             scene,
-            cellmate_avoidance: cellmates,
+            cell_mate_avoidance: cell_mates,
             field,
-            cellmates: cellmate_field,
+            cell_mates: cell_mate_field,
             knot0,
             knot1: None,
             spare: None,
@@ -439,7 +439,7 @@ impl Execution {
 }
 
 /// The cell's other robots, as moving obstacles of the cell-mate method.
-fn cellmate_field(
+fn cell_mate_field(
     agents: &[Agent],
     a: CellMateAvoidance,
     obstacles: Vec<crate::Obstacle>,

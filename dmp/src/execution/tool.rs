@@ -80,7 +80,7 @@ impl Execution {
                 rows[k * d..k * d + 3].copy_from_slice(c.as_slice());
                 rows[k * d + 3..(k + 1) * d].copy_from_slice(&row[3..]);
             }
-            for (field, out) in [(&mut self.field, &mut *out), (&mut self.cellmates, &mut *mates_out)] {
+            for (field, out) in [(&mut self.field, &mut *out), (&mut self.cell_mates, &mut *mates_out)] {
                 found.clear();
                 field.contacts_along(t0, dt, &rows, n, &mut found);
                 for (k, c) in found.drain(..) {

@@ -119,7 +119,7 @@ fn run(
         let refill_points = (refill.as_secs_f64() / DT).round() as usize;
         if k % refill_points == 0 {
             let t = k as f64 * DT;
-            execution.set_cellmates(mates.iter().map(|m| m.seen_at(k, &mate_footprint))).unwrap();
+            execution.set_cell_mates(mates.iter().map(|m| m.seen_at(k, &mate_footprint))).unwrap();
             execution.limit_knots_to(t + refill_points as f64 * DT);
         }
         x.extend(execution.advance(10).unwrap().x);

@@ -33,7 +33,7 @@ pub(crate) fn advance_cancellable(
         all.orientation.omega.extend_from_slice(&p.orientation.omega);
         all.orientation.omega_dot.extend_from_slice(&p.orientation.omega_dot);
         all.contacts.extend(p.contacts.into_iter().map(|(i, c)| (i + done, c)));
-        all.cellmate_contacts.extend(p.cellmate_contacts.into_iter().map(|(i, c)| (i + done, c)));
+        all.cell_mate_contacts.extend(p.cell_mate_contacts.into_iter().map(|(i, c)| (i + done, c)));
         all.stalls.extend(p.stalls);
         all.ignored.extend(p.ignored);
         all.limit = all.limit.max(p.limit);
@@ -51,7 +51,7 @@ pub(crate) fn advance_cancellable(
 /// arrived and the end time are read at the last point; a contact or a stall anywhere in the stretch outranks
 /// arriving, holding and running.
 fn combined_outcome(all: &Stretch, last: Outcome) -> Outcome {
-    let worst = if !all.contacts.is_empty() || !all.cellmate_contacts.is_empty() {
+    let worst = if !all.contacts.is_empty() || !all.cell_mate_contacts.is_empty() {
         Outcome::Collision
     } else if !all.stalls.is_empty() {
         Outcome::Stalled

@@ -81,8 +81,8 @@ impl ServedRun {
             robot_avoidance: if group { avoidance.robots.0 } else { Avoidance::NONE },
             point_samples: avoidance.obstacles.1.max(avoidance.robots.1),
         };
-        let cellmates = CellMateAvoidance { method: avoidance.robots.0, point_samples: avoidance.robots.1 };
-        let execution = Execution::new(primitive, motion, scene, cellmates, stepping, history)?;
+        let cell_mates = CellMateAvoidance { method: avoidance.robots.0, point_samples: avoidance.robots.1 };
+        let execution = Execution::new(primitive, motion, scene, cell_mates, stepping, history)?;
         Ok(Self { execution, ignore_scene: avoidance.ignore_scene, footprints, scene_version: 0, costing })
     }
 
@@ -116,11 +116,11 @@ impl ServedRun {
             self.execution.set_obstacles(seen)?;
         }
         self.scene_version = snapshot.version;
-        self.set_cellmates(others, now_unix_s)
+        self.set_cell_mates(others, now_unix_s)
     }
 
     /// Updates the cell's other robots from their last states (robots without a footprint are invisible).
-    pub(crate) fn set_cellmates(
+    pub(crate) fn set_cell_mates(
         &mut self,
         others: &[Arc<SeenRobot>],
         now_unix_s: f64,
@@ -134,6 +134,6 @@ impl ServedRun {
                 age: now_unix_s - r.state.stamp_unix_s,
             })
         });
-        Ok(self.execution.set_cellmates(mates)?)
+        Ok(self.execution.set_cell_mates(mates)?)
     }
 }

@@ -86,7 +86,7 @@ pub(crate) fn compute(run: &mut ServedRun, step: Step, job: &JobContext<'_>) -> 
     let now = step.wall_of(run.execution.time());
     match &step.scene {
         Some(scene) => run.apply_scene(scene, &step.others, now)?,
-        None => run.set_cellmates(&step.others, now)?,
+        None => run.set_cell_mates(&step.others, now)?,
     }
     // A change the engine refuses is a warning for the robot; the run goes on as before it.
     for c in &step.commands {

@@ -289,7 +289,7 @@ impl<'a> Producer<'a> {
         let mut step = Step {
             rollback_to,
             scene,
-            others: self.cellmates(rollback_to.unwrap_or(self.time)),
+            others: self.cell_mates(rollback_to.unwrap_or(self.time)),
             start_unix: realtime.then_some(self.start_unix),
             now_unix_s: self.app.clock.now_unix_s(),
             commands,
@@ -313,7 +313,7 @@ impl<'a> Producer<'a> {
             step = Step {
                 rollback_to: None,
                 scene: None,
-                others: self.cellmates(self.time),
+                others: self.cell_mates(self.time),
                 start_unix: Some(self.start_unix),
                 now_unix_s: self.app.clock.now_unix_s(),
                 commands: Vec::new(),
@@ -442,7 +442,7 @@ impl<'a> Producer<'a> {
     }
 
     /// The cell's other robots as they are at run time `t`.
-    fn cellmates(&mut self, t: f64) -> Vec<Arc<SeenRobot>> {
+    fn cell_mates(&mut self, t: f64) -> Vec<Arc<SeenRobot>> {
         let Some(first) = self.run.as_ref().and_then(|r| r.execution.members().first()) else {
             return Vec::new();
         };
