@@ -2,9 +2,7 @@
 //! on as before, and a rejection sends nothing ahead of the pacing.
 
 use std::sync::Arc;
-use std::time::Duration;
 
-use dmp::Stepping;
 use dmp_proto::v1;
 use dmp_proto::v1::warning::Kind;
 use tokio::sync::mpsc;
@@ -12,7 +10,6 @@ use tokio::sync::mpsc;
 use super::context::RunContext;
 use super::control::Control;
 use super::pacing::MAX_REFILL;
-use super::pacing::StreamConfig;
 use super::stream::run_stream;
 use crate::clock::Clock;
 
@@ -30,14 +27,7 @@ async fn a_rejection_reaches_the_robot_within_a_refill_and_the_run_goes_on() {
     let clock = Clock::following_tokio();
     let app = Arc::new(RunContext::for_tests(clock));
     let cell = super::tests::cell();
-    let cfg = StreamConfig {
-        stepping: Stepping::rk4(1e-3),
-        segment_points: 10,
-        realtime: true,
-        lookahead: Duration::from_millis(50),
-        max_duration: 5.0,
-        urgency: None,
-    };
+    let cfg = super::tests::realtime_10ms();
     let run = super::tests::reach(&cfg);
     let (tx, mut rx) = mpsc::channel(64);
     let (ctl_tx, ctl_rx) = mpsc::channel(8);

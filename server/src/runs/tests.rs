@@ -41,19 +41,24 @@ pub(super) fn cell() -> crate::cells::cell::Cell {
         .expect("cell c")
 }
 
-#[tokio::test(start_paused = true)]
-async fn real_time_segments_arrive_before_they_are_due_and_a_goal_change_supersedes_from_now() {
-    let clock = Clock::following_tokio();
-    let app = Arc::new(RunContext::for_tests(clock));
-    let cell = super::tests::cell();
-    let cfg = StreamConfig {
+/// Real time, 1 kHz output in 10 ms segments, 50 ms ahead, at most 5 s.
+pub(super) fn realtime_10ms() -> StreamConfig {
+    StreamConfig {
         stepping: Stepping::rk4(1e-3),
         segment_points: 10,
         realtime: true,
         lookahead: Duration::from_millis(50),
         max_duration: 5.0,
         urgency: None,
-    };
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn real_time_segments_arrive_before_they_are_due_and_a_goal_change_supersedes_from_now() {
+    let clock = Clock::following_tokio();
+    let app = Arc::new(RunContext::for_tests(clock));
+    let cell = cell();
+    let cfg = realtime_10ms();
     let run = reach(&cfg);
     let (tx, mut rx) = mpsc::channel(64);
     let (ctl_tx, ctl_rx) = mpsc::channel(8);
