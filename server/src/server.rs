@@ -137,6 +137,9 @@ pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
 pub async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHandle, ServerError> {
     // Refused before anything listens: exposure without protection, a bad access file, bad TLS files.
     let exposure = exposure::check(&config)?;
+    for reason in &exposure.warnings {
+        warn!(reason = %reason, "INSECURE (--insecure): anyone who reaches the server can steer every robot");
+    }
     let access = Arc::new(AccessControl::from_config(&config.security)?);
     let tls = server_tls(&config.security)?;
     let listener = TcpListener::bind(config.grpc_addr).await.map_err(|e| {
