@@ -99,6 +99,7 @@ pub(crate) fn record(
         footprint: footprint.map(|a| v1::Superquadric { semi_axes: a.to_vec(), exponents: Vec::new() }),
         tool,
         updated_unix_ms: 0,
+        margin: 0.0,
     }
 }
 

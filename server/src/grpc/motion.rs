@@ -272,7 +272,14 @@ impl MotionService for MotionServiceImpl {
         info!(robot = %robot_id, steps, collisions = collisions.len(), stalled, "planned");
         let status = segment_status_limited(stretch.outcome, stretch.limit);
         let trajectory = member_segments(&run, stretch, 0, status, None).into_iter().next();
-        Ok(Response::new(v1::PlanResponse { trajectory, collisions, stalled, warnings }))
+        Ok(Response::new(v1::PlanResponse {
+            trajectory,
+            collisions,
+            stalled,
+            warnings,
+            verdict: None,
+            limits: None,
+        }))
     }
 
     type ExecuteStream = SegmentStream;

@@ -46,6 +46,9 @@ pub(crate) fn member_segments(
             orientations: o.q,
             angular_velocities: o.omega,
             angular_accelerations: o.omega_dot,
+            min_clearance: None,
+            verdict: None,
+            limits: None,
         }
     };
     match e.members() {

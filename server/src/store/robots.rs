@@ -71,6 +71,7 @@ mod tests {
             footprint: Some(v1::Superquadric { semi_axes: vec![0.3, 0.2, 0.1], exponents: vec![] }),
             tool: None,
             updated_unix_ms: 7,
+            margin: 0.0,
         }
     }
 

@@ -29,6 +29,7 @@ fn panda_record(id: &str) -> v1::RobotRecord {
         footprint: Some(v1::Superquadric { semi_axes: vec![0.2, 0.2, 0.5], exponents: vec![] }),
         tool: Some(bar_tool()),
         updated_unix_ms: 0,
+        margin: 0.0,
     }
 }
 
