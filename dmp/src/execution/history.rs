@@ -113,6 +113,19 @@ impl History {
         Some((&r.x[from..], &r.xd[from..]))
     }
 
+    /// Every recorded point's position, velocity and filtered goal (`dim` each), oldest first: for a change of
+    /// coordinates.
+    #[cfg_attr(not(feature = "orientation"), allow(dead_code))]
+    pub(super) fn points_mut(&mut self) -> impl Iterator<Item = (&mut [f64], &mut [f64], &mut [f64])> {
+        let d = self.dim;
+        self.records.iter_mut().flat_map(move |r| {
+            r.x.chunks_exact_mut(d)
+                .zip(r.xd.chunks_exact_mut(d))
+                .zip(r.g.chunks_exact_mut(d))
+                .map(|((x, v), g)| (x, v, g))
+        })
+    }
+
     /// Writes the positions of the last points, the most recent first, into `out` (`dim` each, as many as fit);
     /// returns how many were written (fewer when the history holds fewer).
     pub(super) fn recent_positions(&self, out: &mut [f64]) -> usize {

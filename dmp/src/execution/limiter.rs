@@ -98,6 +98,12 @@ impl Limiter {
         }
     }
 
+    /// The last three output positions, the most recent first (`dim` each): for a change of coordinates.
+    #[cfg_attr(not(feature = "orientation"), allow(dead_code))]
+    pub(super) fn recent_mut(&mut self) -> &mut [Vec<f64>; 3] {
+        &mut self.prev
+    }
+
     /// Records `p` as handed out.
     pub(super) fn push(&mut self, p: &[f64]) {
         self.prev.rotate_right(1);
