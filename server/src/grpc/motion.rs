@@ -27,6 +27,7 @@ use crate::error::ServerError;
 use crate::grpc::shared::ServiceState;
 use crate::runs::compute::admission::ComputeReservation;
 use crate::runs::control::Control;
+use crate::runs::endpoints::{End, GoalGuard, Placed, refuse_inside};
 use crate::runs::executing::Claim;
 use crate::runs::ignored::push_obstacle_warnings;
 use crate::runs::pacing::StreamConfig;
@@ -36,6 +37,7 @@ use crate::runs::segments::{Batch, member_segments};
 use crate::runs::served_run::ServedRun;
 use crate::runs::stream::{Admitted, run_stream};
 use crate::runs::stream_memory::StreamBytes;
+use crate::runs::verdict::{Ending, Judge, verdict};
 
 use super::resolved_motion::{Intent, ResolvedMotion};
 use super::session_commands::SessionCommands;
@@ -100,6 +102,27 @@ impl MotionServiceImpl {
         run.execution.set_limits(r.limits, r.chart.is_some())?;
         run.execution.set_goal_filter(r.goal_filter_alpha)?;
         Ok(run)
+    }
+
+    /// Refuses (FAILED_PRECONDITION) a run of `r` whose start or goal is inside one of the obstacles known now: the
+    /// cell's scene (unless the run ignores it) and the run's own; `prefix` names the motion in the request.
+    fn refuse_ends_in_collision(&self, r: &ResolvedMotion, prefix: &str) -> Result<(), ServerError> {
+        let snapshot = (!r.avoidance.ignore_scene).then(|| r.cell.snapshot());
+        let scene = snapshot.iter().flat_map(|s| s.obstacles.values().map(|o| &o.engine));
+        let obstacles: Vec<&dmp::Obstacle> = scene.chain(&r.avoidance.extra).collect();
+        if obstacles.is_empty() {
+            return Ok(());
+        }
+        let n = r.primitive.position_dim();
+        for (end, x) in [(End::Start, &r.motion.start), (End::Goal, &r.motion.goal)] {
+            let orientation = r.chart.as_ref().and_then(|chart| {
+                let y = x.get(n..n + 3)?;
+                Some(dmp::orientation::pose::from_chart(chart, &nalgebra::Vector3::from_column_slice(y)))
+            });
+            let at = Placed { position: &x[..n.min(x.len())], orientation, tool: r.tool.as_ref() };
+            refuse_inside(obstacles.iter().copied(), at, end, &format!("{prefix}.{}", end.field()))?;
+        }
+        Ok(())
     }
 
     /// Refuses, before any work, an answer that would exceed the message size: `values` numbers of position,
@@ -218,6 +241,7 @@ impl MotionService for MotionServiceImpl {
         let req = request.into_inner();
         let r = ResolvedMotion::resolve(&self.state, &caller, Intent::Plan, req.motion.as_ref(), "motion")
             .await?;
+        self.refuse_ends_in_collision(&r, "motion")?;
         let dt = if req.dt == 0.0 { DEFAULT_DT } else { req.dt };
         if !(dt.is_finite() && dt > 0.0 && dt <= 0.1) {
             return Err(ServerError::invalid("dt", "must be greater than 0 and at most 0.1 s").into());
@@ -238,8 +262,11 @@ impl MotionService for MotionServiceImpl {
         self.check_message_size("duration", (steps + 1) * columns(&r.primitive))?;
         let robot_id = r.robot_id.clone();
         let cell = r.cell.clone();
-        // A plan is RK4 at the output rate, as the engine's own rollout.
+        // A plan is RK4 at the output rate, as the engine's own rollout; it ends at its last point.
+        let chart = r.chart;
         let mut run = self.single_robot_run(r, Stepping::rk4(dt), 0)?;
+        run.execution.set_end_time(steps as f64 * dt);
+        run.judge = Judge::new(format!("at the plan's duration ({:.3} s)", steps as f64 * dt), chart);
         let now = self.state.runs.clock.now_unix_s();
         let snapshot = cell.snapshot();
         let others = cell.other_robots(&robot_id, now, 0.5);
@@ -251,7 +278,7 @@ impl MotionService for MotionServiceImpl {
             .admission
             .batch(w.per_scene + w.of_points((steps + 1) as f64), "duration")?;
         // On the batch pool: dropping this future (the client cancelled, left or passed its deadline) stops it.
-        let (stretch, run) = self
+        let (stretch, mut run) = self
             .state
             .runs
             .compute
@@ -269,15 +296,27 @@ impl MotionService for MotionServiceImpl {
         push_obstacle_warnings(&mut stretch.ignored, &mut warnings);
         let collisions: Vec<String> = run.execution.touched().iter().cloned().collect();
         let stalled = !stretch.stalls.is_empty();
-        info!(robot = %robot_id, steps, collisions = collisions.len(), stalled, "planned");
         let status = segment_status_limited(stretch.outcome, stretch.limit);
-        let trajectory = member_segments(&run, stretch, 0, status, None).into_iter().next();
+        let ending = Ending::of(stretch.outcome).unwrap_or(Ending::OutOfTime);
+        let batch = member_segments(&mut run, stretch, 0, status, None);
+        // The plan's last point is its end: a plan that stopped short says so even when the engine's outcome does
+        // not end it.
+        let verdict = batch
+            .first()
+            .and_then(|s| s.verdict.clone())
+            .unwrap_or_else(|| verdict(&run.execution, &run.judge, &batch, ending));
+        let trajectory = batch.into_iter().next().map(|mut s| {
+            s.verdict = Some(verdict.clone());
+            s
+        });
+        let outcome = verdict.outcome().as_str_name();
+        info!(robot = %robot_id, steps, collisions = collisions.len(), stalled, outcome, "planned");
         Ok(Response::new(v1::PlanResponse {
             trajectory,
             collisions,
             stalled,
             warnings,
-            verdict: None,
+            verdict: Some(verdict),
             limits: None,
         }))
     }
@@ -293,6 +332,7 @@ impl MotionService for MotionServiceImpl {
         let req = request.into_inner();
         let r = ResolvedMotion::resolve(&self.state, &caller, Intent::Execute, req.motion.as_ref(), "motion")
             .await?;
+        self.refuse_ends_in_collision(&r, "motion")?;
         let cfg = StreamRequest::of(&req).config(r.motion.tau, &self.state.config, urgency)?;
         info!(robot = %r.robot_id, cell = r.cell.name(), realtime = cfg.realtime, "execute");
         self.check_message_size("segment_s", cfg.segment_points * columns(&r.primitive))?;
@@ -300,7 +340,9 @@ impl MotionService for MotionServiceImpl {
         let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await?;
         audit!(caller, "execute", cell = cell.name(), robot = %r.robot_id, take_over = req.take_over);
         let grant = self.grant(caller, &cell, vec![r.robot_id.clone()])?;
-        let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
+        let chart = r.chart;
+        let mut run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
+        run.judge = Judge::new(end_label(req.max_duration_s, &cfg), chart);
         Ok(Response::new(one_robot_stream(self.spawn(
             run,
             cell,
@@ -337,6 +379,7 @@ impl MotionService for MotionServiceImpl {
             "start.motion",
         )
         .await?;
+        self.refuse_ends_in_collision(&r, "start.motion")?;
         let cfg = StreamRequest::of(&req)
             .config(r.motion.tau, &self.state.config, urgency)
             .map_err(|e| e.within("start"))?;
@@ -347,7 +390,15 @@ impl MotionService for MotionServiceImpl {
         let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await.map_err(|e| e.within("start"))?;
         audit!(caller, "session", cell = cell.name(), robot = %robot_id, take_over = req.take_over);
         let grant = self.grant(caller.clone(), &cell, vec![robot_id.clone()])?;
-        let run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
+        let chart = r.chart;
+        let goals = GoalGuard {
+            cell: cell.clone(),
+            extra: r.avoidance.extra.clone(),
+            ignore_scene: r.avoidance.ignore_scene,
+            tool: r.tool.clone(),
+        };
+        let mut run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
+        run.judge = Judge::new(end_label(req.max_duration_s, &cfg), chart);
         let (ctl_tx, ctl_rx) = mpsc::channel(64);
         let rx = self.spawn(run, cell, cfg, Some(ctl_rx), &peer, Owner { claim, grant })?;
         let shutdown = self.state.runs.shutdown.clone();
@@ -369,7 +420,14 @@ impl MotionService for MotionServiceImpl {
                     _ = shutdown.cancelled() => break,
                 };
                 let Ok(Some(msg)) = msg else { break };
-                let control = commands.control(msg.message);
+                let control = match commands.control(msg.message) {
+                    // A goal inside an obstacle is refused as a command: the run goes on to its former goal.
+                    Control::SetGoal(goal, q) => match goals.rejected(&goal, q) {
+                        Some(w) => Control::Rejected(w),
+                        None => Control::SetGoal(goal, q),
+                    },
+                    c => c,
+                };
                 match &control {
                     Control::Rejected(w) => {
                         debug!(field = %w.field, reason = %w.reason, "session message rejected")
@@ -422,6 +480,7 @@ impl MotionService for MotionServiceImpl {
                 )
                 .into());
             }
+            self.refuse_ends_in_collision(&r, &prefix)?;
             resolved.push(r);
         }
         let tau =
@@ -486,6 +545,7 @@ impl MotionService for MotionServiceImpl {
         run.execution.set_goal_tolerance(goal_tolerance).map_err(ServerError::from)?;
         run.execution.set_limits(limits, false).map_err(ServerError::from)?;
         run.execution.set_goal_filter(goal_filter_alpha).map_err(ServerError::from)?;
+        run.judge = Judge::new(end_label(req.max_duration_s, &cfg), None);
         let rx = self.spawn(run, cell, cfg, None, &peer, Owner { claim, grant })?;
         let stream = ReceiverStream::new(rx).map(|r| {
             r.map(|segments| v1::GroupSegment {
@@ -494,6 +554,16 @@ impl MotionService for MotionServiceImpl {
             })
         });
         Ok(Response::new(Box::pin(stream)))
+    }
+}
+
+/// How a stream's time is bounded, for the verdict of a run that ran out of it: `max_duration_s` as requested (0: 3
+/// tau), `cfg` as resolved.
+fn end_label(max_duration_s: f64, cfg: &StreamConfig) -> String {
+    if max_duration_s == 0.0 {
+        format!("at 3 tau ({:.3} s)", cfg.max_duration)
+    } else {
+        format!("at max_duration_s ({:.3} s)", cfg.max_duration)
     }
 }
 

@@ -4,6 +4,7 @@
 
 pub mod compute;
 pub(crate) mod context;
+pub(crate) mod endpoints;
 pub(crate) mod control;
 pub(crate) mod executing;
 pub(crate) mod histograms;
@@ -16,6 +17,7 @@ pub(crate) mod served_run;
 pub(crate) mod step;
 pub(crate) mod stream;
 pub mod stream_memory;
+pub(crate) mod verdict;
 
 #[cfg(test)]
 mod tests;

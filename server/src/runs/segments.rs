@@ -4,19 +4,23 @@ use dmp::execution::Stretch;
 use dmp_proto::v1;
 
 use super::served_run::ServedRun;
+use super::verdict::{Ending, verdict};
 
 /// What the loop sends: one segment per member, all covering the same times.
 pub(crate) type Batch = Vec<v1::Segment>;
 
 /// One segment per member out of a stretch of the run (a single robot's run moves the points, without a copy).
-/// `start_unix` is the wall time of run time zero (real time).
+/// `start_unix` is the wall time of run time zero (real time). The run's judge records the stretch; when it ends the
+/// run, every member's segment carries the run's verdict.
 pub(crate) fn member_segments(
-    run: &ServedRun,
+    run: &mut ServedRun,
     mut p: Stretch,
     sequence: u64,
     status: v1::SegmentStatus,
     start_unix: Option<f64>,
 ) -> Batch {
+    run.judge.observe(&run.execution, &p, status);
+    let ending = Ending::of(p.outcome);
     let e = &run.execution;
     let d = e.dim();
     let n = p.x.len() / d.max(1);
@@ -51,7 +55,7 @@ pub(crate) fn member_segments(
             limits: None,
         }
     };
-    match e.members() {
+    let mut batch = match e.members() {
         [m] if m.dims.len() == d => vec![segment(&m.id, d, p.x, p.xd, p.xdd)],
         members => members
             .iter()
@@ -72,5 +76,15 @@ pub(crate) fn member_segments(
                 )
             })
             .collect(),
+    };
+    for s in &batch {
+        run.judge.observe_clearance(s.start_time, s.min_clearance);
     }
+    if let Some(ending) = ending {
+        let v = verdict(&run.execution, &run.judge, &batch, ending);
+        for s in &mut batch {
+            s.verdict = Some(v.clone());
+        }
+    }
+    batch
 }

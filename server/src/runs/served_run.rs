@@ -12,6 +12,7 @@ use dmp_proto::v1;
 use crate::cells::cell::{ObstacleSet, SeenRobot};
 use crate::error::ServerError;
 use crate::runs::compute::cost::{Avoided, Workload};
+use crate::runs::verdict::Judge;
 
 /// How a request asked its run to avoid things.
 #[derive(Debug, Clone)]
@@ -37,6 +38,8 @@ pub(crate) struct ServedRun {
     pub footprints: Vec<Option<v1::Superquadric>>,
     /// The version of the cell's scene the run avoids.
     pub scene_version: u64,
+    /// What the run's verdict depends on, recorded as its segments are made ([`crate::runs::verdict`]).
+    pub judge: Judge,
     /// What the run's cost depends on besides the cell.
     costing: Costing,
 }
@@ -83,7 +86,14 @@ impl ServedRun {
         };
         let cell_mates = CellMateAvoidance { method: avoidance.robots.0, point_samples: avoidance.robots.1 };
         let execution = Execution::new(primitive, motion, scene, cell_mates, stepping, history)?;
-        Ok(Self { execution, ignore_scene: avoidance.ignore_scene, footprints, scene_version: 0, costing })
+        Ok(Self {
+            execution,
+            ignore_scene: avoidance.ignore_scene,
+            footprints,
+            scene_version: 0,
+            judge: Judge::default(),
+            costing,
+        })
     }
 
     /// What the run costs to compute in a cell of `cell_obstacles` obstacles and `cell_robots` other robots.

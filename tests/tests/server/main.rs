@@ -27,6 +27,7 @@ mod scene_over_zenoh;
 mod sessions_and_groups;
 mod stale_scene;
 mod tls;
+mod verdicts;
 mod zenoh_access;
 
 use std::path::Path;
