@@ -13,17 +13,23 @@
 //!
 //! Every obstacle is drawn twice: its true shape (a box, ball, cylinder or point cloud, [`Solid`]; filled) and, lighter
 //! and dashed, the isopotential the robot avoids (the inflated superquadric, [`PlotInput::obstacles`]). Where the run
-//! touches a true shape (clearance at most 0) the path is marked. Under the robot-space panels a strip of three
-//! panels shows speed, acceleration and clearance to the nearest obstacle over time, with the run's events as
-//! vertical lines. Moving obstacles and robots are outlined at several marked times, and the paths ticked at the same
-//! times.
+//! touches a true shape (clearance at most 0) the path is marked. Under the robot-space panels a strip of panels
+//! shows speed, acceleration, jerk and clearance to the nearest obstacle over time (and for a pose run, beside them,
+//! the angular speed, acceleration and jerk and the rotation from the start), with the run's events as vertical
+//! lines. The jerk, and the angular quantities, are finite differences of the setpoints at the output rate, as a
+//! robot judges them. Moving obstacles and robots are outlined at several marked times, and the paths ticked at the
+//! same times.
+//!
+//! With [`render_svg_with`], the limits the run kept ([`Safety`], the server's `LimitsInForce`) are drawn as dashed
+//! lines on the panels they bound, with the profile they came from in the legend, and each true shape that keeps a
+//! safety distance is outlined, dashed, that far out.
 //!
 //! Rendering goes through plotters into its own SVG backend (`draw/backend.rs`): coordinates with sub-pixel
 //! precision, and the parts of the figure in `<g class="...">` groups (`obstacle-true`, `isopotential`, `contact`,
 //! `event`, `time-mark`, `path-free`, `path-adapted`, `legend-free`, `legend-adapted`, `speed`, `acceleration`,
-//! `clearance`). Text is emitted as SVG `<text>` elements that the viewer lays out (plotters only estimates their
-//! width for spacing), so no font library is needed. Text that fails to draw is dropped rather than failing the
-//! figure.
+//! `jerk`, `clearance`, `limit`, `margin`, `legend-limits`, `legend-margin`). Text is emitted as SVG `<text>`
+//! elements that the viewer lays out (plotters only estimates their width for spacing), so no font library is
+//! needed. Text that fails to draw is dropped rather than failing the figure.
 //!
 //! The modules are layers, each using only the layers listed before it (and `error`, under all of them):
 //!
@@ -41,7 +47,11 @@
 //! | checking the input for consistency | `data/validate.rs` |
 //! | robots as groups of DMP dimensions | `data/group.rs` |
 //! | decimated curves: positions, coordinates and norms against time | `data/curve.rs` |
-//! | decimating long trajectories (every k-th row) | `data/decimate.rs` |
+//! | decimating long trajectories (every k-th row, or each bucket's peak) | `data/decimate.rs` |
+//! | speed, acceleration and jerk as finite differences at the output rate | `data/differences.rs` |
+//! | the limits and safety distances a run kept | `data/safety.rs` |
+//! | a true shape's outline grown by its safety margin | `data/margin.rs` |
+//! | the time strip's quantities: its grid of panels and their curves | `data/quantity.rs` |
 //! | everything a figure shows, extracted from the input | `data/run.rs` |
 //! | true shapes given: box, ball, cylinder, points; signed distance | `data/solid.rs` |
 //! | true shapes as measured and drawn (given, or the obstacle itself) | `data/truth.rs` |
@@ -59,7 +69,7 @@
 //! | legend | `layout/legend.rs` |
 //! | a robot-space panel: one plane (2-D), or one projection (3-D) | `panels/plane.rs` |
 //! | a coordinate against time | `panels/coordinate.rs` |
-//! | speed, acceleration, clearance and orientation against time, events | `panels/strip.rs` |
+//! | the time strip: its panels against time, events and limit lines | `panels/strip.rs` |
 //! | the figure of a robot moving in 2-D or 3-D | `figures/space.rs` |
 //! | the figure of coordinates against time | `figures/time.rs` |
 
@@ -81,16 +91,25 @@ use self::data::validate;
 
 pub use self::data::input::{Event, PlotInput, Series};
 pub use self::data::pose::PoseTrace;
+pub use self::data::safety::Safety;
 pub use self::data::solid::{Solid, SolidShape};
 pub use self::error::PlotError;
 
-/// Renders the figure as a standalone SVG document. Deterministic: the same input gives the same bytes.
+/// Renders the figure as a standalone SVG document, without limit lines or safety margins. Deterministic: the same
+/// input gives the same bytes.
 pub fn render_svg(input: &PlotInput<'_>) -> Result<String, PlotError> {
+    render_svg_with(input, &Safety::default())
+}
+
+/// Renders the figure as a standalone SVG document, with the limits the run kept drawn on the time strip (a line
+/// for each limit that applies, the profile named in the legend) and the obstacles' true shapes outlined at their
+/// safety distance. Deterministic: the same input gives the same bytes.
+pub fn render_svg_with(input: &PlotInput<'_>, safety: &Safety) -> Result<String, PlotError> {
     let d = validate::dmp_dimension(input)?;
     let groups = groups(input, d)?;
     validate::against_robots(input, &groups)?;
     let sub = groups[0].dims.len();
-    let run = Run::new(input, groups);
+    let run = Run::new(input, groups, safety);
     match sub {
         2 | 3 => figures::space::render(input, &run),
         _ => figures::time::render(input, &run, d),

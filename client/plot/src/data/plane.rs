@@ -6,6 +6,7 @@ use dmp::Obstacle;
 use super::bounds::Bounds;
 use super::geometry::{P2, clip_polygon};
 use super::input::PlotInput;
+use super::margin::grown;
 use super::outline::{Outline, obstacle_outline};
 use super::run::Run;
 
@@ -32,6 +33,8 @@ pub(crate) struct Plane {
     pub(crate) iso: Vec<Outline>,
     /// The true shapes.
     pub(crate) truth: Vec<Outline>,
+    /// The true shapes grown by their safety distance (those that keep one).
+    pub(crate) margins: Vec<Outline>,
     /// Per robot, its footprint at the marked times (empty without a footprint).
     pub(crate) prints: Vec<Vec<Outline>>,
     pub(crate) ranges: ((f64, f64), (f64, f64)),
@@ -55,12 +58,17 @@ impl Plane {
             }
         }
         let mut truth = Vec::new();
+        let mut margins = Vec::new();
         for s in &run.truths {
+            let margin = if s.is_cloud() { 0.0 } else { run.safety.margin_of(s.id()) };
             for t in at(s.moving()) {
                 if t.is_some_and(|t| !s.present_at(t)) {
                     continue;
                 }
                 let poly = s.outline(t.unwrap_or(run.obstacle_time), axes, n);
+                if margin > 0.0 {
+                    margins.push(Outline { t, poly: grown(&poly, margin), cloud: false });
+                }
                 truth.push(Outline { t, poly, cloud: s.is_cloud() });
             }
         }
@@ -95,15 +103,15 @@ impl Plane {
                 },
             })
             .collect();
-        Self::new(run, axes, iso, truth, prints)
+        Self::new(run, axes, iso, (truth, margins), prints)
     }
 
-    /// Projects on the local axes `axes`; `iso`, `truth` and `prints` are already projected.
+    /// Projects on the local axes `axes`; `iso`, `truth` (with the `margins`) and `prints` are already projected.
     fn new(
         run: &Run<'_>,
         axes: (usize, usize),
         iso: Vec<Outline>,
-        truth: Vec<Outline>,
+        (truth, margins): (Vec<Outline>, Vec<Outline>),
         prints: Vec<Vec<Outline>>,
     ) -> Self {
         let local = |p: &[f64], dims: &[usize]| (p[dims[axes.0]], p[dims[axes.1]]);
@@ -133,6 +141,7 @@ impl Plane {
             ticks,
             iso,
             truth,
+            margins,
             prints,
             ranges: ((0.0, 1.0), (0.0, 1.0)),
         };
@@ -158,7 +167,7 @@ impl Plane {
         let grow = 0.4 * span;
         let near = ((motion.x0 - grow, motion.x1 + grow), (motion.y0 - grow, motion.y1 + grow));
         let mut all = motion;
-        for o in self.iso.iter().chain(&self.truth) {
+        for o in self.iso.iter().chain(&self.truth).chain(&self.margins) {
             let clipped = clip_polygon(&o.poly, near);
             all.add_all(if o.cloud { &o.poly } else { &clipped });
         }

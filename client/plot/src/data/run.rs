@@ -5,6 +5,7 @@ use super::clearance::{contacts, marked_times, measured};
 use super::curve::Curve;
 use super::group::Group;
 use super::input::{PlotInput, Series};
+use super::safety::Safety;
 use super::truth::{Truth, truths};
 
 /// Everything extracted from the input, decimated.
@@ -31,10 +32,12 @@ pub(crate) struct Run<'a> {
     pub(crate) contacts: Vec<Vec<Curve>>,
     /// Times at which moving obstacles and footprints are outlined and the paths ticked (empty: nothing moves).
     pub(crate) marks: Vec<f64>,
+    /// The limits and safety distances the run kept.
+    pub(crate) safety: &'a Safety,
 }
 
 impl<'a> Run<'a> {
-    pub(crate) fn new(input: &PlotInput<'a>, groups: Vec<Group<'a>>) -> Self {
+    pub(crate) fn new(input: &PlotInput<'a>, groups: Vec<Group<'a>>, safety: &'a Safety) -> Self {
         let reference = if input.free.is_empty() { input.adapted } else { input.free };
         let t0 = reference.t[0];
         let t1 =
@@ -82,6 +85,7 @@ impl<'a> Run<'a> {
             clearance,
             contacts,
             marks,
+            safety,
         }
     }
 

@@ -15,6 +15,14 @@ pub(crate) enum Truth<'a> {
 }
 
 impl Truth<'_> {
+    /// The obstacle's id.
+    pub(crate) fn id(&self) -> &str {
+        match self {
+            Truth::Solid(s) => &s.id,
+            Truth::Obstacle(o) => o.id(),
+        }
+    }
+
     pub(crate) fn present_at(&self, t: f64) -> bool {
         match self {
             Truth::Solid(s) => s.present_at(t),

@@ -33,6 +33,10 @@ pub(crate) const CONTACT: RGBColor = RGBColor(230, 0, 120);
 pub(crate) const EVENT: RGBColor = RGBColor(120, 60, 160);
 /// Isopotentials (the inflated superquadrics the robot avoids).
 pub(crate) const ISOPOTENTIAL: RGBColor = RGBColor(90, 90, 90);
+/// Limit lines.
+pub(crate) const LIMIT: RGBColor = RGBColor(205, 115, 0);
+/// Safety margins around the true shapes.
+const MARGIN: RGBColor = RGBColor(170, 40, 110);
 
 /// A line style: colour, width in pixels, and `(on, off)` dash lengths in pixels if dashed.
 #[derive(Debug, Clone, Copy)]
@@ -99,6 +103,16 @@ pub(crate) fn obstacle_fill() -> RGBAColor {
 /// Outline of an isopotential: lighter than the true shape, dashed.
 pub(crate) fn isopotential_stroke() -> Stroke {
     Stroke { color: ISOPOTENTIAL.mix(0.7), width: 1.0, dash: Some((5, 3)) }
+}
+
+/// A limit line: dashed, in its own colour.
+pub(crate) fn limit_stroke() -> Stroke {
+    Stroke::dashed(LIMIT, 1.5, (8, 4))
+}
+
+/// The outline of a true shape grown by its safety margin: dashed, not filled.
+pub(crate) fn margin_stroke() -> Stroke {
+    Stroke::dashed(MARGIN, 1.2, (3, 3))
 }
 
 /// Fill of an isopotential: a faint wash.

@@ -12,7 +12,7 @@ use crate::draw::style::{
 };
 use crate::error::PlotError;
 use crate::layout::frame::{Frame, figure};
-use crate::layout::legend::{Entry, Mark, path_entries};
+use crate::layout::legend::{Entry, Mark, path_entries, safety_entries};
 use crate::panels::{plane, strip};
 
 /// The figure of a robot moving in 2-D or 3-D.
@@ -22,7 +22,8 @@ pub(crate) fn render(input: &PlotInput<'_>, run: &Run<'_>) -> Result<String, Plo
     let planes: Vec<Plane> =
         planes(sub).into_iter().map(|axes| Plane::project(input, run, axes, n)).collect();
     let panels: Vec<(u32, u32)> = planes.iter().map(|pl| plane::size(pl, sub)).collect();
-    let entries = legend(input, run, planes.iter().any(|p| p.prints.iter().any(|f| !f.is_empty())));
+    let mut entries = legend(input, run, planes.iter().any(|p| p.prints.iter().any(|f| !f.is_empty())));
+    entries.extend(safety_entries(run, planes.iter().any(|p| !p.margins.is_empty())));
     let frame = Frame {
         title: input.title,
         panels: &panels,

@@ -6,7 +6,7 @@ use crate::data::run::Run;
 use crate::draw::style::{OBSTACLE_EDGE, Stroke, band_fill};
 use crate::error::PlotError;
 use crate::layout::frame::{Frame, figure};
-use crate::layout::legend::{Entry, Mark, path_entries};
+use crate::layout::legend::{Entry, Mark, path_entries, safety_entries};
 use crate::panels::coordinate::{self, Panel};
 use crate::panels::strip;
 
@@ -28,6 +28,7 @@ pub(crate) fn render(input: &PlotInput<'_>, run: &Run<'_>, d: usize) -> Result<S
         entries
             .push(Entry::new(Mark::Patch(band_fill(), Stroke::solid(OBSTACLE_EDGE, 1.0)), "obstacle extent"));
     }
+    entries.extend(safety_entries(run, false));
     let mut notes = Vec::new();
     if d > shown {
         notes.push(format!("showing {shown} of {d} coordinates"));

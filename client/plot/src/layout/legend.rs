@@ -8,7 +8,9 @@ use plotters::style::text_anchor::HPos;
 use crate::data::run::Run;
 use crate::draw::backend::{Doc, SharedDoc, px};
 use crate::draw::primitives::{Area, drawing_err, put_text};
-use crate::draw::style::{MARKER, Stroke, adapted_stroke, demo_stroke, free_stroke};
+use crate::draw::style::{
+    MARKER, Stroke, adapted_stroke, demo_stroke, fmt_num, free_stroke, limit_stroke, margin_stroke,
+};
 use crate::error::PlotError;
 
 const LEGEND_ROW: i32 = px(24) as i32;
@@ -89,6 +91,28 @@ pub(crate) fn path_entries(run: &Run<'_>, demo: Option<&str>, method: &str) -> V
                 format!("method: {}", method.replace('_', " ")),
             ));
         }
+    }
+    entries
+}
+
+/// Entries of what the run was to keep: the limit lines with the profile they came from (if any limit applies),
+/// and the safety margin around the true shapes (if `margins` are drawn), with its distance when it is one for all.
+pub(crate) fn safety_entries(run: &Run<'_>, margins: bool) -> Vec<Entry> {
+    let s = run.safety;
+    let mut entries = Vec::new();
+    if s.any_limit() {
+        let profile = s.profile.trim();
+        let text = if profile.is_empty() { "limits".to_string() } else { format!("limits: {profile}") };
+        entries.push(Entry::new(Mark::Line(limit_stroke()), text).class("legend-limits"));
+    }
+    if margins {
+        let distances: Vec<f64> =
+            run.truths.iter().map(|t| s.margin_of(t.id())).filter(|m| *m > 0.0).collect();
+        let one = distances.first().filter(|m| distances.iter().all(|d| d == *m));
+        let text = one.map_or("safety margin".to_string(), |m| format!("safety margin {} m", fmt_num(*m)));
+        entries.push(
+            Entry::new(Mark::Patch(TRANSPARENT.to_rgba(), margin_stroke()), text).class("legend-margin"),
+        );
     }
     entries
 }

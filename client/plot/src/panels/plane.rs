@@ -1,5 +1,5 @@
-//! A robot-space panel: one plane of a robot moving in 2-D or 3-D (a [`Plane`]), with the obstacles' true shapes
-//! and isopotentials, the paths with their contacts, and, where things move, outlines at the marked times with the
+//! A robot-space panel: one plane of a robot moving in 2-D or 3-D (a [`Plane`]), with the obstacles' true shapes,
+//! their safety margins and isopotentials, the paths with their contacts, and, where things move, outlines at the marked times with the
 //! paths ticked at the same times; with an equal aspect ratio.
 
 use plotters::prelude::*;
@@ -12,7 +12,7 @@ use crate::draw::backend::{Doc, SharedDoc, px};
 use crate::draw::primitives::{Area, Chart, draw_curve, draw_mesh, draw_outline, draw_patch, drawing_err};
 use crate::draw::style::{
     CONTACT, FONT, MARKER, OBSTACLE_EDGE, Stroke, adapted_stroke, contact_stroke, demo_stroke, fmt_num,
-    free_stroke, isopotential_fill, isopotential_stroke, obstacle_fill, robot_color,
+    free_stroke, isopotential_fill, isopotential_stroke, margin_stroke, obstacle_fill, robot_color,
 };
 use crate::error::PlotError;
 use crate::layout::chart::{CAPTION_H, PANEL_MARGIN, X_LABEL_AREA, Y_LABEL_AREA, captioned, chart_on};
@@ -88,7 +88,7 @@ fn fade(run: &Run<'_>, t: Option<f64>) -> f64 {
     }
 }
 
-/// The content of one panel, back to front: isopotentials, true shapes, footprints, reference paths, adapted paths,
+/// The content of one panel, back to front: isopotentials, true shapes, safety margins, footprints, reference paths, adapted paths,
 /// contacts, marks.
 fn draw_plane(doc: &SharedDoc, chart: &mut Chart<'_>, pl: &Plane, run: &Run<'_>) -> Result<(), PlotError> {
     Doc::group(doc, "isopotential", || -> Result<(), PlotError> {
@@ -123,6 +123,13 @@ fn draw_plane(doc: &SharedDoc, chart: &mut Chart<'_>, pl: &Plane, run: &Run<'_>)
             if let Some(t) = o.t {
                 last = time_label(chart, &o.poly, t, pl.ranges, last)?;
             }
+        }
+        Ok(())
+    })?;
+    Doc::group(doc, "margin", || -> Result<(), PlotError> {
+        for o in &pl.margins {
+            let stroke = margin_stroke();
+            draw_outline(chart, &o.poly, Stroke { color: stroke.color.mix(fade(run, o.t)), ..stroke })?;
         }
         Ok(())
     })?;

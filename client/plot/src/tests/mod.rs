@@ -12,6 +12,7 @@ use crate::figures::time::MAX_TIME_PANELS;
 
 mod elements;
 mod pose;
+mod safety;
 use super::{PlotError, PlotInput, render_svg};
 
 pub(super) fn ellipse(id: &str, center: Vec<f64>, axes: Vec<f64>, velocity: Option<Vec<f64>>) -> Obstacle {

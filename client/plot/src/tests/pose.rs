@@ -52,7 +52,7 @@ fn a_held_tool_is_outlined_along_the_path_and_its_rotation_has_a_panel() {
     assert!(texts(&svg).iter().any(|t| t == "tool at t (s)"), "the legend names the outlines");
     let strip = groups(&doc, "orientation");
     assert_eq!(strip.len(), 1, "a panel of the strip for the rotation");
-    assert!(texts(&svg).iter().any(|t| t.contains("rotation from start")));
+    assert!(texts(&svg).iter().any(|t| t == "turn from start (°)"));
     // A mismatched orientation list is refused, naming it.
     let short = turning(10, 0.0);
     let err = render_svg(&PlotInput { pose: Some(PoseTrace { orientations: &short, ..pose }), ..input })
