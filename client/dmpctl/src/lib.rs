@@ -8,6 +8,7 @@
 //! | the commands that talk to the server (`learn`, `list`, `plan`, `stream`, `scene` ...) | `server_commands` |
 //! | `info`, `stats`, `health` and the server's warnings | `server_info` |
 //! | the figure of `plan` and `stream` | `server_plot` |
+//! | what a plan or stream reported beside its setpoints: events, limits in force, clearances | `run_record` |
 //! | `robot put`, `show`, `delete`: a robot's record | `robot_commands` |
 //! | `scenario run --server`: the offline experiment computed by the server | [`scenario_through_server`] |
 //! | where a command acts: its cell and Zenoh endpoints, its server found over Zenoh | `place` |
@@ -25,8 +26,8 @@
 //! The modules form layers, each using only those below it: the dispatcher [`cli`] on top; the commands
 //! (`server_commands`, `robot_commands`, [`scenario_through_server`], `server_plot`, `server_info`, `place`,
 //! `tools`); the flags (`args`); and the files, outputs and runs they share ([`offline`], [`scenario_file`],
-//! `obstacle_file`, `json_position`, [`demo_csv`], `primitive_json`, `outputs`, `progress`, `error`). What other
-//! crates use (the tests, the deploy checks) is public; the rest is the crate's own.
+//! `run_record`, `obstacle_file`, `json_position`, [`demo_csv`], `primitive_json`, `outputs`, `progress`, `error`).
+//! What other crates use (the tests, the deploy checks) is public; the rest is the crate's own.
 
 #![warn(missing_docs)]
 #![warn(unreachable_pub)]
@@ -43,6 +44,7 @@ mod place;
 mod primitive_json;
 mod progress;
 mod robot_commands;
+mod run_record;
 pub mod scenario_file;
 pub mod scenario_through_server;
 mod server_commands;

@@ -156,7 +156,8 @@ pub(crate) async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, Dmp
     s.push(&seg)?;
     let traj = s.trajectory().ok_or_else(|| DmpctlError::protocol("the plan has no points".into()))?;
     write_file(&a.out, "trajectory.csv", trajectory_csv(traj).as_bytes())?;
-    crate::server_plot::write_plot(client, &a.motion, "plan", traj, seg.dt, &[], &a.out).await;
+    let record = crate::run_record::RunRecord::plan(&seg, r.limits.as_ref());
+    crate::server_plot::write_plot(client, &a.motion, "plan", traj, seg.dt, &record, &a.out).await;
     let collisions = if r.collisions.is_empty() { "none".to_string() } else { r.collisions.join(", ") };
     Ok(format!(
         "{}/{}: {} points over {} s (dt {}), scene version {}, collisions: {collisions}, stalled: {}; wrote {}",
@@ -211,7 +212,7 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
     let mut interrupted = false;
     let mut stale = false;
     let mut arrived = 0.0;
-    let mut versions = crate::server_plot::SceneVersions::default();
+    let mut versions = crate::run_record::RunRecord::default();
     let ctrl_c = tokio::signal::ctrl_c();
     tokio::pin!(ctrl_c);
     let progress = crate::progress::Progress::new(format!("stream {}", a.motion.robot));
@@ -250,7 +251,7 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
     }
     write_file(&a.out, "trajectory.csv", trajectory_csv(&traj).as_bytes())?;
     let dt = a.dt.unwrap_or(if traj.len() > 1 { traj.t[1] - traj.t[0] } else { 1e-3 });
-    crate::server_plot::write_plot(client, &a.motion, "stream", &traj, dt, &versions.events, &a.out).await;
+    crate::server_plot::write_plot(client, &a.motion, "stream", &traj, dt, &versions, &a.out).await;
     Ok(format!(
         "{}/{}: {n} segments{}, {} setpoints in force up to t = {} s, last status {status}; wrote {}",
         a.motion.robot,

@@ -1,13 +1,14 @@
 //! The figure of a motion the server planned or streamed (`plan`, `stream`): `plot.svg` beside `trajectory.csv`,
-//! with the obstacle-free plan of the same motion, the cell's obstacles (their true shapes and the isopotentials the
-//! server avoids) and, for a stream, the scene versions as events.
+//! with the obstacle-free plan of the same motion, the cell's obstacles (their true shapes, their safety margins and
+//! the isopotentials the server avoids), the limits in force and, for a stream, the scene versions as events; and
+//! beside it what the run reported of them ([`RunRecord::write`]).
 
 use std::path::Path;
 
 use dmp::Trajectory;
 use dmp_client::DmpClient;
 use dmp_client::setpoints::Setpoints;
-use dmp_plot::{Event, PlotInput, Solid, SolidShape, render_svg};
+use dmp_plot::{PlotInput, Solid, SolidShape, render_svg_with};
 use dmp_proto::avoidance::avoidance_to_proto;
 use dmp_proto::obstacle::obstacle_to_engine;
 use dmp_proto::v1;
@@ -15,24 +16,7 @@ use dmp_proto::v1;
 use crate::args::MotionArgs;
 use crate::error::DmpctlError;
 use crate::outputs::write_file;
-
-/// The scene versions a stream went through: an event each time the version changes after the first segment.
-#[derive(Debug, Default)]
-pub(crate) struct SceneVersions {
-    last: Option<u64>,
-    /// The changes.
-    pub(crate) events: Vec<Event>,
-}
-
-impl SceneVersions {
-    /// Notes the scene version of a segment.
-    pub(crate) fn see(&mut self, seg: &v1::Segment) {
-        if self.last.is_some_and(|v| v != seg.scene_version) {
-            self.events.push(Event::new(seg.start_time, format!("scene version {}", seg.scene_version)));
-        }
-        self.last = Some(seg.scene_version);
-    }
-}
+use crate::run_record::RunRecord;
 
 /// The true shape of a scene obstacle: its solid, or its superquadric without the margin.
 fn true_shape(o: &v1::Obstacle) -> Option<Solid> {
@@ -52,18 +36,22 @@ fn true_shape(o: &v1::Obstacle) -> Option<Solid> {
     Some(s)
 }
 
-/// Writes `out/plot.svg` of `traj`, executed for `motion` with step `dt`. What fails here is a warning on stderr:
-/// the trajectory is already written.
+/// Writes `out/plot.svg` of `traj`, executed for `motion` with step `dt`, and what `record` holds of the limits and
+/// clearances (`limits.json`, `clearance.csv`). What fails here is a warning on stderr: the trajectory is already
+/// written.
 pub(crate) async fn write_plot(
     client: &DmpClient,
     motion: &MotionArgs,
     what: &str,
     traj: &Trajectory,
     dt: f64,
-    events: &[Event],
+    record: &RunRecord,
     out: &Path,
 ) {
-    if let Err(e) = try_write_plot(client, motion, what, traj, dt, events, out).await {
+    if let Err(e) = record.write(out) {
+        eprintln!("warning: the limits and clearances not written: {e}");
+    }
+    if let Err(e) = try_write_plot(client, motion, what, traj, dt, record, out).await {
         eprintln!("warning: plot.svg not written: {e}");
     }
 }
@@ -74,7 +62,7 @@ async fn try_write_plot(
     what: &str,
     traj: &Trajectory,
     dt: f64,
-    events: &[Event],
+    record: &RunRecord,
     out: &Path,
 ) -> Result<(), DmpctlError> {
     let mut spec = motion.spec();
@@ -94,22 +82,26 @@ async fn try_write_plot(
     let method = motion.avoidance.as_ref().map_or("", |a| a.method.name());
     let title = format!("{}/{}: {what}", motion.robot, motion.name);
     let goal = motion.goal.as_ref().map(|g| g.0.clone());
-    let svg = render_svg(&PlotInput {
-        title: &title,
-        demonstration: &[],
-        demonstration_t: None,
-        free: &free,
-        adapted: traj,
-        goal: goal.as_deref(),
-        obstacles: &obstacles,
-        robots: &[],
-        obstacle_time: f64::NAN,
-        // Every obstacle's true shape, or none: a missing one would be taken for its isopotential.
-        solids: if solids.len() == obstacles.len() { &solids } else { &[] },
-        method,
-        clearance: None,
-        events,
-        pose: None,
-    })?;
+    let safety = record.safety(&scene);
+    let svg = render_svg_with(
+        &PlotInput {
+            title: &title,
+            demonstration: &[],
+            demonstration_t: None,
+            free: &free,
+            adapted: traj,
+            goal: goal.as_deref(),
+            obstacles: &obstacles,
+            robots: &[],
+            obstacle_time: f64::NAN,
+            // Every obstacle's true shape, or none: a missing one would be taken for its isopotential.
+            solids: if solids.len() == obstacles.len() { &solids } else { &[] },
+            method,
+            clearance: None,
+            events: &record.events,
+            pose: None,
+        },
+        &safety,
+    )?;
     write_file(out, "plot.svg", svg.as_bytes())
 }
