@@ -159,8 +159,10 @@ pub(crate) async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, Dmp
     let record = crate::run_record::RunRecord::plan(&seg, r.limits.as_ref());
     crate::server_plot::write_plot(client, &a.motion, "plan", traj, seg.dt, &record, &a.out).await;
     let collisions = if r.collisions.is_empty() { "none".to_string() } else { r.collisions.join(", ") };
-    Ok(format!(
-        "{}/{}: {} points over {} s (dt {}), scene version {}, collisions: {collisions}, stalled: {}; wrote {}",
+    let verdict = r.verdict.as_ref();
+    let line = format!(
+        "{}/{}: {} points over {} s (dt {}), scene version {}, collisions: {collisions}, stalled: {}, warnings: {}, \
+         {}; wrote {}",
         a.motion.robot,
         a.motion.name,
         traj.len(),
@@ -168,8 +170,79 @@ pub(crate) async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, Dmp
         seg.dt,
         seg.scene_version,
         r.stalled,
+        r.warnings.len(),
+        verdict_words(verdict),
         a.out.join("trajectory.csv").display()
-    ))
+    );
+    let mut problems = verdict_problems(verdict, a.allow_collision);
+    if verdict.is_none() && !r.collisions.is_empty() && !a.allow_collision {
+        problems.push(format!("collision with {collisions} (--allow-collision if it is meant to)"));
+    }
+    gate(line, problems)
+}
+
+/// The outcome's name without its prefix (`GOAL_REACHED`).
+fn outcome_name(v: &v1::Verdict) -> &'static str {
+    let name = v1::Outcome::try_from(v.outcome).map_or("UNKNOWN", |o| o.as_str_name());
+    name.strip_prefix("OUTCOME_").unwrap_or(name)
+}
+
+/// The verdict in the summary line: `verdict GOAL_REACHED (reached the goal ...)`.
+fn verdict_words(v: Option<&v1::Verdict>) -> String {
+    match v {
+        Some(v) => format!("verdict {} ({})", outcome_name(v), v.reason),
+        None => "no verdict".to_string(),
+    }
+}
+
+/// What is wrong with a run that ended with verdict `v`, as `scenario run` and `sim` judge theirs: a collision
+/// (unless `allow_collision`), or any ending but the goal reached: a stall, a missed goal, a braking stop, a run
+/// blocked or out of time. No verdict at all is a problem too (the run's end is unknown).
+fn verdict_problems(v: Option<&v1::Verdict>, allow_collision: bool) -> Vec<String> {
+    let Some(v) = v else {
+        return vec!["the run ended without a verdict (the server did not say how it ended)".to_string()];
+    };
+    let outcome = v1::Outcome::try_from(v.outcome).unwrap_or(v1::Outcome::Unspecified);
+    let mut problems = Vec::new();
+    if !v.collisions.is_empty() || outcome == v1::Outcome::Collision {
+        if !allow_collision {
+            problems.push(format!("{} (--allow-collision if it is meant to)", v.reason));
+        }
+        if !v.goal_reached {
+            problems.push(format!(
+                "goal not reached ({:.3e} m away at the end{})",
+                v.goal_distance,
+                angle_words(v)
+            ));
+        }
+    } else if outcome != v1::Outcome::GoalReached || !v.goal_reached {
+        problems.push(format!("goal not reached: {} ({})", v.reason, outcome_name(v)));
+    }
+    problems
+}
+
+/// `, 1.2° from the goal orientation` for a pose run, else nothing.
+fn angle_words(v: &v1::Verdict) -> String {
+    if v.goal_angle > 0.0 {
+        format!(", {:.3}° from the goal orientation", v.goal_angle.to_degrees())
+    } else {
+        String::new()
+    }
+}
+
+/// `line` when nothing went wrong, else [`DmpctlError::Problems`] (exit code 3, the problems on stderr).
+fn gate(line: String, problems: Vec<String>) -> Result<String, DmpctlError> {
+    if problems.is_empty() { Ok(line) } else { Err(DmpctlError::Problems { summary: line, problems }) }
+}
+
+/// Real time: the rows of `seg` whose time had passed on the wall clock when it arrived (a robot would have
+/// executed older setpoints in their place), as `sim` counts them.
+fn late_rows(seg: &v1::Segment, now_unix_s: f64) -> usize {
+    if seg.start_unix_s <= 0.0 || seg.dim == 0 {
+        return 0;
+    }
+    let rows = seg.positions.len() / seg.dim as usize;
+    (0..rows).filter(|&k| seg.start_unix_s + k as f64 * seg.dt < now_unix_s).count()
 }
 
 /// The status name of a segment.
@@ -213,6 +286,7 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
     let mut stale = false;
     let mut arrived = 0.0;
     let mut versions = crate::run_record::RunRecord::default();
+    let (mut verdict, mut warnings, mut late, mut collision_segments) = (None, 0usize, 0usize, 0usize);
     let ctrl_c = tokio::signal::ctrl_c();
     tokio::pin!(ctrl_c);
     let progress = crate::progress::Progress::new(format!("stream {}", a.motion.robot));
@@ -222,7 +296,16 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
                 None => break,
                 Some(seg) => {
                     let seg = seg?;
+                    late += late_rows(&seg, unix_now());
                     progress.println(&segment_line(&seg));
+                    warnings += seg.warnings.len();
+                    if seg.status == v1::SegmentStatus::Collision as i32 {
+                        collision_segments += 1;
+                    }
+                    if seg.verdict.is_some() {
+                        // A later one supersedes it (real time: a change after the run had ended).
+                        verdict = seg.verdict.clone();
+                    }
                     progress.tick(format!("{} segments, t = {:.3} s", s.segments() + 1, seg.start_time));
                     print_warnings(&seg.warnings, seg.scene_stale, &mut stale);
                     arrived = seg.goal_reached_time;
@@ -252,15 +335,40 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
     write_file(&a.out, "trajectory.csv", trajectory_csv(&traj).as_bytes())?;
     let dt = a.dt.unwrap_or(if traj.len() > 1 { traj.t[1] - traj.t[0] } else { 1e-3 });
     crate::server_plot::write_plot(client, &a.motion, "stream", &traj, dt, &versions, &a.out).await;
-    Ok(format!(
-        "{}/{}: {n} segments{}, {} setpoints in force up to t = {} s, last status {status}; wrote {}",
+    let collisions = match verdict.as_ref().map(|v| v.collisions.join(", ")) {
+        Some(c) if !c.is_empty() => c,
+        _ if collision_segments > 0 => "yes".to_string(),
+        _ => "none".to_string(),
+    };
+    let line = format!(
+        "{}/{}: {n} segments{}, {} setpoints in force up to t = {} s, last status {status}, collisions: \
+         {collisions} ({collision_segments} COLLISION segments), warnings: {warnings}, late setpoints: {late}, {}; \
+         wrote {}",
         a.motion.robot,
         a.motion.name,
         if interrupted { " (interrupted)" } else { "" },
         traj.len(),
         traj.t.last().copied().unwrap_or(0.0),
+        verdict_words(verdict.as_ref()),
         a.out.join("trajectory.csv").display()
-    ))
+    );
+    // Ctrl-C is a stop the user asked for: how the run would have ended is not judged, what it did is.
+    let mut problems =
+        if interrupted { Vec::new() } else { verdict_problems(verdict.as_ref(), a.allow_collision) };
+    if (interrupted || verdict.is_none()) && collision_segments > 0 && !a.allow_collision {
+        problems.push(format!(
+            "{collision_segments} segments in COLLISION (--allow-collision if it is meant to)"
+        ));
+    }
+    if late > 0 {
+        problems.push(format!("{late} late setpoints"));
+    }
+    gate(line, problems)
+}
+
+/// The wall clock, Unix seconds.
+fn unix_now() -> f64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64())
 }
 
 /// Reads the obstacles of `path`: one JSON obstacle, or a file (e.g. a scenario) whose `obstacles` are all taken.

@@ -7,6 +7,18 @@ use dmp_tests::{TestServer, within};
 use dmpctl::DmpctlError;
 use dmpctl::cli::{Cli, run_async};
 
+/// The summary of a run that completed with problems (exit code 3), one of which contains `problem`.
+fn problems_summary(e: DmpctlError, problem: &str) -> String {
+    assert_eq!(e.exit_code(), 3, "{e}");
+    match e {
+        DmpctlError::Problems { summary, problems } => {
+            assert!(problems.iter().any(|p| p.contains(problem)), "{problems:?}");
+            summary
+        }
+        e => panic!("{e}"),
+    }
+}
+
 /// Runs `dmpctl --server URL ARGS...` (under the tests' timeout).
 async fn run_at(url: &str, args: &[&str]) -> Result<String, DmpctlError> {
     let mut all = vec!["dmpctl", "--server", url];
@@ -68,8 +80,9 @@ async fn server_commands_against_the_server() {
         ],
     )
     .await
-    .unwrap();
-    assert!(said.contains("1501 points"), "{said}");
+    .map_or_else(|e| problems_summary(e, "goal not reached: ended "), |ok| panic!("exit 0: {ok}"));
+    // Not at the goal and at rest to within 1 mm at 1.5 s: out of time, exit 3, the outputs written all the same.
+    assert!(said.contains("1501 points") && said.contains("verdict OUT_OF_TIME"), "{said}");
     let plan = std::fs::read_to_string(dir.path().join("plan/trajectory.csv")).unwrap();
     assert_eq!(plan.lines().next(), Some("t,x1,x2,xd1,xd2,a1,a2"));
     assert_eq!(plan.lines().count(), 1502);
@@ -93,11 +106,15 @@ async fn server_commands_against_the_server() {
         ],
     )
     .await
-    .unwrap();
+    .unwrap_err();
     // 1501 points in segments of 10, the last one the point at 1.5 s; the goal is not reached to within 1 mm
-    // by then, so the run ends at its maximum duration.
+    // by then, so the run ends at its maximum duration: out of time, exit 3.
+    assert_eq!(said.exit_code(), 3, "{said}");
+    let said = said.to_string();
     assert!(
-        said.contains("151 segments, 1501 setpoints in force up to t = 1.5 s, last status STOPPED"),
+        said.contains("151 segments, 1501 setpoints in force up to t = 1.5 s, last status STOPPED")
+            && said.contains("verdict OUT_OF_TIME")
+            && said.contains("goal not reached: ended "),
         "{said}"
     );
     let streamed = std::fs::read_to_string(dir.path().join("stream/trajectory.csv")).unwrap();
@@ -253,6 +270,11 @@ async fn every_command_acts_in_its_one_cell() {
             "line",
             "--duration",
             "2",
+            // At 2 s the line is 2 mm short of its goal: within this tolerance, the plan reaches it (exit 0).
+            "--goal-tolerance",
+            "0.01",
+            "--goal-speed-tolerance",
+            "0.1",
             "--out",
             out_dir.to_str().unwrap(),
         ]);

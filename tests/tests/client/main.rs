@@ -2,5 +2,6 @@
 //! library's calls, `dmpctl`'s commands, and scenarios computed by the server. Every await is under a timeout.
 
 mod dmpctl;
+mod dmpctl_verdicts;
 mod grpc;
 mod scenario_through_server;

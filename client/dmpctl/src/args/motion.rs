@@ -97,6 +97,9 @@ pub(crate) struct PlanArgs {
     /// Output directory (created).
     #[arg(long)]
     pub(crate) out: PathBuf,
+    /// A collision is expected (a plan without avoidance): it does not make the exit code 3.
+    #[arg(long)]
+    pub(crate) allow_collision: bool,
 }
 
 /// `dmpctl stream`.
@@ -129,4 +132,7 @@ pub(crate) struct StreamArgs {
     /// Output directory (created).
     #[arg(long)]
     pub(crate) out: PathBuf,
+    /// A collision is expected (a run without avoidance): it does not make the exit code 3.
+    #[arg(long)]
+    pub(crate) allow_collision: bool,
 }
