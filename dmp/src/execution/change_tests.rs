@@ -271,3 +271,251 @@ fn the_accelerations_of_unlimited_dimensions_stay_the_dmps_after_a_limited_point
     }
     assert!(worst < 0.1, "an acceleration handed out is {worst} m/s² off the velocities' differences");
 }
+
+/// Goal changes of a pose run across its chart's cut (`execution/pose.rs`, `orientation/pose.rs`).
+#[cfg(feature = "orientation")]
+mod across_the_cut {
+    use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+    use super::*;
+    use crate::orientation::pose::pose_motion;
+    use crate::orientation::quaternion::{angle_between, exp, log, to_xyzw};
+    use crate::primitive::OrientationChart;
+
+    const DT: f64 = 1e-3;
+
+    /// The axis of the first turn, and of the new goals beyond it.
+    fn axis() -> Vector3<f64> {
+        Vector3::new(0.3, -0.5, 0.8).normalize()
+    }
+
+    /// A pose primitive (3-D position, K = 400, `tau` = 1 s) in the chart at the identity, turning from `0` to
+    /// `60°` about [`axis`]; `shaped`: with a forcing term on the orientation (a bump of about 0.1 rad across the
+    /// turn), otherwise a straight line.
+    fn turning(shaped: bool) -> Primitive {
+        let y = axis() * 60f64.to_radians();
+        let goal = vec![0.3, 0.1, -0.2, y[0], y[1], y[2]];
+        let mut p = Primitive::straight_line(20, 4.0, vec![400.0; 6], None, 1.0, vec![0.0; 6], goal).unwrap();
+        p.orientation = Some(OrientationChart { reference: [0.0, 0.0, 0.0, 1.0] });
+        if shaped {
+            for (i, w) in p.weights[3..].iter_mut().enumerate() {
+                for (j, v) in w.iter_mut().enumerate() {
+                    *v = 0.1 * ((j as f64) * 0.7 + i as f64).sin();
+                }
+            }
+        }
+        p
+    }
+
+    /// Orientations, angular velocities and accelerations of a pose run's points.
+    #[derive(Default)]
+    struct Turn {
+        q: Vec<UnitQuaternion<f64>>,
+        omega: Vec<Vector3<f64>>,
+        omega_dot: Vec<Vector3<f64>>,
+        outcome: Outcome,
+    }
+
+    impl Turn {
+        fn extend(&mut self, s: &Stretch) {
+            let o = &s.orientation;
+            let quat = |q: &[f64]| UnitQuaternion::new_unchecked(Quaternion::new(q[3], q[0], q[1], q[2]));
+            self.q.extend(o.q.chunks_exact(4).map(quat));
+            self.omega.extend(o.omega.chunks_exact(3).map(Vector3::from_column_slice));
+            self.omega_dot.extend(o.omega_dot.chunks_exact(3).map(Vector3::from_column_slice));
+            self.outcome = s.outcome;
+        }
+
+        /// Advances `n` points at a time, at most `seconds`, or to the end of the run.
+        fn run(&mut self, e: &mut Execution, n: usize, seconds: f64) {
+            for _ in 0..(seconds / (n as f64 * DT)).round() as usize {
+                let s = e.advance(n).unwrap();
+                self.extend(&s);
+                if s.outcome.is_final() {
+                    break;
+                }
+            }
+        }
+
+        /// The rotation travelled from point `from` on: the sum of the angles between neighbours.
+        fn travelled(&self, from: usize) -> f64 {
+            self.q[from..].windows(2).map(|w| angle_between(&w[0], &w[1])).sum()
+        }
+    }
+
+    /// `q` and `-q`.
+    fn both_signs(q: UnitQuaternion<f64>) -> [UnitQuaternion<f64>; 2] {
+        [q, UnitQuaternion::new_unchecked(-q.into_inner())]
+    }
+
+    /// Checks that the points `k - 3 ..= k + 3` around the change (the first point after it is `k`) have no jump
+    /// in orientation, angular velocity or acceleration, by finite differences at the output rate: each step of
+    /// the orientation is the one `ω` gives (to `|ω̇| dt²`); `ω` is the central difference of the
+    /// orientations and `ω̇` that of `ω` (to `O(dt²)` and `O(dt)`, with jerk up to `max_jerk`); and `ω̇` changes from a point to the next by at most
+    /// `max_jerk dt`.
+    fn continuous_at(r: &Turn, k: usize, max_jerk: f64, label: &str) {
+        let peak_acc = r.omega_dot[k - 3..=k + 3].iter().map(|a| a.norm()).fold(0.0, f64::max);
+        for j in k - 2..=k + 3 {
+            let step = angle_between(&r.q[j - 1], &r.q[j]);
+            let expected = 0.5 * (r.omega[j - 1] + r.omega[j]).norm() * DT;
+            let tol = peak_acc * DT * DT + 1e-9;
+            assert!(
+                (step - expected).abs() <= tol,
+                "{label}: orientation at {j}: a step of {step}, not {expected}"
+            );
+        }
+        for j in k - 2..=k + 2 {
+            let fd = log(&(r.q[j + 1] * r.q[j - 1].conjugate())) / (2.0 * DT);
+            let tol = 1e-4 * (1.0 + r.omega[j].norm()) + max_jerk * DT * DT / 3.0;
+            assert!((fd - r.omega[j]).norm() <= tol, "{label}: ω at {j}: {fd} vs {}", r.omega[j]);
+            let fd = (r.omega[j + 1] - r.omega[j - 1]) / (2.0 * DT);
+            let tol = 2.0 * max_jerk * DT;
+            assert!((fd - r.omega_dot[j]).norm() <= tol, "{label}: ω̇ at {j}: {fd} vs {}", r.omega_dot[j]);
+        }
+        for j in k - 3..=k + 3 {
+            let jump = (r.omega_dot[j + 1] - r.omega_dot[j]).norm();
+            assert!(jump <= max_jerk * DT, "{label}: ω̇ jumps by {jump} rad/s² at {j}");
+        }
+    }
+
+    /// New goals 150° to 179° beyond the current orientation, across the chart's cut, in both signs: the run
+    /// turns by the short angle (the rotation travelled after the change is within 0.5° of it, the angle to the
+    /// goal only decreases once the change has settled) and reaches the goal, continuously at the change.
+    #[test]
+    fn a_goal_change_across_the_cut_turns_the_short_way() {
+        for degrees in [150.0, 160.0, 162.2, 170.0, 175.0, 179.0] {
+            let theta = f64::to_radians(degrees);
+            for sign in 0..2 {
+                let label = format!("{degrees}°, sign {sign}");
+                let mut e = alone(&turning(false), Scene::empty(), Stepping::rk4(DT), 10);
+                let mut r = Turn::default();
+                // Nearly at rest at the first goal (60°), then on along the same axis.
+                r.run(&mut e, 100, 1.5);
+                let current = *r.q.last().unwrap();
+                let goal = both_signs(exp(&(axis() * theta)) * current)[sign];
+                e.set_pose_goal(None, Some(to_xyzw(&goal))).unwrap();
+                let k = r.q.len();
+                r.run(&mut e, 100, 6.0);
+                assert_eq!(r.outcome, Outcome::GoalReached, "{label}");
+                let miss = angle_between(r.q.last().unwrap(), &goal).to_degrees();
+                assert!(miss <= 0.1, "{label}: ends {miss}° from the goal");
+                let turned = (r.travelled(k - 1)).to_degrees();
+                assert!((turned - degrees).abs() <= 0.5, "{label}: turned {turned}°");
+                // Settled: from 0.05 s after the change on, the angle to the goal never grows.
+                let to_goal: Vec<f64> = r.q[k + 50..].iter().map(|q| angle_between(q, &goal)).collect();
+                for (j, w) in to_goal.windows(2).enumerate() {
+                    assert!(w[1] <= w[0] + 1e-12, "{label}: the angle to the goal grows at {}", k + 50 + j);
+                }
+                // A filtered goal change: the jerk is at most K alpha_g / tau³ times the angle.
+                continuous_at(&r, k, 400.0 * 10.0 * theta * 1.05, &label);
+            }
+        }
+    }
+
+    /// A change mid-turn (phase 0.25, turning at about 1.5 rad/s, with a forcing term on the orientation) to a goal
+    /// 170° beyond the current orientation, across the cut: the orientation, `ω` and `ω̇` stay continuous (the
+    /// start absorbs what the change of chart does to the transformation system's acceleration), the run turns by
+    /// about the short angle (within the bend its motion and forcing term give it), and reaches the goal. A
+    /// rollback to before the change then joins the points kept without a jump and reaches the goal too.
+    #[test]
+    fn a_goal_change_across_the_cut_mid_turn_is_continuous() {
+        for sign in 0..2 {
+            let label = format!("sign {sign}");
+            let mut e = alone(&turning(true), Scene::empty(), Stepping::rk4(DT), 400);
+            let mut r = Turn::default();
+            r.run(&mut e, 50, 0.35);
+            let k = r.q.len();
+            assert!(r.omega[k - 1].norm() > 1.0, "{label}: turning at {}", r.omega[k - 1].norm());
+            let jerk = |r: &Turn, range: std::ops::Range<usize>| {
+                range.map(|j| (r.omega_dot[j + 1] - r.omega_dot[j]).norm() / DT).fold(0.0, f64::max)
+            };
+            let before = jerk(&r, k - 50..k - 1);
+            let theta = 170f64.to_radians();
+            let goal = both_signs(exp(&(axis() * theta)) * r.q[k - 1])[sign];
+            e.set_pose_goal(None, Some(to_xyzw(&goal))).unwrap();
+            r.run(&mut e, 50, 0.2);
+            let kept = r.q.len();
+            let max_jerk = 1.5 * before + 400.0 * 10.0 * theta * 1.05;
+            continuous_at(&r, k, max_jerk, &label);
+            let mut rest = Turn::default();
+            rest.q.extend_from_slice(&r.q);
+            rest.run(&mut e, 50, 6.0);
+            assert_eq!(rest.outcome, Outcome::GoalReached, "{label}");
+            let miss = angle_between(rest.q.last().unwrap(), &goal).to_degrees();
+            assert!(miss <= 0.1, "{label}: ends {miss}° from the goal");
+            let turned = rest.travelled(k - 1).to_degrees();
+            assert!(turned < 175.0, "{label}: turned {turned}° for a goal 170° away");
+
+            // Back to the change (what a server does: it rolls back to the first point not yet played, and
+            // applies the change there): the same points.
+            let mut again = alone(&turning(true), Scene::empty(), Stepping::rk4(DT), 400);
+            let mut r2 = Turn::default();
+            r2.run(&mut again, 50, 0.35);
+            again.set_pose_goal(None, Some(to_xyzw(&goal))).unwrap();
+            r2.run(&mut again, 50, 0.2);
+            assert_eq!(r2.q.len(), kept);
+            assert!((again.rollback_to(k as f64 * DT) - k as f64 * DT).abs() < 1e-9);
+            let mut redo = Turn::default();
+            redo.run(&mut again, 50, 0.2);
+            for (j, (a, b)) in redo.q.iter().zip(&r.q[k..kept]).enumerate() {
+                assert!(angle_between(a, b) < 1e-12, "{label}: recomputed point {j} differs");
+            }
+            // Back to 0.1 s before the change (the history there is in the old chart, mapped): the run goes on
+            // from there continuously in orientation and `ω`, to the goal. The start absorbed the acceleration's
+            // difference at the change, not there: `ω̇` may step, by a few per cent of a goal step.
+            let back = (k - 100) as f64 * DT;
+            assert!((again.rollback_to(back) - back).abs() < 1e-9);
+            let join = k - 100;
+            let mut r3 = Turn::default();
+            r3.q.extend_from_slice(&r.q[..join]);
+            r3.omega.extend_from_slice(&r.omega[..join]);
+            r3.omega_dot.extend_from_slice(&r.omega_dot[..join]);
+            r3.run(&mut again, 50, 6.0);
+            assert_eq!(r3.outcome, Outcome::GoalReached, "{label}: after the rollback");
+            let miss = angle_between(r3.q.last().unwrap(), &goal).to_degrees();
+            assert!(miss <= 0.1, "{label}: after the rollback, ends {miss}° from the goal");
+            let turned = r3.travelled(join - 1).to_degrees();
+            let short = angle_between(&r3.q[join - 1], &goal).to_degrees();
+            assert!(turned < short + 5.0, "{label}: after the rollback, turned {turned}° for {short}°");
+            let step = 400.0 * theta;
+            continuous_at(&r3, join, 1.5 * before + 400.0 * 10.0 * theta * 1.05 + 0.02 * step / DT, &label);
+        }
+    }
+
+    /// A run whose initial goal is 150° to 179° beyond the primitive's goal orientation (121° to 150° from its
+    /// start the short way, across the primitive's chart's cut), in both signs: `pose_motion` charts the run at
+    /// its goal, so it turns by the short angle and reaches the goal.
+    #[test]
+    fn an_initial_goal_across_the_cut_turns_the_short_way() {
+        let p = turning(false);
+        let primitive_goal = exp(&(axis() * 60f64.to_radians()));
+        let start = UnitQuaternion::identity();
+        for degrees in [150.0, 162.2, 170.0, 179.0] {
+            for sign in 0..2 {
+                let label = format!("{degrees}°, sign {sign}");
+                let goal = both_signs(exp(&(axis() * f64::to_radians(degrees))) * primitive_goal)[sign];
+                let short = angle_between(&start, &goal).to_degrees();
+                let position = Motion { start: p.start.clone(), goal: p.goal.clone(), tau: 1.0 };
+                let m = pose_motion(&p, position, None, Some(to_xyzw(&goal))).unwrap();
+                let mut e = Execution::new(
+                    p.clone(),
+                    m.motion,
+                    Scene::empty(),
+                    CellMateAvoidance::NONE,
+                    Stepping::rk4(DT),
+                    0,
+                )
+                .unwrap();
+                e.set_orientation_chart(m.chart).unwrap();
+                let mut r = Turn::default();
+                r.run(&mut e, 100, 6.0);
+                assert_eq!(r.outcome, Outcome::GoalReached, "{label}");
+                assert!(angle_between(&r.q[0], &start) < 1e-12, "{label}");
+                let miss = angle_between(r.q.last().unwrap(), &goal).to_degrees();
+                assert!(miss <= 0.1, "{label}: ends {miss}° from the goal");
+                let turned = r.travelled(0).to_degrees();
+                assert!((turned - short).abs() <= 0.5, "{label}: turned {turned}° for {short}°");
+            }
+        }
+    }
+}

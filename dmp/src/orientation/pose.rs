@@ -8,13 +8,18 @@
 //! With the chart at the goal (what [`learn_pose`] stores and [`pose_motion`] builds for a replay) the orientation
 //! part of a pose run is exactly an [`super::OrientationRun`]; since both parts share the phase `s` and `tau`,
 //! a change of `tau`, a pause or a stop acts on both at once, and the one [`crate::Execution`] runs both.
-//! A new goal orientation `q_new` during a run is the goal `log(q_new ⊗ q̄_ref)` of the same chart (the sign of
-//! `q_new` nearest the reference): the chart covers every orientation less than π from `q_ref`.
+//! A new goal orientation `q_new` during a run is the goal `log(q_new ⊗ q̄_ref)` of the chart (the sign of `q_new`
+//! nearest the reference). The chart covers every orientation less than π from `q_ref`, but its straight lines
+//! only follow the short way between orientations that are both well inside it: from `y = 60° z` to a goal
+//! `210° z`, charted as `-150° z`, the straight line turns 210° instead of 150°. So a goal change re-charts
+//! (`ChartChange`) when the current orientation or the new goal is more than [`WELL_INSIDE`] from the chart's
+//! centre: the new centre is halfway along the short rotation between them, so that both lie on one line through
+//! it, `y'_g = -y'_c`, and that line is the short rotation.
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use super::jacobian::angular_motion;
-use super::quaternion::{closest_sign, exp, from_xyzw, log, to_xyzw};
+use super::jacobian::{angular_motion, exp_jacobian, log_jacobian};
+use super::quaternion::{angle_between, closest_sign, exp, from_xyzw, log, to_xyzw};
 #[cfg(feature = "learn")]
 use super::{OrientationDemonstration, learn_orientation};
 use crate::error::{InvalidInput, Result};
@@ -39,6 +44,72 @@ pub(crate) fn to_chart(reference: &UnitQuaternion<f64>, q: &UnitQuaternion<f64>)
 /// The orientation of the chart coordinates `y`: `exp(y) ⊗ q_ref`.
 pub fn from_chart(reference: &UnitQuaternion<f64>, y: &Vector3<f64>) -> UnitQuaternion<f64> {
     exp(y) * reference
+}
+
+/// How far from its chart's centre an orientation may be for a goal change to keep the chart (radians): π/2. Two
+/// orientations within it are at most π apart and the straight line between their coordinates stays within it
+/// (a ball is convex), far from the cut at π where the chart turns the long way.
+pub const WELL_INSIDE: f64 = std::f64::consts::FRAC_PI_2;
+
+/// The chart for a goal change from the current orientation `current` to `goal`: `None` when both are within
+/// [`WELL_INSIDE`] of `reference` (the chart is kept), otherwise the orientation halfway along the short rotation
+/// from `current` to `goal`, `q_mid = exp(½ log(ĝ ⊗ q̄_c)) ⊗ q_c` with `ĝ` the sign of `goal` nearest `current`
+/// (the slerp at ½), in the sign of `current` (a non-negative 4-dot product, so that the output quaternions keep
+/// their sign across the change).
+pub(crate) fn chart_for_goal(
+    reference: &UnitQuaternion<f64>,
+    current: &UnitQuaternion<f64>,
+    goal: &UnitQuaternion<f64>,
+) -> Option<UnitQuaternion<f64>> {
+    if angle_between(current, reference) <= WELL_INSIDE && angle_between(goal, reference) <= WELL_INSIDE {
+        return None;
+    }
+    let g = closest_sign(goal, current);
+    let mid = exp(&(log(&(g * current.conjugate())) * 0.5)) * current;
+    Some(closest_sign(&mid, current))
+}
+
+/// A change of chart, from the one at `from` to the one at `to`: the coordinates of the same orientation, angular
+/// velocity and angular acceleration in the new chart.
+///
+/// # Formula
+/// With `Φ(y) = log(exp(y) ⊗ q_from ⊗ q̄_to)` (the sign nearest `q_to`, so `|y'| <= π`):
+/// - `y' = Φ(y)`;
+/// - `ẏ' = J⁻¹(y') J(y) ẏ`: both sides are the world-frame angular velocity `ω` (`orientation/jacobian.rs`);
+/// - `ÿ' = J⁻¹(y') (ω̇ - J̇(y', ẏ') ẏ')`, with `ω̇ = J(y) ÿ + J̇(y, ẏ) ẏ`: the angular acceleration is the same
+///   in both charts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ChartChange {
+    /// The old chart's reference.
+    pub(crate) from: UnitQuaternion<f64>,
+    /// The new chart's reference.
+    pub(crate) to: UnitQuaternion<f64>,
+}
+
+impl ChartChange {
+    /// `y' = Φ(y)`.
+    pub(crate) fn point(&self, y: &Vector3<f64>) -> Vector3<f64> {
+        to_chart(&self.to, &from_chart(&self.from, y))
+    }
+
+    /// `(y', ẏ')` of `(y, ẏ)`.
+    pub(crate) fn velocity(&self, y: &Vector3<f64>, yd: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+        let y2 = self.point(y);
+        (y2, log_jacobian(&y2) * (exp_jacobian(y) * yd))
+    }
+
+    /// `(y', ẏ', ÿ')` of `(y, ẏ, ÿ)`.
+    pub(crate) fn motion(
+        &self,
+        y: &Vector3<f64>,
+        yd: &Vector3<f64>,
+        ydd: &Vector3<f64>,
+    ) -> [Vector3<f64>; 3] {
+        let (y2, yd2) = self.velocity(y, yd);
+        let (_, omega_dot) = angular_motion(y, yd, ydd);
+        let (_, jdot_yd) = angular_motion(&y2, &yd2, &Vector3::zeros());
+        [y2, yd2, log_jacobian(&y2) * (omega_dot - jdot_yd)]
+    }
 }
 
 /// Learns a pose primitive from positions and orientations sampled at the same times.
