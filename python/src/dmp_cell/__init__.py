@@ -15,7 +15,7 @@ from . import pb
 from .client import Client, Plan
 from .errors import ArgumentError, ConnectError, DmpError, ProtocolError, StatusError, ZenohError
 from .obstacles import check_obstacle, obstacle_to_dict, obstacle_to_proto
-from .setpoints import FINAL_STATUSES, ServerWarning, Setpoint, Setpoints
+from .setpoints import FINAL_STATUSES, ServerWarning, Setpoint, Setpoints, Verdict
 from .stream import Stream
 
 __all__ = [
@@ -31,6 +31,7 @@ __all__ = [
     "StatusError",
     "Stream",
     "ServerWarning",
+    "Verdict",
     "ZenohError",
     "check_obstacle",
     "obstacle_to_dict",

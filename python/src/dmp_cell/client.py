@@ -12,20 +12,22 @@ from . import connect as conn
 from .pb import motion, motion_grpc, primitives, primitives_grpc, scene, scene_grpc, server, server_grpc, types
 from .errors import ArgumentError, from_rpc
 from .obstacles import check_name, check_obstacle, obstacle_to_dict, obstacle_to_proto
-from .setpoints import ServerWarning, Setpoints, warning_of
+from .setpoints import ServerWarning, Setpoints, Verdict, verdict_of, warning_of
 from .stream import Stream
 from .values import number, quaternion, rows, vector
 from .zenoh_pub import SUBSCRIBER_WAIT_S, ObstaclePublisher
 
 class Plan(NamedTuple):
     """A whole trajectory (`Client.plan`): its setpoints, the obstacles it touched, whether it stalled away from
-    the goal, the server's warnings, and the scene version it was computed with."""
+    the goal, the server's warnings, the scene version it was computed with, and how it ended (`verdict`: whether
+    the goal was reached and if not why; None from a server that does not say)."""
 
     setpoints: Setpoints
     collisions: List[str]
     stalled: bool
     warnings: List[ServerWarning]
     scene_version: int
+    verdict: Optional[Verdict] = None
 
 
 #: The server's address by default.
@@ -227,8 +229,9 @@ class Client:
         r = self._call(self._motion.Plan, request)
         setpoints = Setpoints()
         setpoints.push(r.trajectory)
+        verdict = verdict_of(r.verdict) if r.HasField("verdict") else None
         return Plan(setpoints, list(r.collisions), r.stalled, [warning_of(w) for w in r.warnings],
-                    r.trajectory.scene_version)
+                    r.trajectory.scene_version, verdict)
 
     def _motion_spec(self, robot, name, goal, start, tau, version, cell, ignore_scene, goal_orientation=None,
                      start_orientation=None) -> motion.MotionSpec:

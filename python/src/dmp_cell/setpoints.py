@@ -59,6 +59,44 @@ class ServerWarning(NamedTuple):
         return f"{self.kind}{obstacle}{field} {self.reason}"
 
 
+class Verdict(NamedTuple):
+    """How a run ended (`dmp.v1.Verdict`: a plan's, or the last segment's of a stream). `outcome` is the name of
+    `dmp.v1.Outcome` without its prefix: `GOAL_REACHED`, `STALLED`, `BLOCKED`, `COLLISION`, `BRAKED`, `OUT_OF_TIME`
+    or `STOPPED`; `goal_reached` whether every robot was at its goal and at rest at the end; `reason` one line for a
+    person (e.g. "ended 0.142 m short of the goal at 3 tau (3.000 s) (out of time)"); `goal_distance` the distance
+    left at the last point (`goal_angle` a pose run's angle, radians); `min_clearance` the smallest clearance from the
+    obstacles over the run, metres (None when the server did not measure it); `collisions` the ids of the obstacles
+    a setpoint was inside of."""
+
+    outcome: str
+    goal_reached: bool
+    reason: str
+    goal_distance: float
+    goal_angle: float
+    min_clearance: Optional[float]
+    collisions: Tuple[str, ...]
+
+    def __str__(self) -> str:
+        return f"{self.outcome}: {self.reason}"
+
+
+def verdict_of(v: motion.Verdict) -> Verdict:
+    """The `Verdict` of a `dmp.v1.Verdict` message."""
+    try:
+        outcome = motion.Outcome.Name(v.outcome)
+    except ValueError:
+        outcome = f"UNKNOWN({v.outcome})"
+    if outcome.startswith("OUTCOME_"):
+        outcome = outcome[len("OUTCOME_"):]
+    clearance = v.min_clearance if v.HasField("min_clearance") else None
+    return Verdict(outcome, v.goal_reached, v.reason, v.goal_distance, v.goal_angle, clearance, tuple(v.collisions))
+
+
+def segment_verdict(seg: motion.Segment) -> Optional[Verdict]:
+    """The verdict a segment carries (only the last segment of a run has one), else None."""
+    return verdict_of(seg.verdict) if seg.HasField("verdict") else None
+
+
 def warning_of(w: types.Warning, sequence: Optional[int] = None) -> ServerWarning:
     try:
         kind = types.Warning.Kind.Name(w.kind)

@@ -27,7 +27,7 @@ import grpc
 
 from .pb import motion, types
 from .errors import DmpError, from_rpc
-from .setpoints import ServerWarning, Setpoint, Setpoints, warning_of
+from .setpoints import ServerWarning, Setpoint, Setpoints, Verdict, segment_verdict, warning_of
 from .values import number, quaternion, vector
 
 log = logging.getLogger("dmp_cell")
@@ -47,7 +47,7 @@ class Stream:
     """An open session; iterate it for `Setpoint`s. Use it as a context manager (or call `close`) to end the call
     early. After iteration: `status` is the last segment's status (`GOAL_REACHED`, `STOPPED`, ...), `setpoints` all
     setpoints in force (`Setpoints`), `warnings` the server's warnings, `scene_version` and `scene_stale` those of
-    the last segment."""
+    the last segment, and `verdict` how the run ended (`Verdict`, carried by its last segment; None until then)."""
 
     def __init__(self, stub: Any, start: motion.ExecuteRequest, metadata, realtime: bool,
                  deadline_s: Optional[float]):
@@ -57,6 +57,7 @@ class Stream:
         self.warnings: List[ServerWarning] = []
         self.scene_version = 0
         self.scene_stale = False
+        self.verdict: Optional[Verdict] = None
         self._requests: "queue.Queue[object]" = queue.Queue()
         self._segments: "queue.Queue[object]" = queue.Queue(QUEUE_SEGMENTS)
         self._closing = False
@@ -170,6 +171,10 @@ class Stream:
             self._clock_offset = seg.start_unix_s - seg.start_time
         self.scene_version = seg.scene_version
         self.scene_stale = seg.scene_stale
+        verdict = segment_verdict(seg)
+        if verdict is not None:
+            # Real time: a later final segment (a change after the run had ended) supersedes it.
+            self.verdict = verdict
         for w in seg.warnings:
             warning = warning_of(w, seg.sequence)
             self.warnings.append(warning)
