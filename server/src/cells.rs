@@ -2,10 +2,12 @@
 //! it): a robot avoids its cell's obstacles and its cell-mates, nothing of the other cells. Zenoh keys carry the
 //! cell (`dmp/<cell>/...`); a gRPC request names its cell, and an empty name means the server's default cell.
 //! Cells are created on first use, up to `limits.max_cells`, and reclaimed when nothing uses them any more (no
-//! obstacle, no robot, no stream, no watch): a delete never creates one.
+//! obstacle, no robot, no stream, no watch): a delete never creates one, nor does a motion, which runs only in a
+//! known cell ([`known`]).
 
 pub mod cell;
 pub mod directory;
+pub(crate) mod known;
 pub mod rendezvous;
 pub(crate) mod robot_bus;
 pub(crate) mod staleness;

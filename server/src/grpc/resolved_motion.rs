@@ -63,7 +63,8 @@ pub(super) struct ResolvedMotion {
 
 impl ResolvedMotion {
     /// Resolves a motion of `caller` against the server's `state`; `caller` must be allowed to `intent` its robot
-    /// in its cell (checked before the cell is created or the store read).
+    /// in its cell (checked before the cell is looked up or the store read); the cell must be known
+    /// ([`crate::cells::known`]).
     pub(super) async fn resolve(
         state: &ServiceState,
         caller: &Caller,
@@ -76,7 +77,10 @@ impl ResolvedMotion {
         check_name(&format!("{prefix}.primitive"), &spec.primitive)?;
         let cell = state.cells.resolve(&spec.cell).map_err(|e| e.within(prefix))?;
         caller.check(&intent.action(cell, &[&spec.robot_id]))?;
-        let cell = state.cells.get(cell).map_err(|e| e.within(prefix))?;
+        // Only a known cell: a typo in its name must not run the motion in a new, empty scene. The refusal names
+        // the known cells whose scene the caller may read.
+        let visible = |c: &str| caller.check(&Action::ReadScene { cell: c }).is_ok();
+        let cell = state.cells.for_motion(cell, visible).map_err(|e| e.within(prefix))?;
         let store = state.store.clone();
         let (robot, name, version) = (spec.robot_id.clone(), spec.primitive.clone(), spec.version);
         // The primitive, and the robot's record: the defaults of its limits, footprint and tool.
