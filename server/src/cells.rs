@@ -6,7 +6,7 @@
 //! known cell ([`known`]).
 
 pub mod cell;
-pub mod directory;
+pub(crate) mod directory;
 pub(crate) mod known;
 pub mod rendezvous;
 pub(crate) mod robot_bus;
@@ -54,7 +54,8 @@ pub struct Cells {
 impl Cells {
     /// The cells of a server whose default cell is `default` (created now); each scene holds at most
     /// `max_obstacles`, and there are at most `max_cells`.
-    pub fn new(default: &str, max_cells: usize, max_obstacles: usize) -> Result<Self, ServerError> {
+    #[cfg(test)]
+    pub(crate) fn new(default: &str, max_cells: usize, max_obstacles: usize) -> Result<Self, ServerError> {
         let limits = RequestLimits {
             max_cells,
             max_obstacles,
@@ -67,7 +68,7 @@ impl Cells {
     /// The cells of a server whose default cell is `default` (created now), bounded by `limits` (cells, obstacles
     /// and bytes per scene); the scenes reserve their memory from `memory`, and their obstacles go stale by
     /// `scene` (`[scene]` of the configuration).
-    pub fn with_limits(
+    pub(crate) fn with_limits(
         default: &str,
         limits: &RequestLimits,
         memory: MemoryBudget,
@@ -94,7 +95,7 @@ impl Cells {
 
     /// The cells `config` describes (its default cell, the cells it serves, their neighbours, `[scene]`), each
     /// scene reserving from `memory`, naming the plant's server of a cell they do not serve from `directory`.
-    pub fn from_config(
+    pub(crate) fn from_config(
         config: &Config,
         memory: MemoryBudget,
         directory: Directory,
@@ -108,7 +109,7 @@ impl Cells {
     }
 
     /// The same cells, serving only `cells` (empty: any cell); the default cell must be one of them.
-    pub fn serving(mut self, cells: &[String]) -> Self {
+    pub(crate) fn serving(mut self, cells: &[String]) -> Self {
         if !cells.is_empty() {
             let mut set: BTreeSet<String> = cells.iter().cloned().collect();
             set.insert(self.default.to_string());
@@ -119,7 +120,7 @@ impl Cells {
 
     /// The same cells, whose robots also avoid those of their neighbours: `neighbours` lists, for a cell, the cells
     /// whose robots it avoids.
-    pub fn with_neighbours(mut self, neighbours: &BTreeMap<String, Vec<String>>) -> Self {
+    pub(crate) fn with_neighbours(mut self, neighbours: &BTreeMap<String, Vec<String>>) -> Self {
         let mut avoiders: HashMap<String, Vec<String>> = HashMap::new();
         for (cell, others) in neighbours {
             for other in others.iter().filter(|o| *o != cell) {
@@ -131,13 +132,13 @@ impl Cells {
     }
 
     /// The same cells, naming the plant's server of a cell they do not serve from `directory`.
-    pub fn with_directory(mut self, directory: Directory) -> Self {
+    pub(crate) fn with_directory(mut self, directory: Directory) -> Self {
         self.directory = directory;
         self
     }
 
     /// The default cell's name.
-    pub fn default_cell(&self) -> &str {
+    pub(crate) fn default_cell(&self) -> &str {
         &self.default
     }
 
@@ -147,12 +148,12 @@ impl Cells {
     }
 
     /// The cells served (its own: not those taken over); None: any.
-    pub fn served(&self) -> Option<Vec<String>> {
+    pub(crate) fn served(&self) -> Option<Vec<String>> {
         self.served.as_ref().map(|s| s.iter().cloned().collect())
     }
 
     /// The cells served for a dead server of the plant ([`crate::plant::failover`]).
-    pub fn taken(&self) -> &TakenCells {
+    pub(crate) fn taken(&self) -> &TakenCells {
         &self.taken
     }
 
@@ -163,20 +164,20 @@ impl Cells {
 
     /// Drops the scene of `cell` (a cell given back after a fail-over: its server keeps it now); streams still
     /// holding it end on their own. Never the default cell.
-    pub fn forget(&self, cell: &str) {
+    pub(crate) fn forget(&self, cell: &str) {
         if cell != &*self.default {
             self.map.lock().unwrap_or_else(|p| p.into_inner()).remove(cell);
         }
     }
 
     /// The cells of this server whose robots avoid the robots of `cell` (its neighbours that list it).
-    pub fn avoiders_of(&self, cell: &str) -> &[String] {
+    pub(crate) fn avoiders_of(&self, cell: &str) -> &[String] {
         self.avoiders.get(cell).map_or(&[], Vec::as_slice)
     }
 
     /// For a stream starting in `cell` (resolved earlier, maybe several awaits ago): what ends it when the cell, a
     /// taken one, goes back (None for a cell of its own), or the refusal when it went back in the meantime.
-    pub fn stream_guard(&self, cell: &str) -> Result<Option<GivenBack>, ServerError> {
+    pub(crate) fn stream_guard(&self, cell: &str) -> Result<Option<GivenBack>, ServerError> {
         let given_back = self.taken.until_given_back(cell);
         if given_back.is_none() && !self.serves(cell) {
             return Err(self.not_served(cell));
@@ -209,7 +210,7 @@ impl Cells {
 
     /// The name of `cell` (empty: the default cell's), checked: what access rules are matched against, before any
     /// cell is created. A cell this server does not serve is refused ([`Cells::serving`]).
-    pub fn resolve<'a>(&'a self, cell: &'a str) -> Result<&'a str, ServerError> {
+    pub(crate) fn resolve<'a>(&'a self, cell: &'a str) -> Result<&'a str, ServerError> {
         let name = if cell.is_empty() { &*self.default } else { cell };
         check_name("cell", name)?;
         if !self.serves(name) {
@@ -265,7 +266,7 @@ impl Cells {
 
     /// Removes the cells nothing uses (no obstacle, robot, stream or watch), except the default cell; returns how
     /// many.
-    pub fn reclaim(&self) -> usize {
+    pub(crate) fn reclaim(&self) -> usize {
         let mut map = self.map.lock().unwrap_or_else(|p| p.into_inner());
         self.reclaim_in(&mut map)
     }
@@ -278,7 +279,7 @@ impl Cells {
     }
 
     /// Every cell's scene, in no particular order.
-    pub fn all(&self) -> Vec<Cell> {
+    pub(crate) fn all(&self) -> Vec<Cell> {
         self.map.lock().unwrap_or_else(|p| p.into_inner()).values().cloned().collect()
     }
 

@@ -10,12 +10,13 @@ enum Source {
     /// The system's wall clock.
     System,
     /// Tokio's clock (paused in tests), anchored to a Unix time.
+    #[cfg(test)]
     Tokio { anchor: Instant, anchor_unix_s: f64 },
 }
 
 /// The server's clock. Cheap to copy.
 #[derive(Debug, Clone, Copy)]
-pub struct Clock {
+pub(crate) struct Clock {
     source: Source,
 }
 
@@ -27,26 +28,28 @@ impl Default for Clock {
 
 impl Clock {
     /// The system's wall clock, and tokio's instants for pacing.
-    pub fn system() -> Self {
+    pub(crate) fn system() -> Self {
         Self { source: Source::System }
     }
 
     /// Wall time that follows tokio's clock from the system's wall time now: with `tokio::time::pause`, time
     /// only moves when the runtime advances it, and wall time with it.
-    pub fn following_tokio() -> Self {
+    #[cfg(test)]
+    pub(crate) fn following_tokio() -> Self {
         Self { source: Source::Tokio { anchor: Instant::now(), anchor_unix_s: system_unix_s() } }
     }
 
     /// Wall time, Unix seconds.
-    pub fn now_unix_s(&self) -> f64 {
+    pub(crate) fn now_unix_s(&self) -> f64 {
         match self.source {
             Source::System => system_unix_s(),
+            #[cfg(test)]
             Source::Tokio { anchor, anchor_unix_s } => anchor_unix_s + anchor.elapsed().as_secs_f64(),
         }
     }
 
     /// The monotonic instant that real-time pacing sleeps until (tokio's, which tests may pause).
-    pub fn now(&self) -> Instant {
+    pub(crate) fn now(&self) -> Instant {
         Instant::now()
     }
 }

@@ -1,7 +1,7 @@
 //! The server's configuration: a TOML file, then flags on top (see `bin/dmp-server.rs`).
 
 pub mod command_line;
-pub mod ros2;
+pub(crate) mod ros2;
 pub mod scene;
 
 use std::net::SocketAddr;
@@ -64,7 +64,7 @@ pub struct PlantConfig {
 
 impl Config {
     /// The default cell: `cell`, unless `cells` is given without it, then the first of `cells`.
-    pub fn default_cell(&self) -> &str {
+    pub(crate) fn default_cell(&self) -> &str {
         match self.cells.first() {
             Some(first) if !self.cells.contains(&self.cell) => first,
             _ => &self.cell,
@@ -72,7 +72,7 @@ impl Config {
     }
 
     /// Checks the plant's names: the cells, the server id, the neighbours (naming the field at fault).
-    pub fn check_plant(&self) -> Result<(), dmp_proto::WireError> {
+    pub(crate) fn check_plant(&self) -> Result<(), dmp_proto::WireError> {
         use dmp_proto::keys::check_name;
         for (i, c) in self.cells.iter().enumerate() {
             check_name(&format!("cells[{i}]"), c)?;
@@ -130,7 +130,7 @@ impl Default for Config {
 
 /// Where the embedded peer listens by default: Zenoh's well-known port, on loopback (secure by default: other hosts
 /// reach it once it listens on another address, which takes TLS and an access file, or `--insecure`).
-pub const DEFAULT_ZENOH_LISTEN: &str = "tcp/127.0.0.1:7447";
+pub(crate) const DEFAULT_ZENOH_LISTEN: &str = "tcp/127.0.0.1:7447";
 
 /// The embedded Zenoh peer (or client of a router network).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -155,7 +155,7 @@ pub struct ZenohConfig {
 impl ZenohConfig {
     /// What `dmp_proto::zenoh_session::session_config` builds the session from: an empty `listen` is Zenoh's
     /// default for the mode.
-    pub fn session_options(&self) -> dmp_proto::zenoh_session::SessionOptions {
+    pub(crate) fn session_options(&self) -> dmp_proto::zenoh_session::SessionOptions {
         dmp_proto::zenoh_session::SessionOptions {
             mode: self.mode.clone(),
             listen: (!self.listen.is_empty()).then(|| self.listen.clone()),
@@ -168,7 +168,7 @@ impl ZenohConfig {
     }
 
     /// Whether an endpoint of the session is a `tls/` one.
-    pub fn uses_tls(&self) -> bool {
+    pub(crate) fn uses_tls(&self) -> bool {
         self.listen.iter().chain(&self.connect).any(|e| e.starts_with("tls/"))
     }
 }

@@ -54,12 +54,12 @@ pub enum ServerError {
 
 impl ServerError {
     /// An invalid argument.
-    pub fn invalid(field: impl Into<String>, reason: impl Into<String>) -> Self {
+    pub(crate) fn invalid(field: impl Into<String>, reason: impl Into<String>) -> Self {
         ServerError::InvalidArgument { field: field.into(), reason: reason.into() }
     }
 
     /// The same error with `prefix.` in front of its field, when it names one.
-    pub fn within(self, prefix: &str) -> Self {
+    pub(crate) fn within(self, prefix: &str) -> Self {
         match self {
             ServerError::InvalidArgument { field, reason } => {
                 ServerError::InvalidArgument { field: format!("{prefix}.{field}"), reason }

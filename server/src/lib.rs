@@ -21,8 +21,8 @@
 pub mod clock;
 pub mod config;
 
-pub mod error;
-pub mod memory;
+pub(crate) mod error;
+pub(crate) mod memory;
 pub(crate) mod wire;
 
 pub mod access;

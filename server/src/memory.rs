@@ -24,7 +24,7 @@ struct Inner {
 
 impl MemoryBudget {
     /// A budget of `limit` bytes, none reserved.
-    pub fn new(limit: usize) -> Self {
+    pub(crate) fn new(limit: usize) -> Self {
         Self { inner: Arc::new(Inner { used: AtomicUsize::new(0), limit, refused: AtomicU64::new(0) }) }
     }
 
@@ -34,23 +34,23 @@ impl MemoryBudget {
     }
 
     /// The budget, bytes.
-    pub fn limit(&self) -> usize {
+    pub(crate) fn limit(&self) -> usize {
         self.inner.limit
     }
 
     /// Reservations (a stream, an obstacle) refused so far for want of memory.
-    pub fn refusals(&self) -> u64 {
+    pub(crate) fn refusals(&self) -> u64 {
         self.inner.refused.load(Ordering::Relaxed)
     }
 
     /// An empty reservation, to grow later.
-    pub fn empty(&self) -> MemoryReservation {
+    pub(crate) fn empty(&self) -> MemoryReservation {
         MemoryReservation { budget: self.clone(), bytes: 0 }
     }
 
     /// Reserves `bytes` for `what` (named in the refusal), or ResourceExhausted when the server's budget cannot
     /// hold them.
-    pub fn reserve(&self, what: &str, bytes: usize) -> Result<MemoryReservation, ServerError> {
+    pub(crate) fn reserve(&self, what: &str, bytes: usize) -> Result<MemoryReservation, ServerError> {
         let mut r = self.empty();
         r.grow(what, bytes)?;
         Ok(r)
@@ -88,19 +88,20 @@ pub struct MemoryReservation {
 
 impl MemoryReservation {
     /// Bytes held.
-    pub fn bytes(&self) -> usize {
+    #[cfg(test)]
+    pub(crate) fn bytes(&self) -> usize {
         self.bytes
     }
 
     /// Reserves `bytes` more for `what`, or ResourceExhausted (and nothing changes).
-    pub fn grow(&mut self, what: &str, bytes: usize) -> Result<(), ServerError> {
+    pub(crate) fn grow(&mut self, what: &str, bytes: usize) -> Result<(), ServerError> {
         self.budget.take(what, bytes)?;
         self.bytes += bytes;
         Ok(())
     }
 
     /// Gives `bytes` back (at most what is held).
-    pub fn shrink(&mut self, bytes: usize) {
+    pub(crate) fn shrink(&mut self, bytes: usize) {
         let bytes = bytes.min(self.bytes);
         self.budget.give_back(bytes);
         self.bytes -= bytes;
@@ -115,7 +116,12 @@ impl Drop for MemoryReservation {
 
 /// Checks `bytes` of `what` against one of the per-item limits (`limit_name` = `limit`): ResourceExhausted naming
 /// the limit, the request's bytes and the limit's value.
-pub fn check_within(what: &str, bytes: usize, limit_name: &str, limit: usize) -> Result<(), ServerError> {
+pub(crate) fn check_within(
+    what: &str,
+    bytes: usize,
+    limit_name: &str,
+    limit: usize,
+) -> Result<(), ServerError> {
     if bytes > limit {
         return Err(ServerError::ResourceExhausted(format!(
             "{what} needs about {bytes} bytes, more than limits.{limit_name} = {limit}"

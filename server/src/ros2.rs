@@ -151,7 +151,7 @@ impl Inbox {
 
 /// The subscribers of the configured topics.
 #[derive(Debug)]
-pub struct Ros2Bridge {
+pub(crate) struct Ros2Bridge {
     subscribers: Vec<Subscriber<()>>,
     counters: Arc<Ros2Counters>,
     outbox: Ros2Out,
@@ -163,7 +163,7 @@ pub struct Ros2Bridge {
 impl Ros2Bridge {
     /// The bridge `config` asks for (none without `ros2.domain`), on the session of `zenoh`, into `cells`; its
     /// refusals also count in the Zenoh bridge's malformed payloads.
-    pub async fn start_configured(
+    pub(crate) async fn start_configured(
         zenoh: &ZenohSide,
         config: &Ros2Config,
         cells: &Cells,
@@ -180,7 +180,7 @@ impl Ros2Bridge {
 
     /// Subscribes to every topic of `config` in its domain on `session`. Refusals are also added to `malformed`
     /// (the Zenoh bridge's counter).
-    pub async fn start(
+    pub(crate) async fn start(
         session: &Session,
         config: &Ros2Config,
         cells: Cells,
@@ -234,17 +234,17 @@ impl Ros2Bridge {
     }
 
     /// Where the streams hand their segments over.
-    pub fn outbox(&self) -> Ros2Out {
+    pub(crate) fn outbox(&self) -> Ros2Out {
         self.outbox.clone()
     }
 
     /// What the bridge took and refused so far.
-    pub fn counters(&self) -> Arc<Ros2Counters> {
+    pub(crate) fn counters(&self) -> Arc<Ros2Counters> {
         self.counters.clone()
     }
 
     /// Stops the markers' and trajectories' publishers and undeclares the subscribers, waiting for running callbacks.
-    pub async fn close(self) {
+    pub(crate) async fn close(self) {
         self.stop.cancel();
         if let Err(e) = self.markers.await {
             warn!(error = %e, "ros2 markers task failed");

@@ -34,7 +34,7 @@ use crate::config::Config;
 use crate::error::ServerError;
 
 /// Version of the store's layout. A file of another version is refused on open (never silently reset).
-pub const SCHEMA_VERSION: u64 = 1;
+pub(crate) const SCHEMA_VERSION: u64 = 1;
 
 /// Name of the database file inside the data directory.
 pub const FILE_NAME: &str = "primitives.redb";
@@ -59,7 +59,7 @@ pub struct Store {
 }
 
 /// Gives the version of a new primitive on a server of a plant: its HLC time, NTP64 (`crate::plant`).
-pub type VersionClock = Arc<dyn Fn() -> u64 + Send + Sync>;
+pub(crate) type VersionClock = Arc<dyn Fn() -> u64 + Send + Sync>;
 
 /// The kinds of operation, in the order of [`Store::operations`].
 const PUT: usize = 0;
@@ -74,7 +74,7 @@ impl fmt::Debug for Store {
 }
 
 /// What a refusal of a damaged store file says to do.
-pub const START_FRESH: &str =
+pub(crate) const START_FRESH: &str =
     "the store file is damaged or truncated; move it away or delete it to start with an empty store";
 
 /// A storage error naming what failed.
@@ -84,7 +84,7 @@ fn storage(what: impl fmt::Display, e: impl Into<redb::Error>) -> ServerError {
 
 impl Store {
     /// Opens the store of `config` (`data_dir`, keeping `limits.max_versions` per primitive) on a blocking thread.
-    pub async fn open_configured(config: &Config) -> Result<Store, ServerError> {
+    pub(crate) async fn open_configured(config: &Config) -> Result<Store, ServerError> {
         let dir = config.data_dir.clone();
         let max_versions = config.limits.max_versions;
         tokio::task::spawn_blocking(move || Store::open(&dir).map(|s| s.keep_versions(max_versions)))
@@ -94,7 +94,7 @@ impl Store {
 
     /// Opens the store in `dir` (created if missing): a new file gets the current schema version, an existing one
     /// must have it.
-    pub fn open(dir: impl AsRef<Path>) -> Result<Store, ServerError> {
+    pub(crate) fn open(dir: impl AsRef<Path>) -> Result<Store, ServerError> {
         let dir = dir.as_ref();
         std::fs::create_dir_all(dir).map_err(|e| {
             ServerError::Storage(format!("cannot create the data directory {}: {e}", dir.display()))
@@ -135,7 +135,7 @@ impl Store {
 
     /// The same store keeping at most `max_versions` (at least 1) versions of each primitive: every put beyond
     /// removes the oldest, in its own transaction (all versions are kept by default).
-    pub fn keep_versions(mut self, max_versions: usize) -> Self {
+    pub(crate) fn keep_versions(mut self, max_versions: usize) -> Self {
         self.max_versions = max_versions.max(1);
         self
     }
@@ -143,19 +143,14 @@ impl Store {
     /// The same store on a server of a plant: a new version is the later of `clock()` (the server's HLC time) and
     /// the last version plus one, and its record names `server_id` as its origin; versions of other servers come
     /// through [`Store::insert_replica`].
-    pub fn stamped(mut self, server_id: &str, clock: VersionClock) -> Self {
+    pub(crate) fn stamped(mut self, server_id: &str, clock: VersionClock) -> Self {
         self.origin = Some((server_id.into(), clock));
         self
     }
 
-    /// The database file.
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
-
     /// Operations called so far (whatever their result), by kind: `put` (a learn or a put), `get`, `list` (a
     /// page), `delete`.
-    pub fn operations(&self) -> [(&'static str, u64); 4] {
+    pub(crate) fn operations(&self) -> [(&'static str, u64); 4] {
         let n = |i: usize| self.operations[i].load(Ordering::Relaxed);
         [("put", n(PUT)), ("get", n(GET)), ("list", n(LIST)), ("delete", n(DELETE))]
     }
@@ -206,7 +201,7 @@ impl Store {
     }
 
     /// Stores `primitive` as the next version of `(robot_id, name)`; durable when it returns.
-    pub fn put(
+    pub(crate) fn put(
         &self,
         robot_id: &str,
         name: &str,
@@ -270,7 +265,7 @@ impl Store {
     /// origins (two servers stamping the same HLC time) keeps the record of the smaller origin id, on every server.
     /// A version that a tombstone deletes is not stored.
     /// A version older than the `max_versions` kept is pruned at once, as it would have been.
-    pub fn insert_replica(&self, record: &v1::PrimitiveRecord) -> Result<bool, ServerError> {
+    pub(crate) fn insert_replica(&self, record: &v1::PrimitiveRecord) -> Result<bool, ServerError> {
         self.count(PUT);
         let (robot_id, name, version) = (record.robot_id.as_str(), record.name.as_str(), record.version);
         let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
@@ -310,7 +305,7 @@ impl Store {
 
     /// Every stored version of every primitive, in key order (what a server of the plant answers a catch-up query
     /// with).
-    pub fn all_records(&self) -> Result<Vec<v1::PrimitiveRecord>, ServerError> {
+    pub(crate) fn all_records(&self) -> Result<Vec<v1::PrimitiveRecord>, ServerError> {
         self.count(LIST);
         let read = self.db.begin_read().map_err(|e| storage("begin read", e))?;
         let prims = read.open_table(PRIMITIVES).map_err(|e| storage("open primitives", e))?;
@@ -353,7 +348,7 @@ impl Store {
 
     /// One page of [`Store::list`]: at most `page_size` records whose names come after `after` (from the first
     /// when None), and the last name of the page when more follow (the next page's `after`).
-    pub fn list_page(
+    pub(crate) fn list_page(
         &self,
         robot_id: &str,
         after: Option<&str>,
@@ -398,7 +393,7 @@ impl Store {
     /// One page of the robots that have primitives, sorted by id: at most `page_size` of those `visible` lets
     /// through whose ids come after `after` (from the first when None), each with its number of names and the
     /// creation time of its newest latest version; and the last id of the page when more may follow.
-    pub fn list_robots_page(
+    pub(crate) fn list_robots_page(
         &self,
         after: Option<&str>,
         page_size: usize,
@@ -457,7 +452,8 @@ impl Store {
 
     /// Deletes every version of `(robot_id, name)`; returns how many were removed (NotFound when none). On a
     /// server of a plant it also records a tombstone ([`Store::delete_versions`]).
-    pub fn delete(&self, robot_id: &str, name: &str) -> Result<u64, ServerError> {
+    #[cfg(test)]
+    pub(crate) fn delete(&self, robot_id: &str, name: &str) -> Result<u64, ServerError> {
         Ok(self.delete_versions(robot_id, name)?.versions)
     }
 }
@@ -470,7 +466,7 @@ fn decode(bytes: &[u8]) -> Result<v1::PrimitiveRecord, ServerError> {
 mod robots;
 mod tombstones;
 
-pub use self::tombstones::{Deleted, TOMBSTONE_RETENTION, Tombstone};
+pub(crate) use self::tombstones::Tombstone;
 
 #[cfg(test)]
 mod tests;

@@ -23,7 +23,7 @@
 //!
 //! The keys are `dmp_proto::keys`'s and the payloads are decoded by `dmp_proto::payload`. A payload that cannot
 //! be decoded or validated is logged at warn with its key and the reason, counted
-//! ([`ZenohBridge::malformed_payloads`]) and changes nothing else. Samples are handled in Zenoh's callbacks: decoding
+//! ([`ZenohBridge::malformed_counter`]) and changes nothing else. Samples are handled in Zenoh's callbacks: decoding
 //! and validating one obstacle or robot state takes microseconds and never awaits.
 
 pub mod threads;
@@ -51,19 +51,20 @@ use crate::config::{Config, ZenohConfig};
 use crate::error::ServerError;
 
 /// Period of the reaper that removes obstacles whose time to live has passed.
-pub const REAP_PERIOD: Duration = Duration::from_millis(100);
+pub(crate) const REAP_PERIOD: Duration = Duration::from_millis(100);
 
 /// What secures a session: TLS files and the access file.
 #[derive(Debug, Clone, Copy)]
-pub struct Security<'a> {
+pub(crate) struct Security<'a> {
     /// The TLS files.
     pub config: &'a crate::config::SecurityConfig,
     /// The access file in force, if any: its access control is generated into the session's configuration.
     pub access: Option<&'a crate::access::Access>,
 }
 
-/// Opens the Zenoh session of [`ZenohConfig`], without TLS or access control (tests, tools).
-pub async fn open_session(cfg: &ZenohConfig) -> Result<Session, ServerError> {
+/// Opens the Zenoh session of [`ZenohConfig`], without TLS or access control (the unit tests).
+#[cfg(test)]
+pub(crate) async fn open_session(cfg: &ZenohConfig) -> Result<Session, ServerError> {
     let none = crate::config::SecurityConfig::default();
     open_secured_session(cfg, &Security { config: &none, access: None }).await
 }
@@ -71,7 +72,7 @@ pub async fn open_session(cfg: &ZenohConfig) -> Result<Session, ServerError> {
 /// Opens the Zenoh session of [`ZenohConfig`] (built by `dmp_proto::zenoh_session::session_config`), its `tls/`
 /// endpoints with the server's certificate and mutual TLS, and the access control generated from the access file.
 /// Fails fast when a `connect` endpoint cannot be reached.
-pub async fn open_secured_session(
+pub(crate) async fn open_secured_session(
     cfg: &ZenohConfig,
     security: &Security<'_>,
 ) -> Result<Session, ServerError> {
@@ -114,7 +115,7 @@ pub async fn open_secured_session(
 /// Spawns the task that removes expired obstacles of every cell, and the cells nothing uses any more, every
 /// [`REAP_PERIOD`] until `stop` is cancelled.
 /// The bridge starts one; without Zenoh, start one for the time to live of gRPC puts.
-pub fn spawn_reaper(cells: Cells, clock: Clock, stop: CancellationToken) -> JoinHandle<()> {
+pub(crate) fn spawn_reaper(cells: Cells, clock: Clock, stop: CancellationToken) -> JoinHandle<()> {
     tokio::spawn(async move {
         let mut tick = tokio::time::interval(REAP_PERIOD);
         tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
@@ -286,7 +287,7 @@ impl SceneUpdater {
 /// The server's side of Zenoh: the session (none with `zenoh.disabled`), the bridge that feeds the scenes, the
 /// robots' state bus, and the locators the session listens on.
 #[derive(Debug)]
-pub struct ZenohSide {
+pub(crate) struct ZenohSide {
     /// The session; none without Zenoh.
     pub session: Option<Session>,
     /// The bridge; none without Zenoh.
@@ -301,7 +302,7 @@ impl ZenohSide {
     /// Opens the session `config.zenoh` describes, secured by `config.security` and `access`, and starts the bridge
     /// into `cells` (robot states taken as `admission` says) and the robot bus. Without Zenoh, only the reaper that
     /// expires obstacles put over gRPC with a time to live.
-    pub async fn start(
+    pub(crate) async fn start(
         config: &Config,
         access: &AccessControl,
         cells: &Cells,
@@ -331,7 +332,7 @@ impl ZenohSide {
     }
 
     /// Closes the bridge, then the session.
-    pub async fn close(self) {
+    pub(crate) async fn close(self) {
         if let Some(b) = self.bridge {
             b.close().await;
         }
@@ -345,7 +346,7 @@ impl ZenohSide {
 
 /// The subscribers that feed the scene from Zenoh, the catch-up querier, and the time-to-live reaper.
 #[derive(Debug)]
-pub struct ZenohBridge {
+pub(crate) struct ZenohBridge {
     /// Applies obstacle samples from elsewhere (a fail-over's query for a taken cell's scene).
     updater: SceneUpdater,
     obstacles: Subscriber<()>,
@@ -364,7 +365,7 @@ impl ZenohBridge {
     /// on `shutdown` or [`ZenohBridge::close`]. The robot states this session publishes itself ([`crate::cells::robot_bus`])
     /// are not received back: the publisher records them locally. Robot states from elsewhere are taken as
     /// `admission` says.
-    pub async fn start(
+    pub(crate) async fn start(
         session: Session,
         cells: Cells,
         clock: Clock,
@@ -408,24 +409,25 @@ impl ZenohBridge {
     }
 
     /// What applies an obstacle sample as if it had been published (the same checks, counted alike).
-    pub fn obstacle_sink(&self) -> crate::plant::failover::ObstacleSink {
+    pub(crate) fn obstacle_sink(&self) -> crate::plant::failover::ObstacleSink {
         let updater = self.updater.clone();
         Arc::new(move |sample| updater.obstacle(sample))
     }
 
     /// How many payloads were refused so far (malformed, invalid, or over a limit).
-    pub fn malformed_payloads(&self) -> u64 {
+    #[cfg(test)]
+    pub(crate) fn malformed_payloads(&self) -> u64 {
         self.malformed.load(Ordering::Relaxed)
     }
 
-    /// The counter behind [`ZenohBridge::malformed_payloads`], to read after the bridge is gone.
-    pub fn malformed_counter(&self) -> Arc<AtomicU64> {
+    /// How many payloads were refused so far (malformed, invalid, or over a limit), to read after the bridge is gone.
+    pub(crate) fn malformed_counter(&self) -> Arc<AtomicU64> {
         self.malformed.clone()
     }
 
     /// Undeclares the subscribers (waiting for running callbacks, so the scene changes no more) and stops the
     /// reaper. The session can be closed afterwards.
-    pub async fn close(self) {
+    pub(crate) async fn close(self) {
         let Self { obstacles, robots, alive, reaper, catch_up, stop, malformed: _, updater: _ } = self;
         drop(stop);
         let undeclared = tokio::task::spawn_blocking(move || {

@@ -55,7 +55,7 @@ pub enum AccessError {
 /// One `[[identity]]` as written.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct IdentityEntry {
+pub(crate) struct IdentityEntry {
     /// Shown in logs and refusals.
     pub name: String,
     /// What it may do.
@@ -77,7 +77,7 @@ pub struct IdentityEntry {
 /// The file as written.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct AccessFile {
+pub(crate) struct AccessFile {
     /// Every identity.
     #[serde(default)]
     pub identity: Vec<IdentityEntry>,
@@ -85,7 +85,7 @@ pub struct AccessFile {
 
 /// An identity, checked.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Identity {
+pub(crate) struct Identity {
     /// Its name.
     pub name: String,
     /// Its role.
@@ -100,20 +100,20 @@ pub struct Identity {
 
 /// The identities of an access file, checked.
 #[derive(Debug, Clone, Default)]
-pub struct Access {
+pub(crate) struct Access {
     identities: Vec<Arc<Identity>>,
 }
 
 impl Access {
     /// Reads and checks the access file at `path`.
-    pub fn load(path: &Path) -> Result<Self, AccessError> {
+    pub(crate) fn load(path: &Path) -> Result<Self, AccessError> {
         let text = std::fs::read_to_string(path)
             .map_err(|source| AccessError::Read { path: path.to_owned(), source })?;
         Self::parse(&text)
     }
 
     /// Checks the text of an access file.
-    pub fn parse(text: &str) -> Result<Self, AccessError> {
+    pub(crate) fn parse(text: &str) -> Result<Self, AccessError> {
         // The message and the line, never the line's text: a secret written under a wrong key would be logged.
         let file: AccessFile = toml::from_str(text).map_err(|e| {
             let line = e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
@@ -126,7 +126,7 @@ impl Access {
     }
 
     /// Checks an access file.
-    pub fn from_file(file: &AccessFile) -> Result<Self, AccessError> {
+    pub(crate) fn from_file(file: &AccessFile) -> Result<Self, AccessError> {
         if file.identity.is_empty() {
             return Err(AccessError::File(
                 "no `[[identity]]`: nobody could use the server (give at least an admin)".into(),
@@ -163,17 +163,17 @@ impl Access {
     }
 
     /// Every identity.
-    pub fn identities(&self) -> &[Arc<Identity>] {
+    pub(crate) fn identities(&self) -> &[Arc<Identity>] {
         &self.identities
     }
 
     /// The identity whose token digest is `digest` (every digest compared in constant time).
-    pub fn by_token(&self, digest: &TokenDigest) -> Option<&Arc<Identity>> {
+    pub(crate) fn by_token(&self, digest: &TokenDigest) -> Option<&Arc<Identity>> {
         credential::find(self.identities.iter().map(|i| i.token), digest).map(|i| &self.identities[i])
     }
 
     /// The identity whose certificate's common name is `cn`.
-    pub fn by_common_name(&self, cn: &str) -> Option<&Arc<Identity>> {
+    pub(crate) fn by_common_name(&self, cn: &str) -> Option<&Arc<Identity>> {
         self.identities.iter().find(|i| i.cert_common_name.as_deref() == Some(cn))
     }
 }

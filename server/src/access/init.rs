@@ -173,7 +173,7 @@ pub fn init(dir: &Path, options: &InitOptions) -> Result<InitSet, InitError> {
 }
 
 /// The common name of the server's certificate (an identity of role `server`).
-pub const SERVER_NAME: &str = "dmp-server";
+pub(crate) const SERVER_NAME: &str = "dmp-server";
 
 /// The Zenoh configuration of a perception node of `name` connecting to the server at `host` over mutual TLS.
 fn zenoh_peer_config(dir: &Path, name: &str, host: &str) -> String {

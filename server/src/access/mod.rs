@@ -20,8 +20,8 @@ use std::sync::Arc;
 use tokio::sync::watch;
 use tracing::{error, info};
 
-pub use file::{Access, AccessError, AccessFile, Identity, IdentityEntry};
-pub use role::{Action, Role, Scope};
+pub(crate) use file::{Access, AccessError, Identity};
+pub(crate) use role::{Action, Role};
 
 use crate::config::SecurityConfig;
 use crate::error::ServerError;
@@ -29,7 +29,7 @@ use credential::TokenDigest;
 
 /// How a caller proved who it is.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Credential {
+pub(crate) enum Credential {
     /// No access file: nothing to prove.
     Open,
     /// A bearer token (its digest).
@@ -40,29 +40,29 @@ pub enum Credential {
 
 /// The identity a request runs as.
 #[derive(Debug, Clone)]
-pub struct Caller {
+pub(crate) struct Caller {
     identity: Option<Arc<Identity>>,
     credential: Credential,
 }
 
 impl Caller {
     /// The caller of an open server (no access file): everything is allowed.
-    pub fn open() -> Self {
+    pub(crate) fn open() -> Self {
         Self { identity: None, credential: Credential::Open }
     }
 
     /// Its name (`anonymous` on an open server).
-    pub fn name(&self) -> &str {
+    pub(crate) fn name(&self) -> &str {
         self.identity.as_ref().map_or("anonymous", |i| &i.name)
     }
 
     /// Its role (admin on an open server).
-    pub fn role(&self) -> Role {
+    pub(crate) fn role(&self) -> Role {
         self.identity.as_ref().map_or(Role::Admin, |i| i.role)
     }
 
     /// Whether it may do `action`; PERMISSION_DENIED naming the identity and the action if not.
-    pub fn check(&self, action: &Action<'_>) -> Result<(), ServerError> {
+    pub(crate) fn check(&self, action: &Action<'_>) -> Result<(), ServerError> {
         match &self.identity {
             None => Ok(()),
             Some(i) if role::allows(i.role, &i.scope, action) => Ok(()),
@@ -72,7 +72,11 @@ impl Caller {
 
     /// Whether its credential, under `access` (a reloaded file), still allows `action`: the identity may have
     /// gone, lost the credential, or changed role or scope.
-    pub fn check_again(&self, access: Option<&Access>, action: &Action<'_>) -> Result<(), ServerError> {
+    pub(crate) fn check_again(
+        &self,
+        access: Option<&Access>,
+        action: &Action<'_>,
+    ) -> Result<(), ServerError> {
         let again = match (&self.credential, access) {
             (Credential::Open, _) => return Ok(()),
             (_, None) => return Ok(()),
@@ -98,26 +102,26 @@ fn denied(i: &Identity, action: &Action<'_>) -> ServerError {
 
 /// The access file in force, reloadable.
 #[derive(Debug)]
-pub struct AccessControl {
+pub(crate) struct AccessControl {
     path: Option<PathBuf>,
     current: watch::Sender<Option<Arc<Access>>>,
 }
 
 impl AccessControl {
     /// An open server: no access file.
-    pub fn open() -> Self {
+    pub(crate) fn open() -> Self {
         Self { path: None, current: watch::Sender::new(None) }
     }
 
     /// The access file at `path`, checked.
-    pub fn load(path: &Path) -> Result<Self, AccessError> {
+    pub(crate) fn load(path: &Path) -> Result<Self, AccessError> {
         let access = Access::load(path)?;
         info!(file = %path.display(), identities = access.identities().len(), "access file loaded");
         Ok(Self { path: Some(path.to_owned()), current: watch::Sender::new(Some(Arc::new(access))) })
     }
 
     /// The access control `security` configures: its access file, checked, or an open server without one.
-    pub fn from_config(security: &SecurityConfig) -> Result<Self, ServerError> {
+    pub(crate) fn from_config(security: &SecurityConfig) -> Result<Self, ServerError> {
         match &security.access {
             Some(path) => Self::load(path).map_err(|e| ServerError::FailedPrecondition(e.to_string())),
             None => Ok(Self::open()),
@@ -125,23 +129,18 @@ impl AccessControl {
     }
 
     /// Whether an access file is in force.
-    pub fn enabled(&self) -> bool {
+    pub(crate) fn enabled(&self) -> bool {
         self.path.is_some()
     }
 
     /// The identities in force (None on an open server).
-    pub fn current(&self) -> Option<Arc<Access>> {
+    pub(crate) fn current(&self) -> Option<Arc<Access>> {
         self.current.borrow().clone()
-    }
-
-    /// Sees every reload.
-    pub fn subscribe(&self) -> watch::Receiver<Option<Arc<Access>>> {
-        self.current.subscribe()
     }
 
     /// Reads the file again. A file that is refused changes nothing (the error says why); streams the new file
     /// no longer allows end with PERMISSION_DENIED.
-    pub fn reload(&self) -> Result<usize, AccessError> {
+    pub(crate) fn reload(&self) -> Result<usize, AccessError> {
         let Some(path) = &self.path else { return Ok(0) };
         match Access::load(path) {
             Ok(access) => {
@@ -159,7 +158,7 @@ impl AccessControl {
 
     /// The caller presenting `token` (the value of a bearer token), or else the verified certificate of common
     /// name `common_name`. UNAUTHENTICATED when neither names an identity (the token itself is never repeated).
-    pub fn authenticate(
+    pub(crate) fn authenticate(
         &self,
         token: Option<&str>,
         common_name: Option<&str>,
@@ -189,7 +188,7 @@ impl AccessControl {
 }
 
 /// What a long request (a stream, a watch) was allowed to do, checked again at every reload of the access file.
-pub struct Grant {
+pub(crate) struct Grant {
     caller: Caller,
     reloads: watch::Receiver<Option<Arc<Access>>>,
     recheck: Recheck,
@@ -205,13 +204,8 @@ impl std::fmt::Debug for Grant {
 }
 
 impl Grant {
-    /// The identity the request runs as.
-    pub fn caller(&self) -> &Caller {
-        &self.caller
-    }
-
     /// Completes with PERMISSION_DENIED once a reload no longer allows the request; never on an open server.
-    pub async fn revoked(&mut self) -> ServerError {
+    pub(crate) async fn revoked(&mut self) -> ServerError {
         loop {
             if self.reloads.changed().await.is_err() {
                 return std::future::pending().await;
@@ -223,7 +217,7 @@ impl Grant {
     }
 
     /// Checks again if the file was reloaded since the last check (for loops that do not wait).
-    pub fn check_now(&mut self) -> Result<(), ServerError> {
+    pub(crate) fn check_now(&mut self) -> Result<(), ServerError> {
         let access = self.reloads.borrow_and_update().clone();
         (self.recheck)(&self.caller, access.as_deref())
     }
@@ -232,7 +226,7 @@ impl Grant {
 impl AccessControl {
     /// The grant of `caller` for a long request, checked now against the file in force and again at every
     /// reload with `recheck` (which calls [`Caller::check_again`] with the request's action).
-    pub fn grant(
+    pub(crate) fn grant(
         &self,
         caller: Caller,
         recheck: impl Fn(&Caller, Option<&Access>) -> Result<(), ServerError> + Send + Sync + 'static,
@@ -246,7 +240,7 @@ impl AccessControl {
 
     /// `caller` as the file in force now knows it: the request was authenticated when its headers arrived, and a
     /// reload may have come before its handler runs. UNAUTHENTICATED when its credential is gone.
-    pub fn refresh(&self, caller: &Caller) -> Result<Caller, ServerError> {
+    pub(crate) fn refresh(&self, caller: &Caller) -> Result<Caller, ServerError> {
         let Some(access) = self.current() else { return Ok(caller.clone()) };
         let identity = match &caller.credential {
             Credential::Open => return Ok(caller.clone()),

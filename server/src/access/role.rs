@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 /// What an identity is for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Role {
+pub(crate) enum Role {
     /// The cell's planner: primitives of its robots; plan and execute any robot of its cells; change the scene of
     /// its cells; everything an observer reads.
     Planner,
@@ -24,7 +24,7 @@ pub enum Role {
 
 impl Role {
     /// The role's name, as in the access file.
-    pub fn as_str(self) -> &'static str {
+    pub(crate) fn as_str(self) -> &'static str {
         match self {
             Role::Planner => "planner",
             Role::Robot => "robot",
@@ -44,7 +44,7 @@ impl std::fmt::Display for Role {
 
 /// What a request does, with the cell and robots it acts on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Action<'a> {
+pub(crate) enum Action<'a> {
     /// Learn or put a primitive of `robot`.
     WritePrimitive {
         /// The robot.
@@ -92,7 +92,7 @@ pub enum Action<'a> {
 
 impl Action<'_> {
     /// The action in words, for refusals and the audit log: `execute robot `r1` in cell `a``.
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         let robots = |rs: &[&str]| match rs {
             [one] => format!("robot `{one}`"),
             many => {
@@ -115,7 +115,7 @@ impl Action<'_> {
 
 /// The cells and robots an identity may act on.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub struct Scope {
+pub(crate) struct Scope {
     /// Its cells; `*` is every cell.
     pub cells: Vec<String>,
     /// Its robots; empty is every robot of its cells.
@@ -124,19 +124,19 @@ pub struct Scope {
 
 impl Scope {
     /// Whether `cell` is one of its cells.
-    pub fn has_cell(&self, cell: &str) -> bool {
+    pub(crate) fn has_cell(&self, cell: &str) -> bool {
         self.cells.iter().any(|c| c == "*" || c == cell)
     }
 
     /// Whether `robot` is one of its robots (every robot when none is listed).
-    pub fn has_robot(&self, robot: &str) -> bool {
+    pub(crate) fn has_robot(&self, robot: &str) -> bool {
         self.robots.is_empty() || self.robots.iter().any(|r| r == robot)
     }
 
     /// Whether the primitives of `robot` are its own. Primitives belong to a robot, not to a cell: an identity that
     /// lists its robots has theirs; one that lists none has every robot's only when its cells are `*` (listing
     /// none in some cells does not give other cells' robots' primitives).
-    pub fn has_primitives_of(&self, robot: &str) -> bool {
+    pub(crate) fn has_primitives_of(&self, robot: &str) -> bool {
         if self.robots.is_empty() {
             self.cells.iter().any(|c| c == "*")
         } else {

@@ -113,14 +113,15 @@ pub struct Cell {
 
 impl Cell {
     /// The empty scene of `cell`, holding at most `max_obstacles`, with no memory bounds, in the default workspace.
-    pub fn new(cell: impl Into<Arc<str>>, max_obstacles: usize) -> Self {
+    #[cfg(test)]
+    pub(crate) fn new(cell: impl Into<Arc<str>>, max_obstacles: usize) -> Self {
         let workspace_m = crate::config::RequestLimits::default().workspace_m;
         Self::with_budget(cell, max_obstacles, usize::MAX, &MemoryBudget::new(usize::MAX), workspace_m)
     }
 
     /// The empty scene of `cell`, holding at most `max_obstacles` and `max_bytes` of them, which it reserves from
     /// `memory`, whose obstacles' centres must lie within `[-workspace_m, workspace_m]` on every axis.
-    pub fn with_budget(
+    pub(crate) fn with_budget(
         cell: impl Into<Arc<str>>,
         max_obstacles: usize,
         max_bytes: usize,
@@ -142,13 +143,13 @@ impl Cell {
     }
 
     /// The same cell with its obstacles going stale by `staleness` (default: never).
-    pub fn with_staleness(mut self, staleness: Staleness) -> Self {
+    pub(crate) fn with_staleness(mut self, staleness: Staleness) -> Self {
         self.staleness = staleness;
         self
     }
 
     /// The cell's staleness rule.
-    pub fn staleness(&self) -> Staleness {
+    pub(crate) fn staleness(&self) -> Staleness {
         self.staleness
     }
 
@@ -173,18 +174,18 @@ impl Cell {
     }
 
     /// The cell's name.
-    pub fn name(&self) -> &str {
+    pub(crate) fn name(&self) -> &str {
         &self.cell
     }
 
     /// Counts a stream executing in the cell until the returned guard is dropped.
-    pub fn stream_opened(&self) -> CellStream {
+    pub(crate) fn stream_opened(&self) -> CellStream {
         self.streams.fetch_add(1, Ordering::Relaxed);
         CellStream { streams: self.streams.clone() }
     }
 
     /// Streams executing in the cell now (Execute, Session, ExecuteGroup: one per stream, whatever its robots).
-    pub fn streams(&self) -> usize {
+    pub(crate) fn streams(&self) -> usize {
         self.streams.load(Ordering::Relaxed)
     }
 
@@ -194,7 +195,7 @@ impl Cell {
     }
 
     /// How many robots the cell sees now besides `members` (a run's own robots).
-    pub fn robot_count_besides<'a>(&self, members: impl IntoIterator<Item = &'a str>) -> usize {
+    pub(crate) fn robot_count_besides<'a>(&self, members: impl IntoIterator<Item = &'a str>) -> usize {
         let robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());
         let own = members.into_iter().filter(|id| robots.contains_key(*id)).count();
         robots.len().saturating_sub(own)
@@ -211,7 +212,7 @@ impl Cell {
     }
 
     /// Adds or replaces an obstacle received at `now_unix_s`; returns the new version.
-    pub fn put(&self, obstacle: v1::Obstacle, now_unix_s: f64) -> Result<u64, ServerError> {
+    pub(crate) fn put(&self, obstacle: v1::Obstacle, now_unix_s: f64) -> Result<u64, ServerError> {
         check_name("obstacle.id", &obstacle.id)?;
         let engine = crate::wire::obstacle_from_proto(&obstacle, self.workspace_m)
             .map_err(|e| e.within("obstacle"))?;
@@ -262,7 +263,7 @@ impl Cell {
 
     /// Removes an obstacle, on a delete received at `now_unix_s`; returns the version and whether it existed. A
     /// delete of an unknown id changes nothing.
-    pub fn delete(&self, id: &str, now_unix_s: f64) -> (u64, bool) {
+    pub(crate) fn delete(&self, id: &str, now_unix_s: f64) -> (u64, bool) {
         let mut out = (0, false);
         self.tx.send_if_modified(|snap| {
             if let Some(bytes) = snap.obstacles.get(id).map(|o| o.bytes) {
@@ -284,7 +285,7 @@ impl Cell {
 
     /// Removes the obstacles whose time to live has passed, and handles those not updated within the cell's
     /// `stale_after_s` by its policy (dropped, or frozen and flagged); returns how many changed.
-    pub fn expire(&self, now_unix_s: f64) -> usize {
+    pub(crate) fn expire(&self, now_unix_s: f64) -> usize {
         let stale_after = (!self.staleness.is_off()).then_some(self.staleness.after_s);
         let drop_stale = self.staleness.policy == StalePolicy::Drop;
         let mut n = 0;
@@ -323,7 +324,7 @@ impl Cell {
     }
 
     /// Records the latest state of a robot.
-    pub fn update_robot(&self, state: v1::RobotState, footprint: Option<dmp::Shape>) {
+    pub(crate) fn update_robot(&self, state: v1::RobotState, footprint: Option<dmp::Shape>) {
         let mut robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());
         match robots.get_mut(&state.robot_id) {
             Some(r) => *r = Arc::new(SeenRobot { state, footprint }),
@@ -334,7 +335,7 @@ impl Cell {
     }
 
     /// Forgets a robot (its run ended).
-    pub fn remove_robot(&self, robot_id: &str) {
+    pub(crate) fn remove_robot(&self, robot_id: &str) {
         let mut robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());
         robots.remove(robot_id);
     }
@@ -347,7 +348,7 @@ impl Cell {
     }
 
     /// [`Cell::other_robots`] into `out` (cleared first), reusing its allocations.
-    pub fn other_robots_into(
+    pub(crate) fn other_robots_into(
         &self,
         robot_id: &str,
         now_unix_s: f64,

@@ -28,7 +28,7 @@ impl Default for Directory {
 
 impl Directory {
     /// Records (or replaces) a live server, and it as the home of the cells it lists.
-    pub fn insert(&self, server: v1::PlantServer) {
+    pub(crate) fn insert(&self, server: v1::PlantServer) {
         {
             let mut homes = self.homes.lock().unwrap_or_else(|p| p.into_inner());
             for cell in &server.cells {
@@ -49,7 +49,7 @@ impl Directory {
     }
 
     /// The cells whose home is not live, with their home (what a server tells one that joins, `homes_away`).
-    pub fn homes_away(&self) -> std::collections::HashMap<String, String> {
+    pub(crate) fn homes_away(&self) -> std::collections::HashMap<String, String> {
         let live = self.server_ids();
         let homes = self.homes.lock().unwrap_or_else(|p| p.into_inner());
         homes.iter().filter(|(_, h)| !live.contains(h)).map(|(c, h)| (c.clone(), h.clone())).collect()
@@ -58,7 +58,7 @@ impl Directory {
     /// The home of `cell` and the server that holds it as the fail-over has it: its home while that is live, else
     /// the live server (`me` included, when given) of highest rendezvous weight ([`super::rendezvous::rendezvous`]).
     /// None for a cell no server ever announced, or no server live.
-    pub fn holder_of(&self, cell: &str, me: Option<&str>) -> Option<(String, String)> {
+    pub(crate) fn holder_of(&self, cell: &str, me: Option<&str>) -> Option<(String, String)> {
         let home = self.homes.lock().unwrap_or_else(|p| p.into_inner()).get(cell).cloned()?;
         let mut live = self.server_ids();
         if live.contains(&home) {
@@ -74,29 +74,29 @@ impl Directory {
     }
 
     /// Forgets a server (its token went).
-    pub fn remove(&self, server_id: &str) {
+    pub(crate) fn remove(&self, server_id: &str) {
         if self.lock().remove(server_id).is_some() {
             self.changes.send_modify(|n| *n += 1);
         }
     }
 
     /// A receiver that sees every change from now on.
-    pub fn changes(&self) -> watch::Receiver<u64> {
+    pub(crate) fn changes(&self) -> watch::Receiver<u64> {
         self.changes.subscribe()
     }
 
     /// The live servers known, by id.
-    pub fn servers(&self) -> Vec<v1::PlantServer> {
+    pub(crate) fn servers(&self) -> Vec<v1::PlantServer> {
         self.lock().values().cloned().collect()
     }
 
     /// The live server `server_id`, if known.
-    pub fn get(&self, server_id: &str) -> Option<v1::PlantServer> {
+    pub(crate) fn get(&self, server_id: &str) -> Option<v1::PlantServer> {
         self.lock().get(server_id).cloned()
     }
 
     /// The live server serving `cell` (the smallest id when several say they do); None when none is known.
-    pub fn owner_of(&self, cell: &str) -> Option<v1::PlantServer> {
+    pub(crate) fn owner_of(&self, cell: &str) -> Option<v1::PlantServer> {
         self.lock().values().find(|s| s.cells.iter().any(|c| c == cell)).cloned()
     }
 

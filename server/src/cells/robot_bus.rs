@@ -24,7 +24,7 @@ use crate::cells::cell::Cell;
 /// server has a session (at most once per `period` per robot: other servers extrapolate with the velocity). Cheap to
 /// clone; a Zenoh error is logged, never returned (a robot's motion never waits on the network).
 #[derive(Debug, Clone)]
-pub struct RobotBus {
+pub(crate) struct RobotBus {
     zenoh: Option<Arc<ZenohRobotBus>>,
     /// The server's cells, to record a robot also in the cells that list its cell as a neighbour.
     cells: Option<Cells>,
@@ -55,7 +55,7 @@ struct ZenohRobotBus {
 impl RobotBus {
     /// A bus publishing on `dmp/<cell>/robots/...` of `zenoh` (session, period between two states of a robot,
     /// seconds) when one is given.
-    pub fn new(zenoh: Option<(Session, f64)>) -> Self {
+    pub(crate) fn new(zenoh: Option<(Session, f64)>) -> Self {
         let zenoh = zenoh.map(|(session, period_s)| {
             Arc::new(ZenohRobotBus { session, period_s, publishers: Mutex::new(HashMap::new()) })
         });
@@ -64,7 +64,7 @@ impl RobotBus {
 
     /// The same bus, recording each robot also in the cells of `cells` that avoid its cell's robots
     /// (`plant.neighbours`).
-    pub fn mirroring(mut self, cells: Cells) -> Self {
+    pub(crate) fn mirroring(mut self, cells: Cells) -> Self {
         self.cells = Some(cells);
         self
     }
@@ -77,7 +77,7 @@ impl RobotBus {
 
     /// Records a robot's state in its cell's scene and publishes it on Zenoh (encoding `application/protobuf`)
     /// unless the robot's last state went out less than the period ago.
-    pub async fn publish(&self, scene: &Cell, state: v1::RobotState, footprint: Option<dmp::Shape>) {
+    pub(crate) async fn publish(&self, scene: &Cell, state: v1::RobotState, footprint: Option<dmp::Shape>) {
         for other in self.avoiders(scene.name()) {
             other.update_robot(state.clone(), footprint.clone());
         }
@@ -108,7 +108,7 @@ impl RobotBus {
     }
 
     /// Forgets a robot whose run ended, locally and on Zenoh (a delete on its key).
-    pub async fn retire(&self, scene: &Cell, robot_id: &str) {
+    pub(crate) async fn retire(&self, scene: &Cell, robot_id: &str) {
         scene.remove_robot(robot_id);
         for other in self.avoiders(scene.name()) {
             other.remove_robot(robot_id);
@@ -136,7 +136,8 @@ impl RobotBus {
     }
 
     /// How many robots currently have a Zenoh publisher.
-    pub fn publishers(&self) -> usize {
+    #[cfg(test)]
+    pub(crate) fn publishers(&self) -> usize {
         self.zenoh.as_ref().map_or(0, |z| {
             z.publishers.lock().unwrap_or_else(|p| p.into_inner()).values().map(HashMap::len).sum()
         })

@@ -17,7 +17,7 @@ use crate::config::RequestLimits;
 
 /// The bounds a robot state must keep, and the count of those dropped. Cheap to clone (the count is shared).
 #[derive(Debug, Clone)]
-pub struct StateAdmission {
+pub(crate) struct StateAdmission {
     max_skew_s: f64,
     workspace_m: f64,
     max_speed_m_s: f64,
@@ -26,7 +26,7 @@ pub struct StateAdmission {
 
 impl StateAdmission {
     /// The bounds of `limits`, nothing dropped yet.
-    pub fn new(limits: &RequestLimits) -> Self {
+    pub(crate) fn new(limits: &RequestLimits) -> Self {
         Self {
             max_skew_s: limits.max_state_skew_s,
             workspace_m: limits.workspace_m,
@@ -37,7 +37,7 @@ impl StateAdmission {
 
     /// Checks `state` (already checked for shape: finite numbers, one dimension) at `now_unix_s` on the server's
     /// clock; the error names the field and the bound. Counts nothing.
-    pub fn check(&self, state: &v1::RobotState, now_unix_s: f64) -> Result<(), WireError> {
+    pub(crate) fn check(&self, state: &v1::RobotState, now_unix_s: f64) -> Result<(), WireError> {
         let skew = state.stamp_unix_s - now_unix_s;
         if skew.is_nan() || skew.abs() > self.max_skew_s {
             return Err(WireError::new(
@@ -63,14 +63,14 @@ impl StateAdmission {
     }
 
     /// [`StateAdmission::check`], counting the state as dropped when it fails.
-    pub fn admit(&self, state: &v1::RobotState, now_unix_s: f64) -> Result<(), WireError> {
+    pub(crate) fn admit(&self, state: &v1::RobotState, now_unix_s: f64) -> Result<(), WireError> {
         self.check(state, now_unix_s).inspect_err(|_| {
             self.dropped.fetch_add(1, Ordering::Relaxed);
         })
     }
 
     /// How many states were dropped so far.
-    pub fn dropped(&self) -> u64 {
+    pub(crate) fn dropped(&self) -> u64 {
         self.dropped.load(Ordering::Relaxed)
     }
 }

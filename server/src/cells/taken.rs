@@ -19,13 +19,13 @@ struct Taken {
 
 /// The cells taken over, by name. Cheap to clone; the lock is never held across an await.
 #[derive(Debug, Clone, Default)]
-pub struct TakenCells {
+pub(crate) struct TakenCells {
     cells: Arc<Mutex<BTreeMap<String, Taken>>>,
 }
 
 impl TakenCells {
     /// Starts serving `cell` for another server; false when it was taken already.
-    pub fn take(&self, cell: &str) -> bool {
+    pub(crate) fn take(&self, cell: &str) -> bool {
         let mut cells = self.lock();
         if cells.contains_key(cell) {
             return false;
@@ -37,7 +37,7 @@ impl TakenCells {
 
     /// Stops serving `cell`, which went to `to` (a server, named in the status that ends its streams); false
     /// when it was not taken.
-    pub fn give_back(&self, cell: &str, to: &str) -> bool {
+    pub(crate) fn give_back(&self, cell: &str, to: &str) -> bool {
         let Some(taken) = self.lock().remove(cell) else { return false };
         *taken.to.lock().unwrap_or_else(|p| p.into_inner()) = to.to_owned();
         taken.gone.cancel();
@@ -45,18 +45,19 @@ impl TakenCells {
     }
 
     /// Whether `cell` is taken.
-    pub fn contains(&self, cell: &str) -> bool {
+    pub(crate) fn contains(&self, cell: &str) -> bool {
         self.lock().contains_key(cell)
     }
 
     /// The cells taken, in order.
-    pub fn names(&self) -> Vec<String> {
+    #[cfg(test)]
+    pub(crate) fn names(&self) -> Vec<String> {
         self.lock().keys().cloned().collect()
     }
 
     /// For a stream of `cell`: None when the cell is not a taken one (it never goes); else what completes when it
     /// goes back, with where it went.
-    pub fn until_given_back(&self, cell: &str) -> Option<GivenBack> {
+    pub(crate) fn until_given_back(&self, cell: &str) -> Option<GivenBack> {
         self.lock().get(cell).map(|t| GivenBack { gone: t.gone.clone().cancelled_owned(), to: t.to.clone() })
     }
 
@@ -67,20 +68,20 @@ impl TakenCells {
 
 /// Completes when a taken cell goes back ([`TakenCells::until_given_back`]).
 #[derive(Debug)]
-pub struct GivenBack {
+pub(crate) struct GivenBack {
     gone: WaitForCancellationFutureOwned,
     to: Arc<Mutex<String>>,
 }
 
 impl GivenBack {
     /// Waits until the cell goes back, and names the server it went to.
-    pub async fn wait(self) -> String {
+    pub(crate) async fn wait(self) -> String {
         self.gone.await;
         self.to.lock().unwrap_or_else(|p| p.into_inner()).clone()
     }
 
     /// Waits until `cell` goes back: the error that ends its streams here (`UNAVAILABLE`, naming where to resume).
-    pub async fn moved(self, cell: &str) -> ServerError {
+    pub(crate) async fn moved(self, cell: &str) -> ServerError {
         let to = self.wait().await;
         ServerError::Moved(format!(
             "cell `{cell}` moved to server {to} (this server served it while its own server was gone): resume there"

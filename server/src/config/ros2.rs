@@ -76,7 +76,7 @@ pub enum TopicKind {
 
 impl Ros2Config {
     /// Checks the topics' names and the transforms, naming the field at fault.
-    pub fn check(&self) -> Result<(), crate::error::ServerError> {
+    pub(crate) fn check(&self) -> Result<(), crate::error::ServerError> {
         use crate::error::ServerError;
         if self.frame.is_empty() {
             return Err(ServerError::invalid("ros2.frame", "must not be empty"));
@@ -98,7 +98,7 @@ impl Ros2Config {
 
     /// The transform from `frame_id` to the cell's frame: the identity for the cell's frame, a static transform's,
     /// or none (a frame the server does not know). A leading `/` (ROS 1 style) is ignored.
-    pub fn frame_to_cell(&self, frame_id: &str) -> Option<Rigid> {
+    pub(crate) fn frame_to_cell(&self, frame_id: &str) -> Option<Rigid> {
         let f = frame_id.trim_start_matches('/');
         if f.is_empty() {
             return None;

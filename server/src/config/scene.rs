@@ -32,7 +32,7 @@ pub struct Staleness {
 
 impl Staleness {
     /// True when obstacles never go stale.
-    pub fn is_off(&self) -> bool {
+    pub(crate) fn is_off(&self) -> bool {
         self.after_s <= 0.0
     }
 }
@@ -61,7 +61,7 @@ pub struct CellSceneConfig {
 
 impl SceneConfig {
     /// The rule of `cell`.
-    pub fn for_cell(&self, cell: &str) -> Staleness {
+    pub(crate) fn for_cell(&self, cell: &str) -> Staleness {
         let over = self.cells.get(cell);
         Staleness {
             after_s: over.and_then(|c| c.stale_after_s).unwrap_or(self.stale_after_s),
@@ -70,7 +70,7 @@ impl SceneConfig {
     }
 
     /// Every `stale_after_s` is finite and not negative.
-    pub fn check(&self) -> Result<(), ServerError> {
+    pub(crate) fn check(&self) -> Result<(), ServerError> {
         let ok = |v: f64| v.is_finite() && v >= 0.0;
         const RANGE: &str = "must be a finite number of seconds, at least 0 (0: off)";
         if !ok(self.stale_after_s) {

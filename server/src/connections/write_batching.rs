@@ -46,7 +46,7 @@ pub struct Urgency(Arc<AtomicU64>);
 impl Urgency {
     /// Something that cannot wait is about to be sent on the connection: for the next [`HOLD`] its flushes write
     /// at once.
-    pub fn write_now(&self) {
+    pub(crate) fn write_now(&self) {
         let until = nanos_now().saturating_add(HOLD.as_nanos() as u64);
         self.0.fetch_max(until, Ordering::AcqRel);
     }

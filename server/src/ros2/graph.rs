@@ -15,7 +15,7 @@ use zenoh::pubsub::Publisher;
 
 /// The node and the count of its entities.
 #[derive(Debug)]
-pub struct Graph {
+pub(crate) struct Graph {
     session: Session,
     node: Node,
     next_entity: AtomicU32,
@@ -25,7 +25,7 @@ pub struct Graph {
 impl Graph {
     /// Declares the node `dmp_server` in `domain` on `session` (a failure is logged: the topics work without it,
     /// only the graph tools do not list the node).
-    pub async fn declare(session: Session, domain: u32) -> Self {
+    pub(crate) async fn declare(session: Session, domain: u32) -> Self {
         let node = Node {
             domain,
             zid: session.zid().to_string(),
@@ -43,13 +43,8 @@ impl Graph {
         Self { session, node, next_entity: AtomicU32::new(1), _token: token }
     }
 
-    /// The ROS domain.
-    pub fn domain(&self) -> u32 {
-        self.node.domain
-    }
-
     /// A publisher of `ty` on `topic`, with its liveliness token.
-    pub async fn publisher(&self, topic: &str, ty: &RosType) -> Result<RosPublisher, zenoh::Error> {
+    pub(crate) async fn publisher(&self, topic: &str, ty: &RosType) -> Result<RosPublisher, zenoh::Error> {
         let entity = self.next_entity.fetch_add(1, Ordering::Relaxed);
         let token_key = self.node.publisher_token(entity, topic, ty);
         let publisher = self.session.declare_publisher(topic_key(self.node.domain, topic, ty)).await?;
@@ -60,7 +55,7 @@ impl Graph {
 
 /// A publisher in the graph: its token lives as long as it does.
 #[derive(Debug)]
-pub struct RosPublisher {
+pub(crate) struct RosPublisher {
     publisher: Publisher<'static>,
     _token: LivelinessToken,
     gid: [u8; 16],
@@ -69,7 +64,7 @@ pub struct RosPublisher {
 
 /// A message that could not be published.
 #[derive(Debug, thiserror::Error)]
-pub enum PublishError {
+pub(crate) enum PublishError {
     /// It does not encode.
     #[error(transparent)]
     Encode(#[from] dmp_ros2::CdrError),
@@ -80,7 +75,7 @@ pub enum PublishError {
 
 impl RosPublisher {
     /// Publishes `msg` (CDR) with the attachment: the next sequence number, `now_unix_s`, the publisher's GID.
-    pub async fn put<T: Serialize>(&mut self, msg: &T, now_unix_s: f64) -> Result<(), PublishError> {
+    pub(crate) async fn put<T: Serialize>(&mut self, msg: &T, now_unix_s: f64) -> Result<(), PublishError> {
         let bytes = dmp_ros2::encode(msg)?;
         self.sequence += 1;
         let attachment = Attachment {

@@ -20,11 +20,11 @@ use dmp_ros2::pose::Rigid;
 use super::paths::Path;
 
 /// The obstacles as they were sent.
-pub const NS_OBSTACLES: &str = "obstacles";
+pub(crate) const NS_OBSTACLES: &str = "obstacles";
 /// The isopotentials the robots avoid.
-pub const NS_ISOPOTENTIALS: &str = "isopotentials";
+pub(crate) const NS_ISOPOTENTIALS: &str = "isopotentials";
 /// The robots' planned paths.
-pub const NS_PATHS: &str = "paths";
+pub(crate) const NS_PATHS: &str = "paths";
 
 /// Rows of directions (from pole to pole) of a 3-D isopotential's mesh.
 const LATITUDES: usize = 8;

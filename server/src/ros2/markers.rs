@@ -30,13 +30,13 @@ use crate::cells::cell::ObstacleSet;
 use crate::clock::Clock;
 
 /// How often the cells' versions are looked at.
-pub const PERIOD: Duration = Duration::from_millis(100);
+pub(crate) const PERIOD: Duration = Duration::from_millis(100);
 
 /// How often every marker goes again, changed or not (seconds).
-pub const FULL_REFRESH_S: f64 = 5.0;
+pub(crate) const FULL_REFRESH_S: f64 = 5.0;
 
 /// The topic of a cell's markers.
-pub fn markers_topic(cell: &str) -> String {
+pub(crate) fn markers_topic(cell: &str) -> String {
     format!("/dmp/{}/markers", topic_token(cell))
 }
 
@@ -125,7 +125,7 @@ impl CellMarkers {
 }
 
 /// Spawns the task that publishes the cells' markers until `stop`.
-pub fn spawn(
+pub(crate) fn spawn(
     graph: Arc<Graph>,
     frame: String,
     cells: Cells,

@@ -10,7 +10,7 @@ use dmp_proto::v1;
 
 /// The most points kept per robot: the oldest go first (a long run's path stays bounded in memory and in the
 /// markers' size).
-pub const MAX_PATH_POINTS: usize = 4096;
+pub(crate) const MAX_PATH_POINTS: usize = 4096;
 
 /// One robot's path: run times and positions (3-D, `z = 0` for 2-D robots).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -40,7 +40,7 @@ impl Path {
 
 /// The paths of one cell and their version (bumped at every change).
 #[derive(Debug, Clone, Default)]
-pub struct CellPaths {
+pub(crate) struct CellPaths {
     /// Per robot.
     pub robots: BTreeMap<String, Path>,
     /// Changes at every change.
@@ -49,11 +49,11 @@ pub struct CellPaths {
 
 /// Every cell's paths. Cheap to clone.
 #[derive(Debug, Clone, Default)]
-pub struct Paths(Arc<Mutex<HashMap<String, CellPaths>>>);
+pub(crate) struct Paths(Arc<Mutex<HashMap<String, CellPaths>>>);
 
 impl Paths {
     /// Adds the segments sent to robots of `cell`.
-    pub fn extend(&self, cell: &str, segments: &[v1::Segment]) {
+    pub(crate) fn extend(&self, cell: &str, segments: &[v1::Segment]) {
         let mut all = self.0.lock().unwrap_or_else(|p| p.into_inner());
         let c = all.entry(cell.to_owned()).or_default();
         for s in segments {
@@ -63,7 +63,7 @@ impl Paths {
     }
 
     /// Forgets the paths of `robots` of `cell` (their stream ended).
-    pub fn remove(&self, cell: &str, robots: &[String]) {
+    pub(crate) fn remove(&self, cell: &str, robots: &[String]) {
         let mut all = self.0.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(c) = all.get_mut(cell) {
             for r in robots {
@@ -74,7 +74,7 @@ impl Paths {
     }
 
     /// A copy of `cell`'s paths, if its version is not `seen`.
-    pub fn changed(&self, cell: &str, seen: Option<u64>) -> Option<CellPaths> {
+    pub(crate) fn changed(&self, cell: &str, seen: Option<u64>) -> Option<CellPaths> {
         let all = self.0.lock().unwrap_or_else(|p| p.into_inner());
         let c = all.get(cell)?;
         (Some(c.version) != seen).then(|| c.clone())

@@ -13,7 +13,7 @@ use dmp_ros2::msgs::trajectory_msgs::{MultiDOFJointTrajectory, MultiDOFJointTraj
 
 /// A name as one token of a ROS topic: every character but letters, digits and `_` becomes `_`, and a name that
 /// starts with a digit (or is empty) gets a leading `_`.
-pub fn topic_token(name: &str) -> String {
+pub(crate) fn topic_token(name: &str) -> String {
     let mut out: String = name.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
     if out.chars().next().is_none_or(|c| c.is_ascii_digit()) {
         out.insert(0, '_');
@@ -22,7 +22,7 @@ pub fn topic_token(name: &str) -> String {
 }
 
 /// The topic of a robot's trajectory: `/dmp/<robot>/trajectory`.
-pub fn trajectory_topic(robot: &str) -> String {
+pub(crate) fn trajectory_topic(robot: &str) -> String {
     format!("/dmp/{}/trajectory", topic_token(robot))
 }
 

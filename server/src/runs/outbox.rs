@@ -14,7 +14,7 @@ pub(crate) const CAPACITY: usize = 256;
 
 /// What a stream hands over.
 #[derive(Debug)]
-pub enum Event {
+pub(crate) enum Event {
     /// Segments sent to robots of `cell` (one per member of a group run), when the robot got them.
     Sent {
         /// The cell.
@@ -35,7 +35,7 @@ pub enum Event {
 
 /// The streams' side. Cheap to clone; empty (does nothing) without ROS 2.
 #[derive(Debug, Clone, Default)]
-pub struct Ros2Out(Option<Arc<Inner>>);
+pub(crate) struct Ros2Out(Option<Arc<Inner>>);
 
 #[derive(Debug)]
 struct Inner {
@@ -46,19 +46,19 @@ struct Inner {
 
 impl Ros2Out {
     /// A handle and the publisher's receiving end; segments dropped are counted in `dropped`.
-    pub fn channel(dropped: Arc<AtomicU64>) -> (Self, mpsc::Receiver<Event>) {
+    pub(crate) fn channel(dropped: Arc<AtomicU64>) -> (Self, mpsc::Receiver<Event>) {
         let (tx, rx) = mpsc::channel(CAPACITY);
         (Self(Some(Arc::new(Inner { tx, dropped }))), rx)
     }
 
     /// A copy of `batch` to offer once the robot has it; none without ROS 2.
-    pub fn copy_of(&self, batch: &[v1::Segment]) -> Option<Vec<v1::Segment>> {
+    pub(crate) fn copy_of(&self, batch: &[v1::Segment]) -> Option<Vec<v1::Segment>> {
         self.0.as_ref().map(|_| batch.to_vec())
     }
 
     /// Hands `segments` (from [`Ros2Out::copy_of`]) of `cell` over, or drops and counts them if the publisher is
     /// behind. Never waits.
-    pub fn offer(&self, cell: &str, segments: Option<Vec<v1::Segment>>, sent_unix_s: f64) {
+    pub(crate) fn offer(&self, cell: &str, segments: Option<Vec<v1::Segment>>, sent_unix_s: f64) {
         let (Some(inner), Some(segments)) = (&self.0, segments) else { return };
         let n = segments.len() as u64;
         let event = Event::Sent { cell: cell.to_owned(), segments, sent_unix_s };
@@ -69,7 +69,7 @@ impl Ros2Out {
 
     /// Hands over the end of the streams of `robots`: at once if there is room, else from a task of its own (it
     /// must not be lost, or the robots' paths would stay drawn; the stream that ends does not wait for it).
-    pub fn ended(&self, cell: &str, robots: &[String]) {
+    pub(crate) fn ended(&self, cell: &str, robots: &[String]) {
         let Some(inner) = &self.0 else { return };
         let event = Event::Ended { cell: cell.to_owned(), robots: robots.to_vec() };
         if let Err(mpsc::error::TrySendError::Full(event)) = inner.tx.try_send(event) {

@@ -16,7 +16,7 @@ pub(super) const ROBOTS: TableDefinition<'_, &str, &[u8]> = TableDefinition::new
 
 impl Store {
     /// Stores `record` as the record of its robot, replacing the one before; durable when it returns.
-    pub fn put_robot(&self, record: &v1::RobotRecord) -> Result<(), ServerError> {
+    pub(crate) fn put_robot(&self, record: &v1::RobotRecord) -> Result<(), ServerError> {
         let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
         tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
         {
@@ -29,7 +29,7 @@ impl Store {
     }
 
     /// The record of `robot_id`, if it has one.
-    pub fn get_robot(&self, robot_id: &str) -> Result<Option<v1::RobotRecord>, ServerError> {
+    pub(crate) fn get_robot(&self, robot_id: &str) -> Result<Option<v1::RobotRecord>, ServerError> {
         let read = self.db.begin_read().map_err(|e| storage("begin read", e))?;
         let robots = match read.open_table(ROBOTS) {
             Ok(t) => t,
@@ -45,7 +45,7 @@ impl Store {
     }
 
     /// Deletes the record of `robot_id` (NotFound when it has none).
-    pub fn delete_robot(&self, robot_id: &str) -> Result<(), ServerError> {
+    pub(crate) fn delete_robot(&self, robot_id: &str) -> Result<(), ServerError> {
         let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
         tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
         let removed = {

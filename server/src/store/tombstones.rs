@@ -25,11 +25,11 @@ use crate::error::ServerError;
 pub(super) const TOMBSTONES: TableDefinition<'_, (&str, &str), u64> = TableDefinition::new("tombstones");
 
 /// How long a tombstone is kept: a server down longer than this should restart on an empty store.
-pub const TOMBSTONE_RETENTION: Duration = Duration::from_secs(7 * 24 * 3600);
+pub(crate) const TOMBSTONE_RETENTION: Duration = Duration::from_secs(7 * 24 * 3600);
 
 /// A tombstone: every version of `(robot_id, name)` up to `up_to` is deleted.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Tombstone {
+pub(crate) struct Tombstone {
     /// The robot.
     pub robot_id: String,
     /// The primitive's name.
@@ -40,7 +40,7 @@ pub struct Tombstone {
 
 /// What a delete removed.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Deleted {
+pub(crate) struct Deleted {
     /// Versions removed from this store.
     pub versions: u64,
     /// The tombstone recorded, on a stamped store (what the other servers of the plant are told).
@@ -56,7 +56,7 @@ impl Store {
     /// Deletes every version of `(robot_id, name)` held here (NotFound when none); on a stamped store it records
     /// the tombstone that the other servers apply, and drops the tombstones past [`TOMBSTONE_RETENTION`], in the
     /// same transaction.
-    pub fn delete_versions(&self, robot_id: &str, name: &str) -> Result<Deleted, ServerError> {
+    pub(crate) fn delete_versions(&self, robot_id: &str, name: &str) -> Result<Deleted, ServerError> {
         self.count(super::DELETE);
         let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
         tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
@@ -95,7 +95,7 @@ impl Store {
     /// (merged with the one held), durable when it returns. Returns whether the store changed. A tombstone past
     /// [`TOMBSTONE_RETENTION`] still removes its versions but is not recorded (nor the expired ones held kept), so
     /// that expired tombstones do not travel back and forth between servers' catch-ups.
-    pub fn apply_tombstone(&self, t: &Tombstone) -> Result<bool, ServerError> {
+    pub(crate) fn apply_tombstone(&self, t: &Tombstone) -> Result<bool, ServerError> {
         self.count(super::DELETE);
         let (robot_id, name) = (t.robot_id.as_str(), t.name.as_str());
         let oldest_kept = self.origin.as_ref().map(|(_, clock)| ntp64_before(clock(), TOMBSTONE_RETENTION));
@@ -150,7 +150,7 @@ impl Store {
 
     /// Every tombstone within [`TOMBSTONE_RETENTION`], in key order (what a server of the plant answers a catch-up
     /// query with, besides the versions).
-    pub fn all_tombstones(&self) -> Result<Vec<Tombstone>, ServerError> {
+    pub(crate) fn all_tombstones(&self) -> Result<Vec<Tombstone>, ServerError> {
         let oldest_kept =
             self.origin.as_ref().map_or(0, |(_, clock)| ntp64_before(clock(), TOMBSTONE_RETENTION));
         let read = self.db.begin_read().map_err(|e| storage("begin read", e))?;
