@@ -235,3 +235,33 @@ async fn a_sessions_new_goal_inside_an_obstacle_is_a_rejected_command() {
     assert_eq!(outcome(&v), v1::Outcome::GoalReached, "{v:?}");
     within("shutdown", handle.shutdown()).await.unwrap();
 }
+
+#[tokio::test(flavor = "multi_thread")]
+async fn every_member_of_a_group_gets_the_verdict_on_the_last_segment() {
+    let dir = tempfile::tempdir().unwrap();
+    let (handle, client) = serve(dir.path()).await;
+    let mut members = Vec::new();
+    for (id, y) in [("a", 0.0), ("b", 1.0)] {
+        let p = line(vec![0.0, y], vec![1.0, y], 1.0);
+        within("put", client.put_primitive(id, "line", &p)).await.unwrap();
+        let mut motion = spec(id, "line");
+        motion.ignore_scene = true;
+        motion.footprint = Some(v1::Superquadric { semi_axes: vec![0.1, 0.1], exponents: vec![] });
+        members.push(v1::GroupMember { motion: Some(motion) });
+    }
+    let request = v1::ExecuteGroupRequest { members, max_duration_s: 10.0, ..Default::default() };
+    let mut stream = within("group", client.execute_group(request)).await.unwrap();
+    let mut groups = Vec::new();
+    while let Some(g) = within("group segment", stream.next()).await {
+        groups.push(g.unwrap());
+    }
+    let (last, before) = groups.split_last().unwrap();
+    assert!(before.iter().flat_map(|g| &g.segments).all(|s| s.verdict.is_none()));
+    assert_eq!(last.segments.len(), 2);
+    for s in &last.segments {
+        let v = s.verdict.as_ref().expect("each member's last segment has the verdict");
+        assert_eq!(outcome(v), v1::Outcome::GoalReached, "{}: {v:?}", s.robot_id);
+        assert!(v.goal_reached && v.goal_distance <= 1e-3, "{v:?}");
+    }
+    within("shutdown", handle.shutdown()).await.unwrap();
+}
