@@ -266,7 +266,7 @@ impl MotionService for MotionServiceImpl {
         let chart = r.chart;
         let mut run = self.single_robot_run(r, Stepping::rk4(dt), 0)?;
         run.execution.set_end_time(steps as f64 * dt);
-        run.judge = Judge::new(format!("at the plan's duration ({:.3} s)", steps as f64 * dt), chart);
+        run.judge = Judge::new(format!("at the plan's duration, t = {:.3} s", steps as f64 * dt), chart);
         let now = self.state.runs.clock.now_unix_s();
         let snapshot = cell.snapshot();
         let others = cell.other_robots(&robot_id, now, 0.5);
@@ -561,9 +561,9 @@ impl MotionService for MotionServiceImpl {
 /// tau), `cfg` as resolved.
 fn end_label(max_duration_s: f64, cfg: &StreamConfig) -> String {
     if max_duration_s == 0.0 {
-        format!("at 3 tau ({:.3} s)", cfg.max_duration)
+        format!("at 3 tau, t = {:.3} s", cfg.max_duration)
     } else {
-        format!("at max_duration_s ({:.3} s)", cfg.max_duration)
+        format!("at max_duration_s, t = {:.3} s", cfg.max_duration)
     }
 }
 
