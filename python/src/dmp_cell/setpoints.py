@@ -63,7 +63,7 @@ class Verdict(NamedTuple):
     """How a run ended (`dmp.v1.Verdict`: a plan's, or the last segment's of a stream). `outcome` is the name of
     `dmp.v1.Outcome` without its prefix: `GOAL_REACHED`, `STALLED`, `BLOCKED`, `COLLISION`, `BRAKED`, `OUT_OF_TIME`
     or `STOPPED`; `goal_reached` whether every robot was at its goal and at rest at the end; `reason` one line for a
-    person (e.g. "ended 0.142 m short of the goal at 3 tau (3.000 s) (out of time)"); `goal_distance` the distance
+    person (e.g. "ended 0.142 m short of the goal at 3 tau, t = 3.000 s (out of time)"); `goal_distance` the distance
     left at the last point (`goal_angle` a pose run's angle, radians); `min_clearance` the smallest clearance from the
     obstacles over the run, metres (None when the server did not measure it); `collisions` the ids of the obstacles
     a setpoint was inside of."""
