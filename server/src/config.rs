@@ -1,6 +1,7 @@
 //! The server's configuration: a TOML file, then flags on top (see `bin/dmp-server.rs`).
 
 pub mod command_line;
+pub mod default_limits;
 pub(crate) mod ros2;
 pub mod scene;
 
@@ -9,6 +10,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
+use crate::config::default_limits::{DefaultLimits, check_margin};
 use crate::config::scene::SceneConfig;
 
 /// Everything the server needs to start.
@@ -186,7 +188,7 @@ impl Default for ZenohConfig {
     }
 }
 
-/// Avoidance used when a request does not name a method.
+/// What a motion request gets where it sets nothing: its avoidance, its limits and its safety distance.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Defaults {
@@ -202,6 +204,20 @@ pub struct Defaults {
     /// Shortest time between two states of one robot published on Zenoh, seconds (the local cell sees every
     /// segment's state).
     pub robot_state_period_s: f64,
+    /// The safety distance a run keeps from every obstacle's true shape, metres, where neither its request
+    /// (`MotionSpec.margin`) nor its robot's record sets one; negative: none.
+    pub margin_m: f64,
+    /// The default profile: the limits a run keeps on the fields that neither its request nor its robot's record
+    /// sets.
+    pub limits: DefaultLimits,
+}
+
+impl Defaults {
+    /// The default profile and safety distance are valid; the error names the key.
+    pub(crate) fn check(&self) -> Result<(), crate::error::ServerError> {
+        self.limits.check()?;
+        check_margin(self.margin_m)
+    }
 }
 
 impl Default for Defaults {
@@ -220,6 +236,8 @@ impl Default for Defaults {
             })),
             integration_step_s: 0.001,
             robot_state_period_s: 0.02,
+            margin_m: 0.01,
+            limits: DefaultLimits::default(),
         }
     }
 }

@@ -135,8 +135,10 @@ pub async fn start(config: Config) -> Result<ServerHandle, ServerError> {
 /// Starts the server on `clock` (tests run real time on tokio's paused clock) and returns once it serves: each step
 /// lives in the module it concerns, in the order of the layers.
 pub(crate) async fn start_with_clock(config: Config, clock: Clock) -> Result<ServerHandle, ServerError> {
-    // Refused before anything listens: exposure without protection, a bad access file, bad TLS files.
+    // Refused before anything listens: exposure without protection, a bad default profile, a bad access file,
+    // bad TLS files.
     let exposure = exposure::check(&config)?;
+    config.defaults.check()?;
     for reason in &exposure.warnings {
         warn!(reason = %reason, "INSECURE (--insecure): anyone who reaches the server can steer every robot");
     }

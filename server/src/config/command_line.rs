@@ -212,6 +212,7 @@ pub fn load_config(args: &Args) -> anyhow::Result<Config> {
         config.ros2.domain = args.ros2_domain;
     }
     config.ros2.check().map_err(|e| anyhow::anyhow!("{e}"))?;
+    config.defaults.check().map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(config)
 }
 
@@ -315,6 +316,32 @@ max_streams = 10
 
         assert!(Args::try_parse_from(["dmp-server", "--zenoh-mode", "router"]).is_err());
         assert!(Args::try_parse_from(["dmp-server", "--grpc-addr", "nowhere"]).is_err());
+    }
+
+    #[test]
+    fn the_default_profile_is_read_and_a_bad_field_is_refused_by_its_key() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("server.toml");
+        let load = |text: &str| {
+            std::fs::write(&file, text).unwrap();
+            load_config(&args(&["--config", file.to_str().unwrap()]))
+        };
+        let c = load("[defaults]\nmargin_m = -1.0\n[defaults.limits]\nmax_speed = 0.5\nmax_jerk = -1.0\n")
+            .unwrap();
+        assert_eq!((c.defaults.limits.max_speed, c.defaults.limits.max_jerk), (0.5, -1.0));
+        assert_eq!(c.defaults.limits.max_acceleration, 5.0, "unset keys keep the defaults");
+        assert_eq!(c.defaults.margin_m, -1.0);
+        for (text, key) in [
+            ("[defaults.limits]\nmax_angular_speed = 0.0\n", "defaults.limits.max_angular_speed:"),
+            ("[defaults.limits]\nmax_jerk = nan\n", "defaults.limits.max_jerk:"),
+            ("[defaults.limits]\nmax_acceleration = inf\n", "defaults.limits.max_acceleration:"),
+            ("[defaults]\nmargin_m = 0.0\n", "defaults.margin_m:"),
+        ] {
+            let e = format!("{:#}", load(text).unwrap_err());
+            assert!(e.starts_with(key), "{text}: {e}");
+        }
+        let e = format!("{:#}", load("[defaults.limits]\nmax_sped = 1.0\n").unwrap_err());
+        assert!(e.contains("max_sped"), "{e}");
     }
 
     /// Every key path of a TOML document, e.g. `zenoh.listen`.

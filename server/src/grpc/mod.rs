@@ -4,6 +4,7 @@
 //! tool from the wire ([`tool`]); and here, the router that serves them with health and reflection.
 
 pub(crate) mod authentication;
+mod limits_in_force;
 pub(crate) mod motion;
 pub(crate) mod primitives;
 mod resolved_motion;

@@ -7,7 +7,6 @@ use std::time::Duration;
 use dmp::Stepping;
 use dmp::execution::{GoalTolerance, GroupMember, join_group};
 use dmp::field::Agent;
-use dmp_proto::limits::tightest;
 use dmp_proto::status::segment_status_limited;
 use dmp_proto::v1;
 use dmp_proto::v1::motion_service_server::MotionService;
@@ -39,6 +38,7 @@ use crate::runs::stream::{Admitted, run_stream};
 use crate::runs::stream_memory::StreamBytes;
 use crate::runs::verdict::{Ending, Judge, verdict};
 
+use super::limits_in_force;
 use super::resolved_motion::{Intent, ResolvedMotion};
 use super::session_commands::SessionCommands;
 use super::stream_request::{DEFAULT_DT, StreamRequest};
@@ -99,7 +99,7 @@ impl MotionServiceImpl {
             run.execution.set_orientation_chart(chart)?;
         }
         run.execution.set_tool(r.tool)?;
-        run.execution.set_limits(r.limits, r.chart.is_some())?;
+        run.execution.set_limits(r.in_force.limits, r.chart.is_some())?;
         run.execution.set_goal_filter(r.goal_filter_alpha)?;
         Ok(run)
     }
@@ -229,9 +229,17 @@ impl MotionServiceImpl {
     }
 }
 
-/// The stream of a one-robot run: the only segment of each batch.
-fn one_robot_stream(rx: mpsc::Receiver<Result<Batch, Status>>) -> SegmentStream {
-    Box::pin(ReceiverStream::new(rx).map(|r| r.map(|mut b| b.remove(0))))
+/// The stream of a one-robot run: the only segment of each batch, the first one carrying the limits in force.
+fn one_robot_stream(rx: mpsc::Receiver<Result<Batch, Status>>, limits: v1::LimitsInForce) -> SegmentStream {
+    Box::pin(ReceiverStream::new(rx).map(move |r| r.map(|b| with_limits(b, &limits).remove(0))))
+}
+
+/// `batch`, each member's first segment (sequence 0) carrying the run's limits in force.
+fn with_limits(mut batch: Batch, limits: &v1::LimitsInForce) -> Batch {
+    for s in batch.iter_mut().filter(|s| s.sequence == 0) {
+        s.limits = Some(limits.clone());
+    }
+    batch
 }
 
 #[tonic::async_trait]
@@ -262,11 +270,12 @@ impl MotionService for MotionServiceImpl {
         self.check_message_size("duration", (steps + 1) * columns(&r.primitive))?;
         let robot_id = r.robot_id.clone();
         let cell = r.cell.clone();
+        let limits = r.in_force.reported.clone();
         // A plan is RK4 at the output rate, as the engine's own rollout; it ends at its last point.
         let chart = r.chart;
         let mut run = self.single_robot_run(r, Stepping::rk4(dt), 0)?;
         run.execution.set_end_time(steps as f64 * dt);
-        run.judge = Judge::new(format!("at the plan's duration, t = {:.3} s", steps as f64 * dt), chart);
+        run.judge = Judge::new(format!("at the plan's duration ({:.3} s)", steps as f64 * dt), chart);
         let now = self.state.runs.clock.now_unix_s();
         let snapshot = cell.snapshot();
         let others = cell.other_robots(&robot_id, now, 0.5);
@@ -317,7 +326,7 @@ impl MotionService for MotionServiceImpl {
             stalled,
             warnings,
             verdict: Some(verdict),
-            limits: None,
+            limits: Some(limits),
         }))
     }
 
@@ -340,17 +349,11 @@ impl MotionService for MotionServiceImpl {
         let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await?;
         audit!(caller, "execute", cell = cell.name(), robot = %r.robot_id, take_over = req.take_over);
         let grant = self.grant(caller, &cell, vec![r.robot_id.clone()])?;
-        let chart = r.chart;
+        let (chart, limits) = (r.chart, r.in_force.reported.clone());
         let mut run = self.single_robot_run(r, cfg.stepping, history_len(&cfg))?;
         run.judge = Judge::new(end_label(req.max_duration_s, &cfg), chart);
-        Ok(Response::new(one_robot_stream(self.spawn(
-            run,
-            cell,
-            cfg,
-            None,
-            &peer,
-            Owner { claim, grant },
-        )?)))
+        let rx = self.spawn(run, cell, cfg, None, &peer, Owner { claim, grant })?;
+        Ok(Response::new(one_robot_stream(rx, limits)))
     }
 
     type SessionStream = SegmentStream;
@@ -390,7 +393,7 @@ impl MotionService for MotionServiceImpl {
         let claim = self.claim(&cell, &[&r.robot_id], req.take_over).await.map_err(|e| e.within("start"))?;
         audit!(caller, "session", cell = cell.name(), robot = %robot_id, take_over = req.take_over);
         let grant = self.grant(caller.clone(), &cell, vec![robot_id.clone()])?;
-        let chart = r.chart;
+        let (chart, in_force) = (r.chart, r.in_force.reported.clone());
         let goals = GoalGuard {
             cell: cell.clone(),
             extra: r.avoidance.extra.clone(),
@@ -446,7 +449,7 @@ impl MotionService for MotionServiceImpl {
                 }
             }
         });
-        Ok(Response::new(one_robot_stream(rx)))
+        Ok(Response::new(one_robot_stream(rx, in_force)))
     }
 
     type ExecuteGroupStream = GroupStream;
@@ -531,7 +534,7 @@ impl MotionService for MotionServiceImpl {
                 }
             });
         // One phase, one set of limits: the tightest of the members'; the goal filter of the first member.
-        let limits = resolved.iter().fold(resolved[0].limits, |a, r| tightest(&a, &r.limits));
+        let in_force = limits_in_force::group(&resolved.iter().map(|r| &r.in_force).collect::<Vec<_>>());
         let goal_filter_alpha = resolved[0].goal_filter_alpha;
         let members =
             agents.into_iter().zip(resolved.into_iter().map(|r| r.footprint_proto)).collect::<Vec<_>>();
@@ -543,14 +546,15 @@ impl MotionService for MotionServiceImpl {
         let grant = self.grant(caller, &cell, ids.iter().map(|id| id.to_string()).collect())?;
         let mut run = ServedRun::new(primitive, motion, members, avoidance, cfg.stepping, history_len(&cfg))?;
         run.execution.set_goal_tolerance(goal_tolerance).map_err(ServerError::from)?;
-        run.execution.set_limits(limits, false).map_err(ServerError::from)?;
+        run.execution.set_limits(in_force.limits, false).map_err(ServerError::from)?;
         run.execution.set_goal_filter(goal_filter_alpha).map_err(ServerError::from)?;
         run.judge = Judge::new(end_label(req.max_duration_s, &cfg), None);
         let rx = self.spawn(run, cell, cfg, None, &peer, Owner { claim, grant })?;
-        let stream = ReceiverStream::new(rx).map(|r| {
+        let limits = in_force.reported;
+        let stream = ReceiverStream::new(rx).map(move |r| {
             r.map(|segments| v1::GroupSegment {
                 sequence: segments.first().map(|s| s.sequence).unwrap_or(0),
-                segments,
+                segments: with_limits(segments, &limits),
             })
         });
         Ok(Response::new(Box::pin(stream)))

@@ -1,15 +1,16 @@
 //! A motion request resolved against the access rules and the store: the primitive, the motion, the avoidance,
-//! and the robot's record as the defaults of its limits, footprint and tool.
+//! and the robot's record as the defaults of its limits, safety distance, footprint and tool.
 
 use dmp::execution::GoalTolerance;
 use dmp::{Motion, Primitive};
 use dmp_proto::avoidance::avoidance_from_proto;
 use dmp_proto::check::{check_in_workspace, check_tau, check_vector};
 use dmp_proto::keys::check_name;
-use dmp_proto::limits::{goal_filter_alpha, limits_from_proto, overridden};
+use dmp_proto::limits::goal_filter_alpha;
 use dmp_proto::shape::superquadric_to_shape;
 use dmp_proto::v1;
 
+use super::limits_in_force::{self, InForce};
 use super::shared::ServiceState;
 use super::tool::tool_from_proto;
 use crate::access::{Action, Caller};
@@ -53,8 +54,9 @@ pub(super) struct ResolvedMotion {
     pub(super) chart: Option<nalgebra::UnitQuaternion<f64>>,
     /// A pose run's tool.
     pub(super) tool: Option<dmp::tool::Tool>,
-    /// The robot's limits: its record's, overridden field by field by the request's (none when neither gives any).
-    pub(super) limits: dmp::Limits,
+    /// The robot's limits and safety distance: the request's, then its record's, then the server's default
+    /// profile, field by field ([`limits_in_force`]).
+    pub(super) in_force: InForce,
     /// The goal filter's `alpha_g` (0: off).
     pub(super) goal_filter_alpha: f64,
     /// The velocity at the start, every dimension of the primitive (zeros: at rest).
@@ -83,7 +85,7 @@ impl ResolvedMotion {
         let cell = state.cells.for_motion(cell, visible).map_err(|e| e.within(prefix))?;
         let store = state.store.clone();
         let (robot, name, version) = (spec.robot_id.clone(), spec.primitive.clone(), spec.version);
-        // The primitive, and the robot's record: the defaults of its limits, footprint and tool.
+        // The primitive, and the robot's record: the defaults of its limits, safety distance, footprint and tool.
         let (record, robot) = tokio::task::spawn_blocking(move || {
             Ok::<_, ServerError>((store.get(&robot, &name, version)?, store.get_robot(&robot)?))
         })
@@ -147,6 +149,7 @@ impl ResolvedMotion {
         // Checked now, not when the first obstacle or robot appears (which would end a running stream).
         obstacles.0.method.validate(&format!("{prefix}.avoidance"), d)?;
         robots.0.method.validate(&format!("{prefix}.robot_avoidance"), d)?;
+        let in_force = limits_in_force::resolve(&spec.robot_id, spec, &robot, defaults, prefix)?;
         // The request's footprint, or the record's.
         let footprint_proto = spec.footprint.clone().or(robot.footprint);
         let footprint = footprint_proto
@@ -160,12 +163,6 @@ impl ResolvedMotion {
             (None, Some(t)) if chart.is_some() && d == 3 => Some(tool_from_proto(t, "robot.tool")?),
             _ => None,
         };
-        // The record's limits, overridden field by field by the request's.
-        let stored = limits_from_proto(robot.limits.as_ref()).map_err(|e| {
-            ServerError::Internal(format!("the stored record of robot `{}`: {e}", spec.robot_id))
-        })?;
-        let requested =
-            limits_from_proto(spec.limits.as_ref()).map_err(|e| e.within(&format!("{prefix}.limits")))?;
         Ok(ResolvedMotion {
             robot_id: spec.robot_id.clone(),
             cell,
@@ -177,7 +174,7 @@ impl ResolvedMotion {
             goal_tolerance: goal_tolerance(spec.goal_tolerance.as_ref(), prefix)?,
             tool,
             chart,
-            limits: overridden(&stored, &requested),
+            in_force,
             goal_filter_alpha: goal_filter_alpha(spec.goal_filter_alpha).map_err(|e| e.within(prefix))?,
             start_velocity,
         })

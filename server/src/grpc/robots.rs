@@ -8,13 +8,13 @@
 use std::sync::Arc;
 
 use dmp_proto::keys::check_name;
-use dmp_proto::limits::limits_from_proto;
 use dmp_proto::shape::superquadric_to_shape;
 use dmp_proto::v1;
 use dmp_proto::v1::robot_service_server::RobotService;
 use tonic::{Request, Response, Status};
 use tracing::{debug, info};
 
+use super::limits_in_force::{check_limits, check_margin};
 use super::primitives::{blocking, now_unix_ms, status};
 use super::tool::tool_from_proto;
 use crate::access::{Action, Caller};
@@ -46,8 +46,9 @@ pub(crate) fn checked_record(
 ) -> Result<v1::RobotRecord, ServerError> {
     check_name("robot.robot_id", &r.robot_id)?;
     if let Some(l) = &r.limits {
-        limits_from_proto(Some(l)).map_err(|e| ServerError::from(e).within("robot.limits"))?;
+        check_limits(l, "robot.limits")?;
     }
+    check_margin(r.margin, "robot.margin")?;
     if let Some(f) = &r.footprint {
         if f.semi_axes.len() > limits.max_dim {
             return Err(ServerError::invalid(
