@@ -6,6 +6,18 @@ use dmp::integrate::goal_filter::DEFAULT_GOAL_ALPHA;
 use crate::WireError;
 use crate::v1;
 
+/// A request's or a robot record's limits that turn every limit off, explicitly (every field negative): what a run
+/// that must follow the DMP exactly (the paper's experiments, a comparison with the engine) asks for, since an
+/// unset field takes the server's default profile.
+pub const NO_LIMITS: v1::Limits = v1::Limits {
+    max_speed: -1.0,
+    max_acceleration: -1.0,
+    max_jerk: -1.0,
+    max_angular_speed: -1.0,
+    max_angular_acceleration: -1.0,
+    max_angular_jerk: -1.0,
+};
+
 /// The engine's limits of `l` (unset: none), each field checked (finite, 0 or more), an error naming it.
 pub fn limits_from_proto(l: Option<&v1::Limits>) -> Result<Limits, WireError> {
     let Some(l) = l else { return Ok(Limits::NONE) };
