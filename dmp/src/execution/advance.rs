@@ -67,6 +67,8 @@ impl Execution {
             );
             self.out_t = ((t + dt) / dt).round() * dt;
             let action = self.keep_limits(
+                t,
+                s,
                 &mut p.x[range.clone()],
                 &mut p.xd[range.clone()],
                 &mut p.xdd[range.clone()],
