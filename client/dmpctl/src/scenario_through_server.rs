@@ -17,6 +17,9 @@
 //!   Rows past the scenario's duration (streams end on segment boundaries) are cut; a shorter run is cut to the
 //!   shorter length, and a note says so.
 //!
+//! Every motion asks for no limits and no safety distance (`NO_LIMITS`, a negative `margin`): a scenario has
+//! neither, and the server's default profile would otherwise hold the run back from the paper's trajectory.
+//!
 //! The robots are the run's own (`scenario.` is no real robot's prefix): their primitives are deleted when the run
 //! ends, also after an error, unless `keep` (`--keep`).
 //!
@@ -34,6 +37,7 @@ use dmp_client::grpc::{DmpClient, record_primitive};
 use dmp_client::setpoints::Setpoints;
 use dmp_proto::avoidance::avoidance_to_proto;
 use dmp_proto::learning::learn_parameters_to_proto;
+use dmp_proto::limits::NO_LIMITS;
 use dmp_proto::obstacle_json::obstacle_to_proto;
 use dmp_proto::shape::footprint_to_proto;
 use dmp_proto::v1;
@@ -210,6 +214,8 @@ async fn plan_one_robot(
         avoidance: Some(avoidance_to_proto(avoidance, s.point_samples)),
         extra_obstacles: obstacles,
         ignore_scene: true,
+        limits: Some(NO_LIMITS),
+        margin: -1.0,
         ..Default::default()
     };
     let obstacles: Vec<v1::Obstacle> = s.obstacles.iter().map(|o| obstacle_to_proto(o, 0.0, 0.0)).collect();
@@ -283,6 +289,8 @@ async fn run_robot_group(
                         ignore_scene: true,
                         cell: String::new(),
                         goal_tolerance: None,
+                        limits: Some(NO_LIMITS),
+                        margin: -1.0,
                         ..Default::default()
                     }),
                 }

@@ -3,6 +3,7 @@
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
 
+use crate::default_limits::exact;
 use crate::{dynamic_volumetric, ellipse, line, paper_curve, serve, spec, until};
 use dmp_tests::{T, within};
 
@@ -49,7 +50,7 @@ async fn bad_input_gets_a_clear_status_and_the_server_keeps_serving() {
         assert!(e.to_string().contains(field), "{v:?}: {e}");
     }
     // A good one starts the run moving: its first point has it.
-    let mut motion = spec("r", "line");
+    let mut motion = exact(spec("r", "line"));
     motion.start_velocity = vec![0.2, -0.1];
     let plan =
         within("plan moving", client.plan(v1::PlanRequest { motion: Some(motion), ..Default::default() }))

@@ -5,6 +5,7 @@ mod access;
 mod arrival;
 mod bad_input;
 mod catch_up;
+mod default_limits;
 mod hostile_compute;
 mod hostile_sessions;
 mod hostile_values;

@@ -5,6 +5,7 @@ use std::path::Path;
 use dmp_proto::v1;
 use tokio_stream::StreamExt;
 
+use crate::default_limits::exact;
 use crate::{dynamic_volumetric, ellipse, paper_curve, serve, spec};
 use dmp_tests::within;
 
@@ -94,7 +95,7 @@ async fn a_coarse_internal_step_stays_within_1e3_of_the_engines_1ms_rollout() {
             dmp::rollout(&primitive, &dmp::Motion::of(&primitive), &field, 1e-3, 1500).unwrap().trajectory;
         // Fixed RK4 steps, and the adaptive step (Dormand-Prince 5(4), at most 30 ms).
         for (step, tolerance) in [(0.005, 0.0), (0.01, 0.0), (0.03, 3e-6)] {
-            let mut motion = spec("arm", "curve");
+            let mut motion = exact(spec("arm", "curve"));
             motion.avoidance = Some(avoidance);
             motion.extra_obstacles = vec![still.clone(), moving.clone()];
             motion.ignore_scene = true;

@@ -99,8 +99,8 @@ async fn a_motion_far_beyond_the_limits_brakes_within_them_and_says_so() {
     assert!(statuses.contains(&(v1::SegmentStatus::LimitBraking as i32)), "no braking reported");
     let p = peaks(&kept(&segments), segments[0].dt);
     assert!(within_limits(p, &slow), "peaks {p:?}");
-    // Bad limits are refused, naming the field.
-    motion.limits = Some(v1::Limits { max_jerk: -1.0, ..limits_to_proto(&slow) });
+    // Bad limits are refused, naming the field (a negative one is none, explicitly: not bad).
+    motion.limits = Some(v1::Limits { max_jerk: f64::NAN, ..limits_to_proto(&slow) });
     let e =
         within("execute", client.execute(v1::ExecuteRequest { motion: Some(motion), ..Default::default() }))
             .await

@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+use crate::default_limits::exact;
 use dmp_client::grpc::DmpClient;
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::v1;
@@ -349,7 +350,8 @@ async fn robots_of_neighbouring_cells_on_two_servers_avoid_each_other() {
             within("put r2", c.put_primitive("r2", "cross", &line(vec![0.0, 0.0], vec![1.0, 0.0], 6.0)))
                 .await
                 .unwrap();
-            let mut motion = spec("r2", "cross");
+            // The DMP's avoidance as the paper has it: no limits holding the swerve back.
+            let mut motion = exact(spec("r2", "cross"));
             motion.footprint = Some(footprint);
             let request = v1::PlanRequest { motion: Some(motion), dt: 0.001, duration: 8.0 };
             within("plan r2", c.plan(request)).await.unwrap().trajectory.unwrap()

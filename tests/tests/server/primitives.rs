@@ -2,6 +2,7 @@
 
 use dmp_proto::v1;
 
+use crate::default_limits::exact;
 use crate::{dynamic_volumetric, ellipse, line, paper_curve, serve, spec};
 use dmp_tests::within;
 
@@ -33,7 +34,7 @@ async fn primitives_survive_a_restart_and_a_plan_equals_the_engine() {
     let offline = dmp::learn(&demo, &dmp::LearnConfig::paper()).unwrap();
     let stored = dmp_client::grpc::record_primitive(&after[0]).unwrap();
     assert_eq!(stored, offline);
-    let mut motion = spec("panda", "curve");
+    let mut motion = exact(spec("panda", "curve"));
     motion.avoidance = Some(dynamic_volumetric(10.0, 2.0, 0.5));
     motion.extra_obstacles = vec![ellipse("ellipse", vec![-0.5, 0.7], vec![0.3, 0.2])];
     motion.ignore_scene = true;

@@ -9,6 +9,7 @@ use tokio_stream::StreamExt;
 use tonic::Code;
 
 use crate::access::{as_identity, secured};
+use crate::default_limits::exact;
 use crate::motion_limits::{kept, peaks};
 use crate::{line, serve, spec};
 use dmp_tests::within;
@@ -53,16 +54,17 @@ async fn a_robot_record_survives_a_restart_and_bad_ones_are_refused_naming_the_f
     assert_eq!(within("get after restart", client.get_robot("panda")).await.unwrap(), stored);
     assert_eq!(within("get psm after restart", client.get_robot("psm")).await.unwrap(), replaced);
 
-    let bad: [(&str, v1::RobotRecord); 6] = [
+    let bad: [(&str, v1::RobotRecord); 7] = [
         ("robot.robot_id", v1::RobotRecord { robot_id: "r".repeat(129), ..panda_record("x") }),
         ("robot.robot_id", v1::RobotRecord { robot_id: "a b".into(), ..panda_record("x") }),
         (
             "robot.limits.max_jerk",
             v1::RobotRecord {
-                limits: Some(v1::Limits { max_jerk: -1.0, ..limits_to_proto(&Limits::PANDA) }),
+                limits: Some(v1::Limits { max_jerk: f64::NAN, ..limits_to_proto(&Limits::PANDA) }),
                 ..panda_record("x")
             },
         ),
+        ("robot.margin", v1::RobotRecord { margin: f64::INFINITY, ..panda_record("x") }),
         (
             "robot.footprint.semi_axes",
             v1::RobotRecord {
@@ -119,8 +121,11 @@ async fn a_run_keeps_the_records_limits_and_the_request_overrides_them_field_by_
         .unwrap();
     let mut motion = spec("base", "dash");
     motion.ignore_scene = true;
-    let free = peaks(&kept(&executed(&client, motion.clone()).await), 1e-3);
-    assert!(free[0] > 1.5, "without a record the dash is fast: {free:?}");
+    let free = peaks(&kept(&executed(&client, exact(motion.clone())).await), 1e-3);
+    assert!(free[0] > 1.5, "without limits the dash is fast: {free:?}");
+    // Without a record: the server's default profile (1 m/s, 5 m/s^2, 50 m/s^3).
+    let p = peaks(&kept(&executed(&client, motion.clone()).await), 1e-3);
+    assert!(p[0] <= 1.0 && p[1] <= 5.0 && p[2] <= 50.0, "default profile {p:?}");
 
     let slow = Limits { max_speed: 0.5, max_acceleration: 1.0, max_jerk: 10.0, ..Limits::NONE };
     within("put robot", client.put_robot_limits("base", &slow)).await.unwrap();

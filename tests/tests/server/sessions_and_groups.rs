@@ -4,6 +4,7 @@ use dmp::Isopotential;
 use dmp_proto::v1;
 use tokio_stream::StreamExt;
 
+use crate::default_limits::exact;
 use crate::{dynamic_volumetric, line, rows, serve, spec};
 use dmp_tests::within;
 
@@ -72,7 +73,8 @@ async fn three_robots_on_a_shared_phase_do_not_collide() {
     for (i, (s, g)) in starts.iter().zip(&goals).enumerate() {
         let id = format!("youbot{}", i + 1);
         within("put", client.put_primitive(&id, "cross", &line(s.to_vec(), g.to_vec(), 10.0))).await.unwrap();
-        let mut motion = spec(&id, "cross");
+        // The paper's youBot test: its avoidance, without limits holding the robots back.
+        let mut motion = exact(spec(&id, "cross"));
         motion.footprint = Some(footprint.clone());
         motion.ignore_scene = true;
         motion.robot_avoidance = Some(dynamic_volumetric(60.0, 2.0, 0.2));
