@@ -162,7 +162,7 @@ pub(crate) async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, Dmp
     let verdict = r.verdict.as_ref();
     let line = format!(
         "{}/{}: {} points over {} s (dt {}), scene version {}, collisions: {collisions}, stalled: {}, warnings: {}, \
-         {}; wrote {}",
+         {}, {}; wrote {}",
         a.motion.robot,
         a.motion.name,
         traj.len(),
@@ -172,6 +172,7 @@ pub(crate) async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, Dmp
         r.stalled,
         r.warnings.len(),
         verdict_words(verdict),
+        limits_words(record.limits.as_ref()),
         a.out.join("trajectory.csv").display()
     );
     let mut problems = verdict_problems(verdict, a.allow_collision);
@@ -193,6 +194,27 @@ fn verdict_words(v: Option<&v1::Verdict>) -> String {
         Some(v) => format!("verdict {} ({})", outcome_name(v), v.reason),
         None => "no verdict".to_string(),
     }
+}
+
+/// The limits in force in the summary line: `limits (server default): 1 m/s, 5 m/s^2, ..., margin 0.01 m`, a field
+/// without a limit as `no max_jerk`.
+fn limits_words(l: Option<&v1::LimitsInForce>) -> String {
+    let Some(l) = l else { return "limits in force not reported".to_string() };
+    let b = l.limits.unwrap_or_default();
+    let fields = [
+        ("max_speed", b.max_speed, "m/s"),
+        ("max_acceleration", b.max_acceleration, "m/s^2"),
+        ("max_jerk", b.max_jerk, "m/s^3"),
+        ("max_angular_speed", b.max_angular_speed, "rad/s"),
+        ("max_angular_acceleration", b.max_angular_acceleration, "rad/s^2"),
+        ("max_angular_jerk", b.max_angular_jerk, "rad/s^3"),
+    ];
+    let bounds: Vec<String> = fields
+        .iter()
+        .map(|(name, v, unit)| if *v > 0.0 { format!("{v} {unit}") } else { format!("no {name}") })
+        .collect();
+    let margin = if l.margin > 0.0 { format!("margin {} m", l.margin) } else { "no margin".to_string() };
+    format!("limits ({}): {}, {margin}", l.profile, bounds.join(", "))
 }
 
 /// What is wrong with a run that ended with verdict `v`, as `scenario run` and `sim` judge theirs: a collision
@@ -342,14 +364,15 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
     };
     let line = format!(
         "{}/{}: {n} segments{}, {} setpoints in force up to t = {} s, last status {status}, collisions: \
-         {collisions} ({collision_segments} COLLISION segments), warnings: {warnings}, late setpoints: {late}, {}; \
-         wrote {}",
+         {collisions} ({collision_segments} COLLISION segments), warnings: {warnings}, late setpoints: {late}, {}, \
+         {}; wrote {}",
         a.motion.robot,
         a.motion.name,
         if interrupted { " (interrupted)" } else { "" },
         traj.len(),
         traj.t.last().copied().unwrap_or(0.0),
         verdict_words(verdict.as_ref()),
+        limits_words(versions.limits.as_ref()),
         a.out.join("trajectory.csv").display()
     );
     // Ctrl-C is a stop the user asked for: how the run would have ended is not judged, what it did is.
@@ -537,5 +560,28 @@ mod tests {
             ..Default::default()
         };
         assert_eq!(segment_line(&seg), "segment 7 t 0.0700 s points 10 status GOAL_REACHED scene_version 3");
+    }
+
+    #[test]
+    fn the_limits_in_force_name_their_profile_and_the_fields_without_a_limit() {
+        let l = v1::LimitsInForce {
+            limits: Some(v1::Limits {
+                max_speed: 1.0,
+                max_acceleration: 5.0,
+                max_jerk: 0.0,
+                max_angular_speed: 2.0,
+                max_angular_acceleration: 10.0,
+                max_angular_jerk: 100.0,
+            }),
+            profile: "request + server default".into(),
+            unlimited: vec!["max_jerk".into()],
+            margin: 0.01,
+        };
+        assert_eq!(
+            limits_words(Some(&l)),
+            "limits (request + server default): 1 m/s, 5 m/s^2, no max_jerk, 2 rad/s, 10 rad/s^2, 100 rad/s^3, \
+             margin 0.01 m"
+        );
+        assert_eq!(limits_words(None), "limits in force not reported");
     }
 }
