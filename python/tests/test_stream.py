@@ -11,6 +11,10 @@ from server import ROBOT
 
 DEADLINE_S = 60.0
 
+#: The DMP's own timing, which these tests check: no limits, no safety distance (the server's default profile
+#: would hold the 2 m/s reach back).
+EXACT = dict(limits=dmp_cell.NO_LIMITS, margin=-1.0)
+
 
 def norm(v):
     return math.sqrt(sum(x * x for x in v))
@@ -33,7 +37,7 @@ def check_continuous(sps, dt):
 
 def test_a_stream_reaches_the_goal_with_continuous_setpoints(server, learned):
     goal = [0.9, 0.4]
-    with server.client(ROBOT) as c, c.stream(ROBOT, "reach", goal=goal, deadline_s=DEADLINE_S) as s:
+    with server.client(ROBOT) as c, c.stream(ROBOT, "reach", goal=goal, deadline_s=DEADLINE_S, **EXACT) as s:
         sps = list(s)
     assert s.status == "GOAL_REACHED"
     assert s.setpoints.segments > 10
@@ -52,7 +56,7 @@ def test_a_stream_reaches_the_goal_with_continuous_setpoints(server, learned):
 
 def test_a_goal_change_mid_stream_is_honoured_even_by_a_reader_that_fell_behind(server, learned):
     new_goal = [0.6, 0.9]
-    with server.client(ROBOT) as c, c.stream(ROBOT, "reach", tau=2.0, deadline_s=DEADLINE_S) as s:
+    with server.client(ROBOT) as c, c.stream(ROBOT, "reach", tau=2.0, deadline_s=DEADLINE_S, **EXACT) as s:
         # A robot that is slow to read: the server must not run ahead to the end of the run meanwhile (the
         # stream's buffers are bounded), or the goal change below would come too late.
         time.sleep(0.3)
@@ -70,7 +74,7 @@ def test_a_goal_change_mid_stream_is_honoured_even_by_a_reader_that_fell_behind(
 def test_a_goal_change_in_real_time_supersedes_the_points_already_sent(server, learned):
     new_goal = [0.3, 0.8]
     with server.client(ROBOT) as c:
-        with c.stream(ROBOT, "reach", realtime=True, deadline_s=DEADLINE_S) as s:
+        with c.stream(ROBOT, "reach", realtime=True, deadline_s=DEADLINE_S, **EXACT) as s:
             sps = []
             for sp in s:
                 sps.append(sp)
@@ -89,7 +93,7 @@ def test_a_goal_change_in_real_time_supersedes_the_points_already_sent(server, l
 
 
 def test_a_refused_command_is_a_warning_and_the_run_goes_on(server, learned):
-    with server.client(ROBOT) as c, c.stream(ROBOT, "reach", deadline_s=DEADLINE_S) as s:
+    with server.client(ROBOT) as c, c.stream(ROBOT, "reach", deadline_s=DEADLINE_S, **EXACT) as s:
         for i, _ in enumerate(s):
             if i == 100:
                 s.set_goal([1.0, 2.0, 3.0])
@@ -105,7 +109,7 @@ def test_a_refused_command_is_a_warning_and_the_run_goes_on(server, learned):
 def test_stop_ends_the_stream_at_rest(server, learned):
     # In real time: read as fast as possible, the server may have computed the whole reach before the stop
     # arrives, and the stop then applies at the goal.
-    with server.client(ROBOT) as c, c.stream(ROBOT, "reach", realtime=True, deadline_s=DEADLINE_S) as s:
+    with server.client(ROBOT) as c, c.stream(ROBOT, "reach", realtime=True, deadline_s=DEADLINE_S, **EXACT) as s:
         for i, _ in enumerate(s):
             if i == 200:
                 s.stop()
@@ -117,8 +121,8 @@ def test_stop_ends_the_stream_at_rest(server, learned):
 def test_a_plan_is_the_whole_trajectory_at_once(server, learned):
     goal = [0.9, 0.4]
     with server.client(ROBOT) as c:
-        plan = c.plan(ROBOT, "reach", goal=goal, dt=0.002)
-        with c.stream(ROBOT, "reach", goal=goal, dt=0.002, deadline_s=DEADLINE_S) as s:
+        plan = c.plan(ROBOT, "reach", goal=goal, dt=0.002, **EXACT)
+        with c.stream(ROBOT, "reach", goal=goal, dt=0.002, deadline_s=DEADLINE_S, **EXACT) as s:
             streamed = s.collect()
     assert not plan.collisions and not plan.stalled and not plan.warnings
     sps = list(plan.setpoints)
@@ -133,7 +137,7 @@ def test_a_plan_is_the_whole_trajectory_at_once(server, learned):
 
 
 def test_measured_states_are_reported_and_a_stale_one_is_dropped(server, learned):
-    with server.client(ROBOT) as c, c.stream(ROBOT, "reach", deadline_s=DEADLINE_S) as s:
+    with server.client(ROBOT) as c, c.stream(ROBOT, "reach", deadline_s=DEADLINE_S, **EXACT) as s:
         for i, sp in enumerate(s):
             if i == 100:
                 s.report_state(sp.position, sp.velocity)

@@ -33,7 +33,8 @@ def test_a_plan_says_whether_it_reached_its_goal_and_how_far_it_stopped_short(pl
 
 
 def test_the_last_segment_of_a_stream_carries_its_verdict(plain):
-    with plain.stream("v1", "reach", goal=[0.9, 0.4], deadline_s=DEADLINE_S) as s:
+    # The server's default profile holds the 2 m/s reach to 1 m/s: it arrives after 3 tau, the default end.
+    with plain.stream("v1", "reach", goal=[0.9, 0.4], max_duration_s=6.0, deadline_s=DEADLINE_S) as s:
         assert s.verdict is None
         list(s)
     assert s.status == "GOAL_REACHED"

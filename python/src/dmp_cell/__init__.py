@@ -12,10 +12,10 @@ The gRPC stubs are generated from the repository's `proto/` when the package is 
 """
 
 from . import pb
-from .client import Client, Plan
+from .client import NO_LIMITS, Client, Plan
 from .errors import ArgumentError, ConnectError, DmpError, ProtocolError, StatusError, ZenohError
 from .obstacles import check_obstacle, obstacle_to_dict, obstacle_to_proto
-from .setpoints import FINAL_STATUSES, ServerWarning, Setpoint, Setpoints, Verdict
+from .setpoints import FINAL_STATUSES, LimitsInForce, ServerWarning, Setpoint, Setpoints, Verdict
 from .stream import Stream
 
 __all__ = [
@@ -24,6 +24,8 @@ __all__ = [
     "ConnectError",
     "DmpError",
     "FINAL_STATUSES",
+    "LimitsInForce",
+    "NO_LIMITS",
     "Plan",
     "ProtocolError",
     "Setpoint",

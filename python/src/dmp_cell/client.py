@@ -12,7 +12,8 @@ from . import connect as conn
 from .pb import motion, motion_grpc, primitives, primitives_grpc, scene, scene_grpc, server, server_grpc, types
 from .errors import ArgumentError, from_rpc
 from .obstacles import check_name, check_obstacle, obstacle_to_dict, obstacle_to_proto
-from .setpoints import ServerWarning, Setpoints, Verdict, verdict_of, warning_of
+from .setpoints import (LIMIT_FIELDS, LimitsInForce, ServerWarning, Setpoints, Verdict, limits_of, verdict_of,
+                        warning_of)
 from .stream import Stream
 from .values import number, quaternion, rows, vector
 from .zenoh_pub import SUBSCRIBER_WAIT_S, ObstaclePublisher
@@ -20,7 +21,8 @@ from .zenoh_pub import SUBSCRIBER_WAIT_S, ObstaclePublisher
 class Plan(NamedTuple):
     """A whole trajectory (`Client.plan`): its setpoints, the obstacles it touched, whether it stalled away from
     the goal, the server's warnings, the scene version it was computed with, and how it ended (`verdict`: whether
-    the goal was reached and if not why; None from a server that does not say)."""
+    the goal was reached and if not why; None from a server that does not say), and the limits it kept (`limits`:
+    the bounds, their profile and the safety distance; None from a server that does not say)."""
 
     setpoints: Setpoints
     collisions: List[str]
@@ -28,13 +30,27 @@ class Plan(NamedTuple):
     warnings: List[ServerWarning]
     scene_version: int
     verdict: Optional[Verdict] = None
+    limits: Optional[LimitsInForce] = None
 
+
+#: Limits that turn every limit off, explicitly (`plan` and `stream`'s `limits`): the DMP's own trajectory. A field
+#: left out (or 0) takes the robot's record's, then the server's default profile.
+NO_LIMITS: Mapping[str, float] = {f: -1.0 for f in LIMIT_FIELDS}
 
 #: The server's address by default.
 DEFAULT_ADDRESS = "127.0.0.1:50051"
 
 #: How long a unary call may take by default, seconds.
 CALL_TIMEOUT_S = 60.0
+
+
+def motion_limits(limits: Mapping[str, float]) -> motion.Limits:
+    """The `dmp.v1.Limits` of a mapping of its fields (`max_speed`, ...) to bounds; an unknown field or a value that
+    is not a finite number raises `ArgumentError` naming `limits.<field>`."""
+    for field in limits:
+        if field not in LIMIT_FIELDS:
+            raise ArgumentError(f"limits.{field}", f"is not a field of dmp.v1.Limits ({', '.join(LIMIT_FIELDS)})")
+    return motion.Limits(**{f: number(f"limits.{f}", v) for f, v in limits.items()})
 
 
 class Client:
@@ -216,13 +232,18 @@ class Client:
         duration: float = 0.0,
         goal_orientation: Optional[Sequence[float]] = None,
         start_orientation: Optional[Sequence[float]] = None,
+        limits: Optional[Mapping[str, float]] = None,
+        margin: float = 0.0,
     ) -> Plan:
         """The whole trajectory of the primitive `(robot, name)` at once, around the cell's obstacles: its
-        setpoints, the contacts met, whether it stalled, the server's warnings. `dt` defaults to 1 ms, `duration`
-        to 1.2 tau."""
+        setpoints, the contacts met, whether it stalled, the server's warnings, the limits it kept. `dt` defaults
+        to 1 ms, `duration` to 1.2 tau. `limits` maps fields of `dmp.v1.Limits` (`max_speed`, ...) to a bound, a
+        negative value turning the limit off (`NO_LIMITS`: all off); a field left out takes the robot's record's,
+        then the server's default profile. `margin` is the safety distance from the obstacles, metres (0: the
+        record's or the server's, negative: none)."""
         request = motion.PlanRequest(
             motion=self._motion_spec(robot, name, goal, start, tau, version, cell, ignore_scene,
-                                     goal_orientation, start_orientation),
+                                     goal_orientation, start_orientation, limits, margin),
             dt=number("dt", dt),
             duration=number("duration", duration),
         )
@@ -230,11 +251,12 @@ class Client:
         setpoints = Setpoints()
         setpoints.push(r.trajectory)
         verdict = verdict_of(r.verdict) if r.HasField("verdict") else None
+        limits = limits_of(r.limits) if r.HasField("limits") else None
         return Plan(setpoints, list(r.collisions), r.stalled, [warning_of(w) for w in r.warnings],
-                    r.trajectory.scene_version, verdict)
+                    r.trajectory.scene_version, verdict, limits)
 
     def _motion_spec(self, robot, name, goal, start, tau, version, cell, ignore_scene, goal_orientation=None,
-                     start_orientation=None) -> motion.MotionSpec:
+                     start_orientation=None, limits=None, margin=0.0) -> motion.MotionSpec:
         return motion.MotionSpec(
             robot_id=robot,
             primitive=name,
@@ -247,6 +269,8 @@ class Client:
             goal_orientation=quaternion("goal_orientation", goal_orientation) if goal_orientation is not None else [],
             start_orientation=(quaternion("start_orientation", start_orientation)
                                if start_orientation is not None else []),
+            limits=motion_limits(limits) if limits is not None else None,
+            margin=number("margin", margin),
         )
 
     def stream(
@@ -269,6 +293,8 @@ class Client:
         deadline_s: Optional[float] = None,
         goal_orientation: Optional[Sequence[float]] = None,
         start_orientation: Optional[Sequence[float]] = None,
+        limits: Optional[Mapping[str, float]] = None,
+        margin: float = 0.0,
     ) -> Stream:
         """Executes the primitive `(robot, name)` (latest `version` by default) as a session, and returns the
         `Stream`: iterate it for the setpoints in force (supersession applied), send it `set_goal`, `set_tau`,
@@ -276,10 +302,11 @@ class Client:
         paces the segments (and the iteration) on the wall clock, otherwise they come as fast as they are read.
         `dt`, `segment_s`, `lookahead_s` and `max_duration_s` default to the server's (1 ms, 10 ms, 50 ms, until
         the goal); `take_over` ends another stream of the robot; `deadline_s` bounds the whole call. A pose
-        primitive's `goal_orientation` and `start_orientation` (x, y, z, w) default to its own."""
+        primitive's `goal_orientation` and `start_orientation` (x, y, z, w) default to its own. `limits` and
+        `margin` as `plan`'s; the stream's `limits` says which it keeps."""
         request = motion.ExecuteRequest(
             motion=self._motion_spec(robot, name, goal, start, tau, version, cell, ignore_scene, goal_orientation,
-                                     start_orientation),
+                                     start_orientation, limits, margin),
             dt=number("dt", dt),
             segment_s=number("segment_s", segment_s),
             pacing=motion.PACING_REALTIME if realtime else motion.PACING_AS_FAST_AS_READ,

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import bisect
 import math
-from typing import List, NamedTuple, Optional, Tuple
+from typing import Dict, List, NamedTuple, Optional, Tuple
 
 from .pb import motion, types
 from .errors import ProtocolError
@@ -78,6 +78,39 @@ class Verdict(NamedTuple):
 
     def __str__(self) -> str:
         return f"{self.outcome}: {self.reason}"
+
+
+class LimitsInForce(NamedTuple):
+    """The limits a run keeps (`dmp.v1.LimitsInForce`: a plan's, or the first segment's of a stream), after its
+    request, its robot's record and the server's default profile. `limits` maps each field of `dmp.v1.Limits`
+    (`max_speed` m/s, `max_acceleration` m/s², `max_jerk` m/s³, and the angular ones in rad) to its bound, None where
+    there is none; `profile` names where they came from (e.g. "request + server default"); `unlimited` the fields
+    without a limit; `margin` the safety distance kept from every obstacle, metres (0: none)."""
+
+    limits: Dict[str, Optional[float]]
+    profile: str
+    unlimited: Tuple[str, ...]
+    margin: float
+
+    def __str__(self) -> str:
+        bounds = ", ".join(f"{k} {v:g}" if v is not None else f"no {k}" for k, v in self.limits.items())
+        return f"{bounds}, margin {self.margin:g} m ({self.profile})"
+
+
+#: The fields of `dmp.v1.Limits`, in the message's order.
+LIMIT_FIELDS = ("max_speed", "max_acceleration", "max_jerk", "max_angular_speed", "max_angular_acceleration",
+                "max_angular_jerk")
+
+
+def limits_of(l: motion.LimitsInForce) -> LimitsInForce:
+    """The `LimitsInForce` of a `dmp.v1.LimitsInForce` message."""
+    bounds = {f: (getattr(l.limits, f) if getattr(l.limits, f) > 0 else None) for f in LIMIT_FIELDS}
+    return LimitsInForce(bounds, l.profile, tuple(l.unlimited), l.margin)
+
+
+def segment_limits(seg: motion.Segment) -> Optional[LimitsInForce]:
+    """The limits in force a segment carries (only the first segment of a run has them), else None."""
+    return limits_of(seg.limits) if seg.HasField("limits") else None
 
 
 def verdict_of(v: motion.Verdict) -> Verdict:

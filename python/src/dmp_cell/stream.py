@@ -27,7 +27,8 @@ import grpc
 
 from .pb import motion, types
 from .errors import DmpError, from_rpc
-from .setpoints import ServerWarning, Setpoint, Setpoints, Verdict, segment_verdict, warning_of
+from .setpoints import (LimitsInForce, ServerWarning, Setpoint, Setpoints, Verdict, segment_limits, segment_verdict,
+                        warning_of)
 from .values import number, quaternion, vector
 
 log = logging.getLogger("dmp_cell")
@@ -47,7 +48,8 @@ class Stream:
     """An open session; iterate it for `Setpoint`s. Use it as a context manager (or call `close`) to end the call
     early. After iteration: `status` is the last segment's status (`GOAL_REACHED`, `STOPPED`, ...), `setpoints` all
     setpoints in force (`Setpoints`), `warnings` the server's warnings, `scene_version` and `scene_stale` those of
-    the last segment, and `verdict` how the run ended (`Verdict`, carried by its last segment; None until then)."""
+    the last segment, `verdict` how the run ended (`Verdict`, carried by its last segment; None until then), and
+    `limits` the limits it keeps (`LimitsInForce`, carried by its first segment; None until then)."""
 
     def __init__(self, stub: Any, start: motion.ExecuteRequest, metadata, realtime: bool,
                  deadline_s: Optional[float]):
@@ -58,6 +60,7 @@ class Stream:
         self.scene_version = 0
         self.scene_stale = False
         self.verdict: Optional[Verdict] = None
+        self.limits: Optional[LimitsInForce] = None
         self._requests: "queue.Queue[object]" = queue.Queue()
         self._segments: "queue.Queue[object]" = queue.Queue(QUEUE_SEGMENTS)
         self._closing = False
@@ -171,6 +174,9 @@ class Stream:
             self._clock_offset = seg.start_unix_s - seg.start_time
         self.scene_version = seg.scene_version
         self.scene_stale = seg.scene_stale
+        limits = segment_limits(seg)
+        if limits is not None and self.limits is None:
+            self.limits = limits
         verdict = segment_verdict(seg)
         if verdict is not None:
             # Real time: a later final segment (a change after the run had ended) supersedes it.
