@@ -80,8 +80,11 @@ impl ResolvedMotion {
         let cell = state.cells.resolve(&spec.cell).map_err(|e| e.within(prefix))?;
         caller.check(&intent.action(cell, &[&spec.robot_id]))?;
         // Only a known cell: a typo in its name must not run the motion in a new, empty scene. The refusal names
-        // the known cells whose scene the caller may read.
-        let visible = |c: &str| caller.check(&Action::ReadScene { cell: c }).is_ok();
+        // the known cells where the caller may do the same, or read the scene.
+        let visible = |c: &str| {
+            caller.check(&intent.action(c, &[&spec.robot_id])).is_ok()
+                || caller.check(&Action::ReadScene { cell: c }).is_ok()
+        };
         let cell = state.cells.for_motion(cell, visible).map_err(|e| e.within(prefix))?;
         let store = state.store.clone();
         let (robot, name, version) = (spec.robot_id.clone(), spec.primitive.clone(), spec.version);
