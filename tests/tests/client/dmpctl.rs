@@ -256,6 +256,15 @@ async fn every_command_acts_in_its_one_cell() {
             .map(|l| l.split(',').nth(2).unwrap().parse::<f64>().unwrap().abs())
             .fold(0.0, f64::max)
     };
+    // A typo in the cell is refused (exit 2), naming the known cells, not planned in a new, empty scene.
+    let typo_dir = dir.path().join("plan-typo");
+    let typo = ["--cell", "lba2", "plan", "--robot", "r", "--name", "line", "--duration", "2", "--out"];
+    let e = run_at(&url, &[&typo[..], &[typo_dir.to_str().unwrap()]].concat()).await.unwrap_err();
+    assert_eq!(e.exit_code(), 2, "{e}");
+    assert!(e.to_string().contains("unknown cell `lba2`: known cells are `bar`, `lab2` ("), "{e}");
+    assert!(
+        server.handle().cells().find("lba2").unwrap().is_none() && !typo_dir.join("trajectory.csv").exists()
+    );
     for (cell, out) in [(None, "plan-default"), (Some("lab2"), "plan-lab2")] {
         let mut args = Vec::new();
         if let Some(c) = cell {

@@ -104,6 +104,8 @@ impl Fuzzed {
             c.limits.max_obstacles = 50;
             c.limits.max_streams = 64;
             c.compute.max_request_work = 1e8;
+            // Cell `c1` (of `requests::CELLS`) is declared, empty: motions run there too, not only refusals.
+            c.scene.cells.insert("c1".into(), Default::default());
         }));
         let endpoint = Endpoint::from_shared(server.url()).expect("a URL");
         let channel = rt.block_on(within("connect", endpoint.connect())).expect("connects");

@@ -14,8 +14,8 @@ use tonic::Code;
 
 use crate::{ellipse, line, spec};
 
-/// A secured server (an access file of `access init` for cell `cell-a`, robots `panda-1` and `panda-2`), and
-/// every identity's token.
+/// A secured server of cell `cell-a` (its default cell, with an access file of `access init` for that cell and
+/// robots `panda-1` and `panda-2`), and every identity's token.
 pub(crate) async fn secured(set: &Path) -> (TestServer, HashMap<String, String>) {
     let options = InitOptions {
         cells: vec!["cell-a".into()],
@@ -26,6 +26,7 @@ pub(crate) async fn secured(set: &Path) -> (TestServer, HashMap<String, String>)
     let access = set.join("access.toml");
     let server = TestServer::start_with(|c| {
         c.zenoh.disabled = true;
+        c.cell = "cell-a".into();
         c.security.access = Some(access);
     })
     .await;

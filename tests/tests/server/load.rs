@@ -3,7 +3,7 @@
 use dmp_proto::v1;
 use tokio_stream::StreamExt;
 
-use crate::{line, serve, spec, until};
+use crate::{ellipse, line, serve, spec, until};
 use dmp_tests::within;
 
 #[tokio::test(flavor = "multi_thread")]
@@ -19,8 +19,13 @@ async fn a_hundred_concurrent_streams_complete_and_a_leaving_client_frees_its_st
         tasks.push(tokio::spawn(async move {
             let mut motion = spec("fleet", "hop");
             motion.ignore_scene = true;
-            // A robot executes one stream at a time in a cell: the same robot in a hundred cells.
+            // A robot executes one stream at a time in a cell: the same robot in a hundred cells, each declared by
+            // its scene (far off the line; the motion ignores it anyway).
             motion.cell = format!("bay{i}");
+            let bay = client.clone().with_cell(motion.cell.clone());
+            within("declare the bay", bay.put_obstacle(ellipse("wall", vec![5.0, 5.0], vec![0.1, 0.1])))
+                .await
+                .unwrap();
             let request =
                 v1::ExecuteRequest { motion: Some(motion), max_duration_s: 2.0, ..Default::default() };
             let mut stream = client.execute(request).await.unwrap();

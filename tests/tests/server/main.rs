@@ -28,6 +28,7 @@ mod scene_over_zenoh;
 mod sessions_and_groups;
 mod stale_scene;
 mod tls;
+mod unknown_cells;
 mod verdicts;
 mod zenoh_access;
 

@@ -43,6 +43,7 @@ async fn certificates_name_identities_and_bad_clients_fail_cleanly() {
     set(o);
     let server = TestServer::start_with(|c| {
         c.zenoh.disabled = true;
+        c.cell = "cell-a".into();
         c.security.access = Some(d.join("access.toml"));
         c.security.tls_cert = Some(d.join("server.pem"));
         c.security.tls_key = Some(d.join("server.key"));
