@@ -101,6 +101,9 @@ async fn a_session_sends_commands_and_receives_superseding_segments() {
         primitive: "p".into(),
         tau: 4.0,
         ignore_scene: true,
+        // The DMP's own run, which the plan and the stream compare bit for bit.
+        limits: Some(dmp_proto::limits::NO_LIMITS),
+        margin: -1.0,
         ..Default::default()
     };
     // Where the run goes without commands.

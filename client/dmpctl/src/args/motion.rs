@@ -52,6 +52,10 @@ pub(crate) struct MotionArgs {
     /// "At rest": largest speed at the goal, in the demonstration's units per second [default: 0.001].
     #[arg(long = "goal-speed-tolerance", value_name = "SPEED", value_parser = positive)]
     pub(crate) goal_speed_tolerance: Option<f64>,
+    /// No limits and no safety distance: the DMP's own trajectory [default: the robot's record, then the server's
+    /// default profile].
+    #[arg(long = "no-limits")]
+    pub(crate) no_limits: bool,
 }
 
 impl MotionArgs {
@@ -77,6 +81,8 @@ impl MotionArgs {
                 speed: self.goal_speed_tolerance.unwrap_or(0.0),
                 ..Default::default()
             }),
+            limits: self.no_limits.then_some(dmp_proto::limits::NO_LIMITS),
+            margin: if self.no_limits { -1.0 } else { 0.0 },
             ..Default::default()
         }
     }
