@@ -69,6 +69,8 @@ def as_robot(motion, motion_grpc, primitives, primitives_grpc, set_dir, addr, ro
         request = motion.ExecuteRequest(
             motion=motion.MotionSpec(robot_id=robot_id, primitive="reach"),
             pacing=motion.PACING_AS_FAST_AS_READ,
+            # The server's default profile holds the 2 m/s reach to 1 m/s: it arrives after 3 tau, the default end.
+            max_duration_s=6.0,
         )
         return list(stub.Execute(request, metadata=metadata, timeout=20))
 

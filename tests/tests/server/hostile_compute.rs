@@ -10,6 +10,7 @@ use dmp_proto::v1::primitive_service_client::PrimitiveServiceClient;
 use dmp_tests::{TestServer, within};
 use tokio_stream::StreamExt;
 
+use crate::default_limits::exact;
 use crate::{line, spec, until};
 
 /// `n` spheres 50 m away.
@@ -184,7 +185,8 @@ async fn requests_beyond_the_budgets_are_refused_with_their_cost_and_others_go_o
             .unwrap();
     }
     let realtime = |robot: &str, obstacles: usize| {
-        let mut motion = spec(robot, "line");
+        // The DMP's own timing: the robot's stream reaches its goal within the default 3 tau.
+        let mut motion = exact(spec(robot, "line"));
         motion.extra_obstacles = far_obstacles(obstacles);
         v1::ExecuteRequest { motion: Some(motion), pacing: v1::Pacing::Realtime as i32, ..Default::default() }
     };

@@ -3,6 +3,7 @@
 use dmp_proto::v1;
 use tokio_stream::StreamExt;
 
+use crate::default_limits::exact;
 use crate::{ellipse, line, serve, spec, until};
 use dmp_tests::within;
 
@@ -17,7 +18,8 @@ async fn a_hundred_concurrent_streams_complete_and_a_leaving_client_frees_its_st
     for i in 0..100 {
         let client = client.clone();
         tasks.push(tokio::spawn(async move {
-            let mut motion = spec("fleet", "hop");
+            // The DMP's own timing: each hop arrives within its 2 s.
+            let mut motion = exact(spec("fleet", "hop"));
             motion.ignore_scene = true;
             // A robot executes one stream at a time in a cell: the same robot in a hundred cells, each declared by
             // its scene (far off the line; the motion ignores it anyway).

@@ -19,6 +19,7 @@ use dmp_server::server::start;
 use dmp_tests::{config, within};
 use tokio_stream::StreamExt;
 
+use crate::default_limits::exact;
 use crate::{line, rows, spec};
 
 /// `msg` is `segment` as the topic is documented: the robot's one joint, the cell's frame and its first point's wall
@@ -87,7 +88,9 @@ async fn a_group_runs_trajectories_arrive_on_rmw_zenoh_keys_as_the_robots_got_th
     let members = robots
         .iter()
         .map(|r| {
-            let mut motion = spec(r, "go");
+            // The DMP's own timing: the run lasts its second or so, and its segments fit the subscribers' queues
+            // until they are read (the default profile would stretch it to several seconds).
+            let mut motion = exact(spec(r, "go"));
             motion.ignore_scene = true;
             motion.footprint = Some(v1::Superquadric { semi_axes: vec![0.2, 0.2], exponents: vec![] });
             v1::GroupMember { motion: Some(motion) }
