@@ -275,7 +275,7 @@ impl MotionService for MotionServiceImpl {
         let chart = r.chart;
         let mut run = self.single_robot_run(r, Stepping::rk4(dt), 0)?;
         run.execution.set_end_time(steps as f64 * dt);
-        run.judge = Judge::new(format!("at the plan's duration ({:.3} s)", steps as f64 * dt), chart);
+        run.judge = Judge::new(format!("at the plan's duration, t = {:.3} s", steps as f64 * dt), chart);
         let now = self.state.runs.clock.now_unix_s();
         let snapshot = cell.snapshot();
         let others = cell.other_robots(&robot_id, now, 0.5);

@@ -4,8 +4,8 @@
 
 pub mod compute;
 pub(crate) mod context;
-pub(crate) mod endpoints;
 pub(crate) mod control;
+pub(crate) mod endpoints;
 pub(crate) mod executing;
 pub(crate) mod histograms;
 pub(crate) mod ignored;
