@@ -8,7 +8,7 @@ use dmp_server::server::start;
 use dmp_tests::{config, within};
 use tokio_stream::StreamExt;
 
-use crate::motion_limits::{kept, peaks};
+use crate::motion_limits::{executed, kept, peaks};
 use crate::{line, serve, spec};
 
 /// `m`, asking for no limits and no safety distance: the DMP's own trajectory, as the engine computes it (a
@@ -35,17 +35,6 @@ fn default_profile() -> v1::LimitsInForce {
         unlimited: Vec::new(),
         margin: 0.01,
     }
-}
-
-/// Every segment of an as-fast-as-read Execute of `motion`.
-async fn executed(client: &dmp_client::DmpClient, motion: v1::MotionSpec) -> Vec<v1::Segment> {
-    let request = v1::ExecuteRequest { motion: Some(motion), max_duration_s: 30.0, ..Default::default() };
-    let mut stream = within("execute", client.execute(request)).await.unwrap();
-    let mut segments = Vec::new();
-    while let Some(s) = within("segment", stream.next()).await {
-        segments.push(s.unwrap());
-    }
-    segments
 }
 
 #[tokio::test(flavor = "multi_thread")]

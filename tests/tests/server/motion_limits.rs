@@ -11,6 +11,17 @@ use tokio_stream::StreamExt;
 use crate::{line, rows, serve, spec};
 use dmp_tests::within;
 
+/// Every segment of an as-fast-as-read Execute of `motion` (30 s at most).
+pub(crate) async fn executed(client: &dmp_client::DmpClient, motion: v1::MotionSpec) -> Vec<v1::Segment> {
+    let request = v1::ExecuteRequest { motion: Some(motion), max_duration_s: 30.0, ..Default::default() };
+    let mut stream = within("execute", client.execute(request)).await.unwrap();
+    let mut segments = Vec::new();
+    while let Some(s) = within("segment", stream.next()).await {
+        segments.push(s.unwrap());
+    }
+    segments
+}
+
 /// The points a robot keeps: each segment supersedes the earlier ones from its start time on.
 pub(crate) fn kept(segments: &[v1::Segment]) -> Vec<Vec<f64>> {
     let mut out: Vec<Vec<f64>> = Vec::new();

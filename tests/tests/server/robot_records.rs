@@ -5,12 +5,11 @@
 use dmp::Limits;
 use dmp_proto::limits::limits_to_proto;
 use dmp_proto::v1;
-use tokio_stream::StreamExt;
 use tonic::Code;
 
 use crate::access::{as_identity, secured};
 use crate::default_limits::exact;
-use crate::motion_limits::{kept, peaks};
+use crate::motion_limits::{executed, kept, peaks};
 use crate::{line, serve, spec};
 use dmp_tests::within;
 
@@ -98,17 +97,6 @@ async fn a_robot_record_survives_a_restart_and_bad_ones_are_refused_naming_the_f
     let gone = within("get deleted", client.get_robot("panda")).await.unwrap_err();
     assert_eq!(gone.code(), Some(Code::NotFound), "{gone}");
     within("shutdown", handle.shutdown()).await.unwrap();
-}
-
-/// The setpoints a robot keeps from an Execute of `motion`.
-async fn executed(client: &dmp_client::DmpClient, motion: v1::MotionSpec) -> Vec<v1::Segment> {
-    let request = v1::ExecuteRequest { motion: Some(motion), max_duration_s: 30.0, ..Default::default() };
-    let mut stream = within("execute", client.execute(request)).await.unwrap();
-    let mut segments = Vec::new();
-    while let Some(s) = within("segment", stream.next()).await {
-        segments.push(s.unwrap());
-    }
-    segments
 }
 
 #[tokio::test(flavor = "multi_thread")]
