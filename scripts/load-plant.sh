@@ -7,11 +7,11 @@
 #   e.g. scripts/load-plant.sh 1000 --duration-s 10
 # The router is `zenohd` when on the PATH, else eclipse-zenoh's Python session in router mode
 # (DMP_TEST_PYTHON, default .venv/bin/python); it listens on tcp/127.0.0.1:7647, the servers on 50160-50162.
-# DMP_SERVER and DMPCTL override target/release/dmp-server and target/release/dmpctl.
+# DMP_SERVER_BIN and DMPCTL override target/release/dmp-server and target/release/dmpctl.
 set -euo pipefail
 n=$1
 shift
-server=${DMP_SERVER:-target/release/dmp-server}
+server=${DMP_SERVER_BIN:-target/release/dmp-server}
 generator=${DMPCTL:-target/release/dmpctl}
 python=${DMP_TEST_PYTHON:-.venv/bin/python}
 router=tcp/127.0.0.1:7647

@@ -26,16 +26,16 @@ ROBOT = "r1"
 
 
 def server_binary() -> Path:
-    """`$DMP_SERVER`, else `$CARGO_TARGET_DIR/debug/dmp-server`, else the repository's `target/debug/dmp-server`."""
-    if os.environ.get("DMP_SERVER"):
-        path = Path(os.environ["DMP_SERVER"])
+    """`$DMP_SERVER_BIN`, else `$CARGO_TARGET_DIR/debug/dmp-server`, else the repository's `target/debug/dmp-server`."""
+    if os.environ.get("DMP_SERVER_BIN"):
+        path = Path(os.environ["DMP_SERVER_BIN"])
     else:
         target = Path(os.environ.get("CARGO_TARGET_DIR") or REPO / "target")
         path = (target if target.is_absolute() else REPO / target) / "debug" / "dmp-server"
     if not path.is_file():
         raise RuntimeError(
             f"{path} does not exist: build it first (`cargo build -p dmp-server`, or `cargo test --workspace`), "
-            "or set DMP_SERVER"
+            "or set DMP_SERVER_BIN"
         )
     return path
 

@@ -21,12 +21,12 @@ use super::scene::SceneCommand;
 pub struct Cli {
     /// gRPC address of the server [default: with `--cell` and `--zenoh-connect` (or `--zenoh-config`), the server
     /// of the plant serving the cell, asked over Zenoh; else http://127.0.0.1:50051]. `scenario run` uses the
-    /// server only when this is given.
-    #[arg(long, global = true, value_name = "URL")]
+    /// server only when this is given (or `DMP_SERVER` is set).
+    #[arg(long, global = true, value_name = "URL", env = "DMP_SERVER")]
     pub(crate) server: Option<String>,
     /// The robot cell of every command: its scene, its motions and its Zenoh keys `dmp/<cell>/...` [default: the
     /// server's own default cell, from GetInfo]. Letters, digits, `_`, `-` and `.`.
-    #[arg(long, global = true, value_name = "NAME")]
+    #[arg(long, global = true, value_name = "NAME", env = "DMP_CELL")]
     pub(crate) cell: Option<String>,
     /// Zenoh endpoint to connect to, e.g. `tcp/127.0.0.1:7447` (repeatable) [default: the server's own Zenoh
     /// locators, from GetInfo, unless `--zenoh-config` is given].

@@ -14,7 +14,7 @@ pub(crate) const TOKEN_ENV: &str = "DMP_TOKEN";
 #[derive(Clone, Default, Args)]
 pub(crate) struct ConnectArgs {
     /// The CA that signed the server's certificate (PEM): connect over TLS (`https://`).
-    #[arg(long, global = true, value_name = "FILE")]
+    #[arg(long, global = true, value_name = "FILE", env = "DMP_TLS_CA")]
     pub(crate) tls_ca: Option<PathBuf>,
     /// This client's certificate (PEM), for mutual TLS; its common name names an identity.
     #[arg(long, global = true, value_name = "FILE", requires = "tls_key")]

@@ -26,8 +26,8 @@ pub(crate) enum SceneCommand {
         /// Transport.
         #[arg(long, value_enum, default_value_t = Via::Grpc)]
         via: Via,
-        /// Seconds after which the obstacles expire (replaces the file's `ttl_s`; 0: never).
-        #[arg(long, value_parser = non_negative, allow_hyphen_values = true)]
+        /// Seconds after which the obstacles expire (replaces the file's `ttl_s`; 0: never). `--ttl` is an alias.
+        #[arg(long = "ttl-s", alias = "ttl", value_parser = non_negative, allow_hyphen_values = true)]
         ttl: Option<f64>,
     },
     /// Remove an obstacle.
