@@ -20,7 +20,7 @@
 //!   or reaches it through a router, and the server (re)started or came back after the link was lost). A put and
 //!   a resend are serialised, so a resend never brings back a deleted obstacle.
 //!
-//! The other way is a zenohd storage of `dmp/*/obstacles/**` (see the README).
+//! The other way is a zenohd storage of `dmp/*/obstacles/**` (see docs/server.md).
 
 use std::collections::BTreeMap;
 use std::fmt;

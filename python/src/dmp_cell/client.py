@@ -56,8 +56,8 @@ def motion_limits(limits: Mapping[str, float]) -> motion.Limits:
 class Client:
     """A client of the DMP cell's server.
 
-    `address` is `HOST:PORT`, `http://HOST:PORT` or `https://HOST:PORT`. A secured server (see the README, "Who
-    may steer what") wants TLS, as `dmpctl`'s flags: `tls_ca` (the CA that signed the server's certificate),
+    `address` is `HOST:PORT`, `http://HOST:PORT` or `https://HOST:PORT`. A secured server (see the repository's
+    docs/security.md) wants TLS, as `dmpctl`'s flags: `tls_ca` (the CA that signed the server's certificate),
     optionally `tls_cert` and `tls_key` (this client's certificate for mutual TLS: its common name names an
     identity) and `server_name` (the name the server's certificate must have; default: the address's host); and
     an identity: a bearer `token` (or `token_file`), sent with every call in the `authorization` metadata, or the
