@@ -67,8 +67,6 @@ impl Execution {
             );
             self.out_t = ((t + dt) / dt).round() * dt;
             let action = self.keep_limits(
-                t,
-                s,
                 &mut p.x[range.clone()],
                 &mut p.xd[range.clone()],
                 &mut p.xdd[range.clone()],
@@ -91,7 +89,7 @@ impl Execution {
                 }
             }
         }
-        self.history.push(p.start_time, &self.stretch_s, &p.x, &p.xd, &self.stretch_g);
+        self.history.push(p.start_time, &self.stretch_s, &p.x, &p.xd, &p.xdd, &self.stretch_g);
         self.track_goal(p.start_time, &p.x, &p.xd, n);
         if n > 0 {
             self.last_x.copy_from_slice(&p.x[(n - 1) * d..]);

@@ -12,6 +12,7 @@ impl Execution {
     /// filter ([`Execution::set_goal_filter`]; on by default), so that the acceleration stays continuous.
     pub fn set_goal(&mut self, goal: Vec<f64>) -> Result<(), InvalidInput> {
         check_vector("goal", &goal, self.primitive.dim)?;
+        self.restart_at_output();
         self.rebase();
         self.anchor_goal(self.holding);
         self.integrator.goal_filter_mut().retarget(&self.motion.goal, &goal);
@@ -55,6 +56,9 @@ impl Execution {
     pub fn set_holding(&mut self, holding: bool) {
         let holding = holding || self.stopping;
         if holding != self.holding {
+            if holding {
+                self.restart_at_output();
+            }
             self.rebase();
             self.anchor_goal(holding);
         }
@@ -105,7 +109,6 @@ impl Execution {
         self.acc0_current = false;
         // The restored point was handed out by the DMP, not the limiter; the coupling's rate is decided again at
         // the next period.
-        self.probe = false;
         self.tau_rate = 0.0;
         self.out_t = s.t;
     }

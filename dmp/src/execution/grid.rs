@@ -1,12 +1,10 @@
 //! The run's internal grid: the knot after `knot0`, by one RK4 step of `step_points` output steps, by an adaptive
-//! Dormand–Prince 5(4) step, by the exact holding deceleration, or, right after a point the limiter changed on a
-//! coarse grid, by a probe of one output step.
+//! Dormand–Prince 5(4) step, or by the exact holding deceleration.
 
 use super::Execution;
 use super::diagnosis::{Diagnosis, step_is_finite};
 use super::field_sum::FieldSum;
 use super::hold::{hold_acc, hold_step};
-use crate::canonical::phase_after;
 use crate::dense::Knot;
 use crate::integrate::dormand_prince;
 
@@ -27,9 +25,8 @@ macro_rules! field_sum {
 }
 
 impl Execution {
-    /// Computes the knot after `knot0` (one RK4 step of `step_points` output steps, an adaptive step, the exact
-    /// holding deceleration, or after a limited point on a coarse grid the probe), and the accelerations at both
-    /// knots under the current field and motion (a probe's end knot carries its start's).
+    /// Computes the knot after `knot0` (one RK4 step of `step_points` output steps, an adaptive step, or the exact
+    /// holding deceleration), and the accelerations at both knots under the current field and motion.
     ///
     /// A step that is not finite is redone while each obstacle's term is checked at the states it evaluates; the
     /// obstacles (or cell-mates) whose term is not finite are dropped for the rest of the run and reported, and the
@@ -56,12 +53,10 @@ impl Execution {
             self.next_points = proposal;
             self.step(&mut k1, None);
         }
-        if self.probe || self.holding || self.stepping.tolerance.is_some() {
-            // A probe's end knot carries its start's acceleration; holding does not reuse it; an adaptive step's
-            // is exact.
-            self.knot1_acc = !self.probe && !self.holding;
+        if self.holding || self.stepping.tolerance.is_some() {
+            // Holding does not reuse it; an adaptive step's is exact.
+            self.knot1_acc = !self.holding;
         }
-        self.probe = false;
         // Times are whole multiples of dt, not a drifting sum.
         let s = &mut self.scratch;
         s.t = (s.t / self.stepping.dt).round() * self.stepping.dt;
@@ -77,9 +72,7 @@ impl Execution {
         let h = self.stepping.internal_step();
         self.start_from_knot0();
         let s = &mut self.scratch;
-        if self.probe && !self.holding {
-            self.probe_step(k1, diagnosis);
-        } else if let (Some(tol), false) = (self.stepping.tolerance, self.holding) {
+        if let (Some(tol), false) = (self.stepping.tolerance, self.holding) {
             self.adaptive_step(tol, k1, diagnosis);
         } else if self.holding {
             hold_step(&self.primitive, self.base_tau, s, h, &mut self.knot0.xdd);
@@ -101,35 +94,6 @@ impl Execution {
                 self.integrator.acceleration(&self.motion, &mut both, s.t, s.s, &s.x, &s.xd, &mut k1.xdd);
             }
         }
-    }
-
-    /// The probe after a point the limiter changed, into the scratch state: one output step `h` at the
-    /// acceleration `a` of the restart point (`knot0.xdd`, evaluated there; `k1.xdd` is the same).
-    ///
-    /// # Formula
-    /// `x(t + h) = x + h v + h² a / 2`, `v(t + h) = v + h a`. The point proposed to the limiter then asks for the
-    /// acceleration `(a' + a) / 2`, `a'` the one it last handed out (the restart point's velocity is the output's
-    /// central difference, `v' + a' h / 2`): the DMP's acceleration at the restart, reached at half the rate. The
-    /// step drops the DMP's jerk over one output step (`j h³ / 6`, about a micrometre at the Panda's jerk and
-    /// 1 ms): the limiter judges every point anyway, and the grid's next step starts from the probe's point when
-    /// the limiter keeps it.
-    fn probe_step(&mut self, k1: &mut Knot, diagnosis: Option<&mut Diagnosis>) {
-        let h = self.stepping.dt;
-        let mut both = field_sum!(self, diagnosis);
-        let s = &mut self.scratch;
-        let a = &mut self.knot0.xdd;
-        if !self.acc0_current {
-            self.integrator.acceleration(&self.motion, &mut both, s.t, s.s, &s.x, &s.xd, a);
-            self.cost.evaluations += 1;
-        }
-        for i in 0..a.len() {
-            s.x[i] += h * s.xd[i] + 0.5 * h * h * a[i];
-            s.xd[i] += h * a[i];
-        }
-        s.s = phase_after(s.s, self.integrator.alpha(), self.motion.tau, h);
-        s.t += h;
-        k1.xdd.copy_from_slice(a);
-        self.cost.steps += 1;
     }
 
     /// The scratch state at `knot0`, where a step starts.

@@ -18,6 +18,8 @@ struct Record {
     /// Row-major, `dim` per point.
     x: Vec<f64>,
     xd: Vec<f64>,
+    /// The accelerations handed out.
+    xdd: Vec<f64>,
     /// The filtered goal at each point.
     g: Vec<f64>,
 }
@@ -57,6 +59,7 @@ impl Record {
         self.s.truncate(n);
         self.x.truncate(n * dim);
         self.xd.truncate(n * dim);
+        self.xdd.truncate(n * dim);
         self.g.truncate(n * dim);
     }
 }
@@ -82,15 +85,21 @@ impl History {
     }
 
     /// Appends the points from time `t0` on, one output step apart, with phases `s`, positions `x`, velocities
-    /// `xd` and filtered goals `g` (`dim` per point), and forgets the oldest records that are no longer needed to hold `keep` points.
-    pub(super) fn push(&mut self, t0: f64, s: &[f64], x: &[f64], xd: &[f64], g: &[f64]) {
-        debug_assert!(x.len() == s.len() * self.dim && xd.len() == x.len() && g.len() == x.len());
+    /// `xd`, accelerations `xdd` and filtered goals `g` (`dim` per point), and forgets the oldest records that are
+    /// no longer needed to hold `keep` points.
+    pub(super) fn push(&mut self, t0: f64, s: &[f64], x: &[f64], xd: &[f64], xdd: &[f64], g: &[f64]) {
+        debug_assert!(
+            x.len() == s.len() * self.dim
+                && xd.len() == x.len()
+                && xdd.len() == x.len()
+                && g.len() == x.len()
+        );
         if s.is_empty() || self.keep == 0 {
             return;
         }
         let mut r = self.spare.pop().unwrap_or_default();
         r.first = (t0 / self.dt).round() as i64;
-        for (buf, from) in [(&mut r.s, s), (&mut r.x, x), (&mut r.xd, xd), (&mut r.g, g)] {
+        for (buf, from) in [(&mut r.s, s), (&mut r.x, x), (&mut r.xd, xd), (&mut r.xdd, xdd), (&mut r.g, g)] {
             buf.clear();
             buf.extend_from_slice(from);
         }
@@ -111,6 +120,13 @@ impl History {
         let r = self.records.back()?;
         let from = (r.len() - 1) * self.dim;
         Some((&r.x[from..], &r.xd[from..]))
+    }
+
+    /// Velocity and acceleration handed out with the last point.
+    pub(super) fn last_motion(&self) -> Option<(&[f64], &[f64])> {
+        let r = self.records.back()?;
+        let from = (r.len() - 1) * self.dim;
+        Some((&r.xd[from..], &r.xdd[from..]))
     }
 
     /// Every recorded point's position, velocity and filtered goal (`dim` each), oldest first: for a change of
@@ -187,7 +203,7 @@ mod tests {
         let s: Vec<f64> = ks.iter().map(|k| 1.0 - k / 1000.0).collect();
         let x: Vec<f64> = ks.iter().flat_map(|&k| [k, -k]).collect();
         let xd: Vec<f64> = ks.iter().flat_map(|&k| [10.0 * k, 1.0]).collect();
-        h.push(from as f64 * DT, &s, &x, &xd, &x);
+        h.push(from as f64 * DT, &s, &x, &xd, &xd, &x);
     }
 
     fn rollback(h: &mut History, t: f64) -> Option<State> {

@@ -24,20 +24,24 @@
 //!    more deceleration, `COUPLE_RATE |x'|`), and so does the relaxation. The rate in force changes with `c`, by
 //!    at most `COUPLE_RATE` / [`COUPLE_RATE_PERIODS`] a period, so that the term never jumps the acceleration by
 //!    more than a quarter of `COUPLE_RATE |x'|`; a rollback sets it to 0.
-//! 2. **The limiter** ([`super::limiter`]): a point that would still exceed a bound is replaced by the nearest one
-//!    within the bounds, and the DMP is restarted from it ([`LimitAction::Limited`]). On a coarse grid the next
-//!    point is the restarted DMP's probe ([`Execution::probe_step`]): one output step at the acceleration of the
-//!    restart point, one evaluation instead of a whole step, since a limited point is mostly followed by more.
+//! 2. **The final stage** ([`super::tracking`]): a point of the DMP that keeps the bounds (as backward
+//!    differences, [`super::limiter`]) is handed out as it is; where it does not, a jerk-limited online trajectory
+//!    generator (Ruckig) tracks the DMP from the last output state within the bounds, time-optimally and never past
+//!    the goal, until it has caught up. The DMP is not restarted from the generator's points: it stays the
+//!    reference. The coupling above then follows the generator's lag behind the DMP instead of the DMP's own
+//!    use of the bounds: the phase waits where the lag would cut the reference's curve by more than its path
+//!    tolerance, and is free on a straight way (the time-optimal motion).
 //! 3. **Braking.** Where the DMP asks to decelerate (an acceleration against the velocity) at more than
-//!    [`BRAKE_ABOVE`] times the acceleration bound (an obstacle appears right in front), the robot brakes to rest within its limits
-//!    ([`LimitAction::Braking`]), and the DMP restarts from rest.
+//!    [`BRAKE_ABOVE`] times the acceleration bound (an obstacle appears right in front), the generator brakes
+//!    time-optimally, and the stretch says so ([`LimitAction::Braking`]).
 //!
 //! No point handed out exceeds a bound, measured as backward finite differences of the positions at the output
 //! rate, across stretches, changes and rollbacks (the limiter's last points are taken from the history after a
 //! rollback).
 
+use super::Execution;
 use super::limiter::{Group, Limiter};
-use super::{ARRIVED_SPEED, Execution};
+use super::tracking::Tracker;
 use crate::error::InvalidInput;
 
 pub use super::limits::Limits;
@@ -67,9 +71,9 @@ pub enum LimitAction {
     None,
     /// The phase was slowed (temporal coupling: `tau` scaled up).
     Slowed,
-    /// Points were replaced by the nearest within the limits (the DMP restarted from them).
+    /// Points came from the final stage's generator, tracking the DMP within the limits.
     Limited,
-    /// The robot braked towards rest within its limits: the DMP asked for far more than they allow.
+    /// The generator braked: the DMP asked to decelerate far harder than the limits allow.
     Braking,
 }
 
@@ -102,7 +106,13 @@ impl Execution {
         if orientation {
             groups.push(Group { dims: (dim - 3..dim).collect(), bounds: limits.angular() });
         }
+        groups.retain(|g| !g.bounds.is_none());
         self.limits = limits;
+        let tracked: Vec<_> = groups.iter().map(|g| (g.dims.clone(), g.bounds)).collect();
+        self.tracker = Tracker::new(&tracked, self.stepping.dt);
+        if orientation {
+            self.tracker.set_angular(&(dim - 3..dim).collect::<Vec<_>>());
+        }
         self.limiter = Limiter::new(groups, dim, self.stepping.dt, &self.knot0.x);
         self.restore_limiter();
         Ok(())
@@ -118,7 +128,7 @@ impl Execution {
         self.tau_scale
     }
 
-    /// The limiter's last points from the history (after a rollback, or new limits).
+    /// The limiter's last points and the final stage's state from the history (after a rollback, or new limits).
     pub(super) fn restore_limiter(&mut self) {
         let d = self.primitive.dim;
         self.recent.resize(3 * d, 0.0);
@@ -135,54 +145,65 @@ impl Execution {
             n = 3;
         }
         self.limiter.set_recent(&self.recent, n);
+        if let Some((xd, xdd)) = self.history.last_motion() {
+            self.limiter.set_handed(xd, xdd);
+        }
+        self.tracker.reset(n > 0 && self.history.last().is_some());
     }
 
-    /// Keeps the limits at the point just computed (at time `t` and phase `s`), before it is handed out; the next output point is at `self.out_t`. Returns what it did.
-    pub(super) fn keep_limits(
-        &mut self,
-        t: f64,
-        s: f64,
-        x: &mut [f64],
-        xd: &mut [f64],
-        xdd: &mut [f64],
-    ) -> LimitAction {
-        if self.limiter.is_off() {
+    /// Keeps the limits at the DMP's point just computed (rewritten in place by the final stage where it does not
+    /// keep them), before it is handed out; the next output point is at `self.out_t`. Returns what it did.
+    pub(super) fn keep_limits(&mut self, x: &mut [f64], xd: &mut [f64], xdd: &mut [f64]) -> LimitAction {
+        if self.tracker.is_off() {
             if self.tau_scale != 1.0 || self.tau_rate != 0.0 {
                 // Limits taken off mid-run: the time scale relaxes back, and the speed coupling's term is off.
                 self.couple(0.0, 0.0);
             }
             return LimitAction::None;
         }
-        let verdict = self.limiter.limit(x, xd, xdd, self.braking);
-        if !self.braking && !self.holding && verdict.decel_usage > BRAKE_ABOVE {
-            self.braking = true;
-        }
-        let mut action = if self.braking {
-            LimitAction::Braking
-        } else if verdict.changed {
-            LimitAction::Limited
-        } else {
-            LimitAction::None
-        };
-        if self.braking {
-            let speed = xd.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if speed <= ARRIVED_SPEED {
-                // At rest, within rounding: the DMP goes on from here. The point keeps the velocity of the
-                // positions handed out (zeroing it would tell the robot it stands while they still creep).
-                self.braking = false;
+        let mut keeps = std::mem::take(&mut self.keeps);
+        let verdict = self.limiter.check(x, &mut keeps);
+        let tracking = self.tracker.track(x, xd, xdd, &self.motion.goal, &keeps, &self.limiter);
+        for g in 0..keeps.len() {
+            if !self.tracker.generated(g) {
+                self.limiter.hand_out_measured(g, xd, xdd);
             }
         }
-        if verdict.changed || action == LimitAction::Braking {
+        self.keeps = keeps;
+        self.limiter.push(x, xd, xdd);
+        let mut action = if !tracking.generated {
+            LimitAction::None
+        } else if verdict.decel_usage > BRAKE_ABOVE {
+            LimitAction::Braking
+        } else {
+            LimitAction::Limited
+        };
+        if tracking.generated {
             self.cost.limited += 1;
-            self.restart_dmp_at(t, s, x, xd);
         }
         if !self.holding {
-            self.couple(verdict.usage, verdict.speed_usage);
+            self.couple(tracking.lag_usage, tracking.lag_usage);
         }
         if self.tau_scale > 1.0 && action == LimitAction::None {
             action = LimitAction::Slowed;
         }
         action
+    }
+
+    /// Restarts the DMP at the robot, one output step after the last point handed out, when the final stage is
+    /// tracking it from behind: a stop, a pause or a new goal then starts from where the robot is, not from where
+    /// the DMP ran ahead to.
+    pub(super) fn restart_at_output(&mut self) {
+        if !self.tracker.is_active() || !self.has_last {
+            return;
+        }
+        self.rebase();
+        let dt = self.stepping.dt;
+        for i in 0..self.primitive.dim {
+            self.knot0.x[i] = self.last_x[i] + dt * self.last_xd[i];
+            self.knot0.xd[i] = self.last_xd[i];
+        }
+        self.acc0_current = false;
     }
 
     /// Temporal coupling after a point that used `usage` of the bounds, `speed_usage` of the speed bounds.
@@ -213,24 +234,5 @@ impl Execution {
             self.motion.tau = self.base_tau * wanted;
             self.tau_rate = applied;
         }
-    }
-
-    /// Restarts the DMP at the output point just handed out (time `t`, phase `s`): the next knot is computed from
-    /// there.
-    fn restart_dmp_at(&mut self, t: f64, s: f64, x: &[f64], xd: &[f64]) {
-        self.knot0.t = t;
-        self.knot0.s = s;
-        self.knot0.x.copy_from_slice(x);
-        self.knot0.xd.copy_from_slice(xd);
-        if let Some(k1) = self.knot1.take() {
-            if self.out_t < k1.t - 0.5 * self.stepping.dt {
-                self.cost.restarts += 1;
-            }
-            self.spare = Some(k1);
-        }
-        self.acc0_current = false;
-        // On a coarse grid the next point comes from a probe, not a whole step (most limited points are followed
-        // by more).
-        self.probe = self.stepping.is_coarse();
     }
 }

@@ -43,6 +43,7 @@ mod pose;
 mod stepping;
 #[cfg(feature = "orientation")]
 mod tool;
+mod tracking;
 
 use crate::avoidance::Avoidance;
 use crate::dense::{Interpolant, Knot};
@@ -65,6 +66,7 @@ pub use self::limiting::{LimitAction, Limits};
 pub use self::pose::OrientationPoints;
 pub(crate) use self::stepping::check_stability;
 pub use self::stepping::{IntegrationCost, MAX_STIFF_STEP, Stepping};
+use self::tracking::Tracker;
 
 /// The default speed under which a robot has arrived, and the speed under which a stop has come to rest.
 pub(crate) const ARRIVED_SPEED: f64 = GoalTolerance::DEFAULT.speed;
@@ -182,10 +184,8 @@ pub struct Execution {
     /// `knot0.xdd` is the acceleration at `knot0` under the current field and motion (it was computed as the
     /// previous step's end knot and nothing changed since): the next step reuses it as its first stage.
     acc0_current: bool,
-    /// The next knot is a probe ([`Execution::probe_step`]): the DMP restarted at a point the limiter changed.
-    probe: bool,
-    /// `knot1.xdd` is the acceleration at `knot1`'s own state under the field and motion of its step (not a
-    /// probe's, which carries its start's, nor a fine step's that did not evaluate it).
+    /// `knot1.xdd` is the acceleration at `knot1`'s own state under the field and motion of its step (not a fine
+    /// step's that did not evaluate it).
     knot1_acc: bool,
     /// The interpolant of `knot0` and `knot1`, fitted when `knot1` is computed.
     interpolant: Interpolant,
@@ -239,8 +239,10 @@ pub struct Execution {
     limiter: Limiter,
     /// Scratch: the limiter's last points.
     recent: Vec<f64>,
-    /// Braking to rest (the limits could not be kept otherwise).
-    braking: bool,
+    /// The final stage: tracks the DMP within the limits where it does not keep them.
+    tracker: Tracker,
+    /// Scratch: which groups' points keep their bounds.
+    keeps: Vec<bool>,
     /// `tau` as set, and the temporal coupling's factor on it (applied, and wanted).
     base_tau: f64,
     tau_scale: f64,
@@ -304,7 +306,8 @@ impl Execution {
             limits: Limits::NONE,
             limiter,
             recent: Vec::new(),
-            braking: false,
+            tracker: Tracker::default(),
+            keeps: Vec::new(),
             base_tau: motion.tau,
             tau_scale: 1.0,
             tau_scale_target: 1.0,
@@ -319,7 +322,6 @@ impl Execution {
             knot1: None,
             spare: None,
             acc0_current: false,
-            probe: false,
             knot1_acc: false,
             interpolant: Interpolant::default(),
             xdd: vec![0.0; dim],

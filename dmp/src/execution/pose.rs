@@ -201,6 +201,8 @@ mod with_orientation {
                 let y = change.point(&last3(p));
                 set_last3(p, &y);
             }
+            // A generator tracking the DMP takes over again from the mapped last points.
+            self.tracker.reset(false);
             self.acc0_current = false;
             self.chart = Some(change.to);
         }

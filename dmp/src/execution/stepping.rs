@@ -54,6 +54,7 @@ impl Stepping {
     }
 
     /// True when the internal step is coarser than the output step (a fixed coarse step, or the adaptive one).
+    #[cfg(test)]
     pub(crate) fn is_coarse(&self) -> bool {
         self.step_points > 1 || self.tolerance.is_some()
     }
