@@ -214,12 +214,27 @@ impl Store {
         tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
         let record = {
             let mut last = tx.open_table(LAST_VERSIONS).map_err(|e| storage("open last_versions", e))?;
-            let version = last
+            let known = last
                 .get((robot_id, name))
                 .map_err(|e| storage("read last_versions", e))?
-                .map_or(0, |v| v.value())
-                + 1;
-            let version = self.origin.as_ref().map_or(version, |(_, clock)| version.max(clock()));
+                .map_or(0, |v| v.value());
+            let horizon = self.horizon();
+            if horizon.is_some_and(|(_, beyond)| known > beyond) {
+                return Err(ServerError::FailedPrecondition(format!(
+                    "the last version of robot `{robot_id}`'s `{name}` is {known}, more than {} ms ahead of this \
+                     server's clock (forged, or the clock was set back): delete the name on this server to purge \
+                     it across the plant, then learn it again",
+                    tombstones::max_skew().as_millis()
+                )));
+            }
+            // Never wraps: a version after u64::MAX would be 0, older than every other.
+            let version = known.checked_add(1).ok_or_else(|| {
+                ServerError::FailedPrecondition(format!(
+                    "robot `{robot_id}`'s `{name}` has used every version number (the last is {known}): delete \
+                     the name to purge it, then learn it again"
+                ))
+            })?;
+            let version = horizon.map_or(version, |(now, _)| version.max(now));
             last.insert((robot_id, name), version).map_err(|e| storage("write last_versions", e))?;
             let record = v1::PrimitiveRecord {
                 robot_id: robot_id.into(),
@@ -265,9 +280,13 @@ impl Store {
     /// origins (two servers stamping the same HLC time) keeps the record of the smaller origin id, on every server.
     /// A version that a tombstone deletes is not stored.
     /// A version older than the `max_versions` kept is pruned at once, as it would have been.
+    /// A version stamped beyond the horizon ([`tombstones::max_skew`] ahead of this server's clock) is refused.
     pub(crate) fn insert_replica(&self, record: &v1::PrimitiveRecord) -> Result<bool, ServerError> {
         self.count(PUT);
         let (robot_id, name, version) = (record.robot_id.as_str(), record.name.as_str(), record.version);
+        if let Some(h) = self.horizon() {
+            tombstones::refuse_ahead("version", version, h)?;
+        }
         let mut tx = self.db.begin_write().map_err(|e| storage("begin write", e))?;
         tx.set_durability(Durability::Immediate).map_err(|e| storage("set durability", e))?;
         let stored = {

@@ -7,7 +7,9 @@
 //! servers' queryables on start and each time one (re)appears (its matching status going from none to some), so a
 //! server that starts late or comes back catches up, deletes included. Versions and tombstones commute: whatever
 //! order they arrive in, a version up to a tombstone is deleted and a later one kept. What arrives is checked as a Put is (names, the
-//! primitive's ranges and `limits`, the message size): a refused record is logged and counted, never stored.
+//! primitive's ranges and `limits`, the message size), and a version or tombstone stamped more than the HLC's bound
+//! ahead of this server's clock is refused (forged numbers, `store/tombstones.rs`): a refused record is logged
+//! (its key, claimed origin and source session) and counted, never stored.
 //!
 //! Only servers may publish on these keys: the access control generated from the access file allows them to server
 //! identities alone ([`crate::access::zenoh_acl`]).
@@ -210,6 +212,13 @@ async fn apply(
 ) {
     let key = sample.key_expr().as_str().to_owned();
     let checked = check(limits, sample);
+    // Who sent it, as far as the sample says: the origin its record claims, the Zenoh session that put it (when
+    // it attached its source info; Zenoh does not hand the authenticated identity to the application).
+    let origin = match &checked {
+        Ok(Incoming::Version(r)) => r.origin_server.clone(),
+        _ => String::new(),
+    };
+    let source = sample.source_info().map(|s| s.source_id().zid().to_string()).unwrap_or_default();
     let store = store.clone();
     let done = tokio::task::spawn_blocking(move || match checked? {
         Incoming::Version(record) => store.insert_replica(&record),
@@ -225,7 +234,7 @@ async fn apply(
         Ok(false) => debug!(key, "plant: replicated primitive held already"),
         Err(e) => {
             refused.fetch_add(1, Ordering::Relaxed);
-            warn!(key, reason = %e, "plant: replicated primitive refused");
+            warn!(key, origin, source, reason = %e, "plant: replicated primitive refused");
         }
     }
 }

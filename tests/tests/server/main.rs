@@ -6,6 +6,7 @@ mod arrival;
 mod bad_input;
 mod catch_up;
 mod default_limits;
+mod forged_versions;
 mod hostile_compute;
 mod hostile_sessions;
 mod hostile_values;
