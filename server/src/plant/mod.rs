@@ -22,8 +22,10 @@
 //! the tombstone arrives (a server that was down gets the tombstones in its catch-up, as it gets the versions). A
 //! version stamped after the delete is kept everywhere; a server that applied the tombstone numbers its next
 //! version above `N`, so a re-learn after a delete is the latest everywhere even with clocks apart. Of two
-//! tombstones of one name the larger holds. One tombstone per (robot, name) is kept, for
-//! [`crate::store::TOMBSTONE_RETENTION`] (7 days): a server down longer should start on an empty store.
+//! tombstones of one name the larger holds. A version or tombstone stamped more than the HLC's bound ahead of the
+//! receiver's clock is refused, and a delete purges one held from before (`store/tombstones.rs`). One tombstone
+//! per (robot, name) is kept, for [`crate::store::TOMBSTONE_RETENTION`] (7 days): a server down longer should
+//! start on an empty store.
 //!
 //! Robot records (`RobotService`) are not replicated: each server keeps its own.
 
