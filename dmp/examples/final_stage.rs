@@ -2,7 +2,8 @@
 //! 1 s minimum-jerk demonstration of each, learned), replayed at `tau` 0.05–2 s at the Panda's Cartesian limits. For each, the time until the output stays within 1 mm of the
 //! goal is compared with the larger of the time-optimal motion's (Ruckig over the distance, one axis, from rest to
 //! rest, at the robot's speed, acceleration and jerk) and the unlimited replay's own. Also the overshoot past the
-//! goal, and the cost per output point of the limited run against the unlimited one.
+//! goal, the largest distance from the straight line, and the cost per output point of the limited run against the
+//! unlimited one.
 //!
 //! `cargo run --release -p dmp --example final_stage [reaches] [seed]` (defaults 200 and 1).
 
@@ -39,9 +40,10 @@ impl Rng {
     }
 }
 
-/// Time until the path stays within `tol` of `goal`, the overshoot past the goal along the reach, and the seconds
-/// spent computing, for a run of `p` to `goal` at `tau` with `limits`.
-fn run(p: &Primitive, goal: &[f64], tau: f64, limits: Limits, tol: f64) -> (f64, f64, f64) {
+/// Time until the path stays within `tol` of `goal`, the overshoot past the goal along the reach, the largest
+/// distance from the straight line, and the seconds spent computing a point, for a run of `p` to `goal` at `tau`
+/// with `limits`.
+fn run(p: &Primitive, goal: &[f64], tau: f64, limits: Limits, tol: f64) -> (f64, f64, f64, f64) {
     let motion = Motion { start: vec![0.0; 3], goal: goal.to_vec(), tau };
     let mut e =
         Execution::new(p.clone(), motion, Scene::empty(), CellMateAvoidance::NONE, Stepping::rk4(DT), 0)
@@ -49,7 +51,7 @@ fn run(p: &Primitive, goal: &[f64], tau: f64, limits: Limits, tol: f64) -> (f64,
     e.set_limits(limits, false).unwrap();
     let d = goal.iter().map(|g| g * g).sum::<f64>().sqrt();
     let u: Vec<f64> = goal.iter().map(|g| g / d).collect();
-    let (mut within, mut overshoot, mut t) = (None::<f64>, 0.0f64, 0.0);
+    let (mut within, mut overshoot, mut deviation, mut t) = (None::<f64>, 0.0f64, 0.0f64, 0.0);
     let started = Instant::now();
     let mut x = Vec::new();
     while t < 3.0 * tau.max(0.5) + 3.0 {
@@ -70,8 +72,10 @@ fn run(p: &Primitive, goal: &[f64], tau: f64, limits: Limits, tol: f64) -> (f64,
         }
         let along: f64 = q.iter().zip(&u).map(|(a, b)| a * b).sum();
         overshoot = overshoot.max(along - d);
+        let across = (q.iter().map(|a| a * a).sum::<f64>() - along * along).max(0.0).sqrt();
+        deviation = deviation.max(across);
     }
-    (within.unwrap_or(f64::INFINITY), overshoot, spent / (x.len() / 3).max(1) as f64)
+    (within.unwrap_or(f64::INFINITY), overshoot, deviation, spent / (x.len() / 3).max(1) as f64)
 }
 
 /// The time-optimal motion over `d` from rest to rest at `(v, a, j)`: the time it stays within `tol` of its end.
@@ -107,6 +111,7 @@ fn main() {
     let l = Limits::PANDA;
     let tol = 1e-3;
     let (mut ratios, mut overshoots, mut cost_limited, mut cost_free) = (vec![], vec![], vec![], vec![]);
+    let (mut deviations, mut deviations_free) = (vec![], vec![]);
     let mut worst = (0.0, 0.0, 0.0);
     for _ in 0..n {
         let d = 0.05 + 0.75 * rng.next();
@@ -117,8 +122,10 @@ fn main() {
         let r = (1.0 - z * z).sqrt();
         let goal = [d * r * phi.cos(), d * r * phi.sin(), d * z];
         let p = reach(&goal);
-        let (t_lim, over, c_lim) = run(&p, &goal, tau, l, tol);
-        let (t_free, _, c_free) = run(&p, &goal, tau, Limits::NONE, tol);
+        let (t_lim, over, dev, c_lim) = run(&p, &goal, tau, l, tol);
+        let (t_free, _, dev_free, c_free) = run(&p, &goal, tau, Limits::NONE, tol);
+        deviations.push(dev);
+        deviations_free.push(dev_free);
         let t_opt = optimum(d, &l, tol);
         let ratio = t_lim / t_opt.max(t_free);
         if ratio > worst.0 {
@@ -139,6 +146,12 @@ fn main() {
         worst.2
     );
     println!("overshoot past the goal: worst {:.4} % of the reach", 100.0 * worst_overshoot);
+    let worst_of = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    println!(
+        "distance from the straight line: worst {:.2} mm limited, {:.2} mm unlimited",
+        1e3 * worst_of(&deviations),
+        1e3 * worst_of(&deviations_free)
+    );
     println!(
         "cost per output point: limited {:.0} ns, unlimited {:.0} ns (medians)",
         1e9 * median(&mut cost_limited),

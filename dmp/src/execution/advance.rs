@@ -1,6 +1,6 @@
 //! Advancing a run: the next output points, their contacts and stalls, and what they came to.
 
-use super::{Execution, Outcome, Stretch};
+use super::{Execution, LimitAction, Outcome, Stretch};
 use crate::error::{DmpError, Result};
 use crate::field::Contact;
 use crate::stall::{StallConfig, StallDetector};
@@ -24,6 +24,7 @@ impl Execution {
             ..Stretch::default()
         };
         self.stretch_s.clear();
+        self.stretch_generated.clear();
         self.stretch_g.resize(n * d, 0.0);
         for k in 0..n {
             let t = self.out_t;
@@ -72,6 +73,7 @@ impl Execution {
                 &mut p.xdd[range.clone()],
             );
             p.limit = p.limit.max(action);
+            self.stretch_generated.push(matches!(action, LimitAction::Limited | LimitAction::Braking));
 
             // Stalls at the point handed out (checked at its time); contacts below, for all points.
             if self.holding {
@@ -89,7 +91,15 @@ impl Execution {
                 }
             }
         }
-        self.history.push(p.start_time, &self.stretch_s, &p.x, &p.xd, &p.xdd, &self.stretch_g);
+        self.history.push(
+            p.start_time,
+            &self.stretch_s,
+            &p.x,
+            &p.xd,
+            &p.xdd,
+            &self.stretch_g,
+            &self.stretch_generated,
+        );
         self.track_goal(p.start_time, &p.x, &p.xd, n);
         if n > 0 {
             self.last_x.copy_from_slice(&p.x[(n - 1) * d..]);

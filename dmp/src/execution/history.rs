@@ -22,6 +22,8 @@ struct Record {
     xdd: Vec<f64>,
     /// The filtered goal at each point.
     g: Vec<f64>,
+    /// Whether each point came from the final stage's generator (not the DMP's own).
+    generated: Vec<bool>,
 }
 
 impl Record {
@@ -61,6 +63,7 @@ impl Record {
         self.xd.truncate(n * dim);
         self.xdd.truncate(n * dim);
         self.g.truncate(n * dim);
+        self.generated.truncate(n);
     }
 }
 
@@ -85,9 +88,20 @@ impl History {
     }
 
     /// Appends the points from time `t0` on, one output step apart, with phases `s`, positions `x`, velocities
-    /// `xd`, accelerations `xdd` and filtered goals `g` (`dim` per point), and forgets the oldest records that are
-    /// no longer needed to hold `keep` points.
-    pub(super) fn push(&mut self, t0: f64, s: &[f64], x: &[f64], xd: &[f64], xdd: &[f64], g: &[f64]) {
+    /// `xd`, accelerations `xdd` and filtered goals `g` (`dim` per point), whether each came from the final stage's
+    /// generator (`generated`, one per point, or empty: none did), and forgets the oldest records that are no longer
+    /// needed to hold `keep` points.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn push(
+        &mut self,
+        t0: f64,
+        s: &[f64],
+        x: &[f64],
+        xd: &[f64],
+        xdd: &[f64],
+        g: &[f64],
+        generated: &[bool],
+    ) {
         debug_assert!(
             x.len() == s.len() * self.dim
                 && xd.len() == x.len()
@@ -103,6 +117,9 @@ impl History {
             buf.clear();
             buf.extend_from_slice(from);
         }
+        r.generated.clear();
+        r.generated.extend_from_slice(generated);
+        r.generated.resize(s.len(), false);
         self.points += s.len();
         self.records.push_back(r);
         while let Some(front) = self.records.front()
@@ -127,6 +144,11 @@ impl History {
         let r = self.records.back()?;
         let from = (r.len() - 1) * self.dim;
         Some((&r.xd[from..], &r.xdd[from..]))
+    }
+
+    /// Whether the last point came from the final stage's generator.
+    pub(super) fn last_generated(&self) -> bool {
+        self.records.back().and_then(|r| r.generated.last().copied()).unwrap_or(false)
     }
 
     /// Every recorded point's position, velocity and filtered goal (`dim` each), oldest first: for a change of
@@ -203,7 +225,7 @@ mod tests {
         let s: Vec<f64> = ks.iter().map(|k| 1.0 - k / 1000.0).collect();
         let x: Vec<f64> = ks.iter().flat_map(|&k| [k, -k]).collect();
         let xd: Vec<f64> = ks.iter().flat_map(|&k| [10.0 * k, 1.0]).collect();
-        h.push(from as f64 * DT, &s, &x, &xd, &xd, &x);
+        h.push(from as f64 * DT, &s, &x, &xd, &xd, &x, &[]);
     }
 
     fn rollback(h: &mut History, t: f64) -> Option<State> {

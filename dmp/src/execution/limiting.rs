@@ -148,7 +148,10 @@ impl Execution {
         if let Some((xd, xdd)) = self.history.last_motion() {
             self.limiter.set_handed(xd, xdd);
         }
-        self.tracker.reset(n > 0 && self.history.last().is_some());
+        // The generator goes on from the last point kept where it gave that point; where the DMP did, the DMP
+        // restarts from it, and goes on giving the points it gave before (a robot that already carried them out
+        // sees no change) while they keep the bounds.
+        self.tracker.reset(n > 0 && self.history.last().is_some() && self.history.last_generated());
     }
 
     /// Keeps the limits at the DMP's point just computed (rewritten in place by the final stage where it does not

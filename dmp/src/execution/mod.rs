@@ -205,6 +205,8 @@ pub struct Execution {
     history: History,
     /// The phases of the points of an `advance`, for the history.
     stretch_s: Vec<f64>,
+    /// Whether each point of the stretch came from the final stage's generator.
+    stretch_generated: Vec<bool>,
     holding: bool,
     stopping: bool,
     stall: Vec<StallDetector>,
@@ -332,6 +334,7 @@ impl Execution {
             end_time: f64::INFINITY,
             history: History::new(dim, stepping.dt, history),
             stretch_s: Vec::new(),
+            stretch_generated: Vec::new(),
             holding: false,
             stopping: false,
             stall,

@@ -18,6 +18,8 @@
 //! reference's state at that point, made admissible:
 //! - `a_t` is `a_r` within the acceleration bound, and `v_t` is `v_r` within the speed bound less what bringing
 //!   `a_t` to zero at the largest jerk adds, `|v_t + a_t |a_t| / (2 J)| <= V` (a target Ruckig can hold);
+//! - **forward:** on each axis, `|v_t|` is at most the speed gained over the way to the target,
+//!   `sqrt(v0² + v_b(d)²)` with `d = |x_r - x|` (a faster target is reached only by a run-up, backwards first);
 //! - **never past the goal:** on each axis that moves towards the goal `g`, `|v_t|` is at most the speed from which
 //!   braking within the axis's bounds stops at `g` from `x_r`:
 //!   `v_b(d) = (d² J)^(1/3)` for `d <= A³ / J²`, else `v_b(d) = -A² / (2 J) + sqrt(A⁴ / (4 J²) + 2 A d)`, with
@@ -31,10 +33,13 @@
 //! # Norm bounds on axes
 //! The bounds are Euclidean norms over a group's dimensions (a robot's position, or its orientation); Ruckig's are
 //! per axis. Each plan gives axis `i` the bounds `w_i (V, A, J)` with `sum w_i² = 1`, so that the norms keep
-//! `(V, A, J)`: `w` follows the direction from the output to the target (a straight reach is planned along its
-//! line, time-optimally, with phase synchronisation keeping it straight), is never below [`MIN_WEIGHT`] (no axis
+//! `(V, A, J)`: `w` follows the direction from the output to the target, is never below [`MIN_WEIGHT`] (no axis
 //! is frozen), nor below the current state's own use of an axis (the generator never starts outside its bounds;
-//! Ruckig also finds no plan from a state exactly at a bound, hence [`FLOOR_ROOM`]).
+//! Ruckig also finds no plan from a state exactly at a bound, hence [`FLOOR_ROOM`]), and leaves the state able to
+//! brake within them (else it moves back towards the last plan's split). The caps on the target's velocity scale
+//! the reference's velocity as one vector. The axes are planned in phase: from a state in line with the target,
+//! along the straight chord to it (time-optimally on a straight reach), which the lag's allowance below relies on.
+//! Where that is impossible Ruckig synchronises the axes' durations instead.
 //!
 //! # The phase waits for the robot
 //! While the output lags behind the reference, cutting across the reference's curve would leave its path: the chord
@@ -54,6 +59,13 @@ use super::limits::Bounds;
 
 /// The generator replans towards the reference every this many output points.
 pub(super) const REPLAN_POINTS: usize = 10;
+/// The share of the way to the target over which the speed gained counts towards a target's speed (the rest is room
+/// for the jerk's ramps and the current acceleration).
+const REACH_SHARE: f64 = 0.5;
+/// A target's speed is checked for being reachable going forward only while it is this many times the robot's
+/// (a robot starting after a reference that is already fast): tracking a reference at speed, the next plans close
+/// the gap.
+const RUN_UP: f64 = 2.0;
 /// Smallest weight of an axis in the split of a norm bound.
 pub(super) const MIN_WEIGHT: f64 = 0.05;
 /// Largest deviation from the reference's path that the lag may cause, in the position's units (metres).
@@ -452,7 +464,6 @@ impl GroupTracker {
         kept.2[..n].copy_from_slice(wj);
         self.weights = Some(kept);
         self.input.control_interface = ControlInterface::Position;
-        self.input.synchronization = Synchronization::Phase;
         let scale_v = vref.max(1.0) * 1e3;
         for (k, &i) in self.dims.iter().enumerate() {
             let (vk, ak, jk) = (b.v * wv[k], b.a * wa[k], b.j * wj[k]);
@@ -481,11 +492,37 @@ impl GroupTracker {
             } else {
                 (-v_top, finite(vk, scale_v) * room)
             };
-            let v_t = v_t.clamp(lo, hi);
+            let mut v_t = v_t.clamp(lo, hi);
+            // Reachable going forward: at most the speed the axis can gain over the way to the target, from its
+            // current speed (`sqrt(v0² + v_b(d)²)`, with `v_b` the speed that braking covers `d` from, the same
+            // distance accelerating). A target faster than that is reached only by a run-up: backwards first.
+            let ahead = x[i] - self.input.current_position[k];
+            let v0 = self.input.current_velocity[k];
+            if v_t * ahead > 0.0 && v_t.abs() > RUN_UP * v0.abs() {
+                let gain = braking_speed(REACH_SHARE * ahead.abs(), ak, jk);
+                let reach = (v0 * v0 + gain * gain).sqrt() * room;
+                v_t = v_t.clamp(-reach, reach);
+            }
             self.input.target_position[k] = x[i];
             self.input.target_velocity[k] = v_t;
             self.input.target_acceleration[k] = if v_t == xd[i] { a_t } else { 0.0 };
         }
+        // The caps scale the reference's velocity as one vector (by the smallest of the axes' shares), so that the
+        // target moves the way the reference does: on a straight reach, along its line.
+        let share = self
+            .dims
+            .iter()
+            .enumerate()
+            .filter(|&(_, &i)| xd[i] != 0.0)
+            .map(|(k, &i)| (self.input.target_velocity[k] / xd[i]).clamp(0.0, 1.0))
+            .fold(1.0, f64::min);
+        if share < 1.0 {
+            for (k, &i) in self.dims.iter().enumerate() {
+                self.input.target_velocity[k] = share * xd[i];
+                self.input.target_acceleration[k] = 0.0;
+            }
+        }
+        self.input.synchronization = Synchronization::Phase;
     }
 
     /// Whether Ruckig's answer is a step to use: a plan, whose step keeps each axis's jerk (the change of its
