@@ -285,7 +285,7 @@ pub(crate) fn segment_line(seg: &v1::Segment) -> String {
     )
 }
 
-/// `stream`: executes, prints a line per segment on stderr, writes the setpoints in force to `DIR/trajectory.csv`
+/// `stream`: executes, prints a line per segment on stderr (unless `--quiet`), writes the setpoints in force to `DIR/trajectory.csv`
 /// and their figure to `DIR/plot.svg`.
 /// Ctrl-C ends the stream early and still writes what was received.
 pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String, DmpctlError> {
@@ -319,7 +319,9 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
                 Some(seg) => {
                     let seg = seg?;
                     late += late_rows(&seg, unix_now());
-                    progress.println(&segment_line(&seg));
+                    if !a.quiet {
+                        progress.println(&segment_line(&seg));
+                    }
                     warnings += seg.warnings.len();
                     if seg.status == v1::SegmentStatus::Collision as i32 {
                         collision_segments += 1;

@@ -141,4 +141,7 @@ pub(crate) struct StreamArgs {
     /// A collision is expected (a run without avoidance): it does not make the exit code 3.
     #[arg(long)]
     pub(crate) allow_collision: bool,
+    /// No line per segment: only warnings, problems and the summary.
+    #[arg(long)]
+    pub(crate) quiet: bool,
 }

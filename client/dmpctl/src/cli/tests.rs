@@ -276,7 +276,13 @@ fn stream_options() {
     let Command::Stream(a) = parse(&["stream", "--robot", "r", "--name", "p", "--out", "o"]).command else {
         panic!()
     };
-    assert!(!a.realtime && a.motion.goal.is_none());
+    assert!(!a.realtime && a.motion.goal.is_none() && !a.quiet);
+    let Command::Stream(a) =
+        parse(&["stream", "--robot", "r", "--name", "p", "--out", "o", "--quiet"]).command
+    else {
+        panic!()
+    };
+    assert!(a.quiet);
 }
 
 #[test]
@@ -291,6 +297,12 @@ fn scene_commands() {
     let Command::Scene(SceneCommand::Put { via, ttl, .. }) = c.command else { panic!() };
     assert_eq!((via, ttl), (Via::Zenoh, Some(2.5)));
     assert_eq!(c.zenoh_connect, vec!["tcp/h:7447"]);
+    let Command::Scene(SceneCommand::Put { ttl, .. }) =
+        parse(&["scene", "put", "o.json", "--ttl-s", "1.5"]).command
+    else {
+        panic!()
+    };
+    assert_eq!(ttl, Some(1.5));
     let Command::Scene(SceneCommand::Delete { id, via }) =
         parse(&["scene", "delete", "box1", "--via", "zenoh"]).command
     else {
