@@ -169,6 +169,12 @@ pub(super) fn braking_speed(d: f64, a: f64, j: f64) -> f64 {
     }
 }
 
+/// The largest speed an axis at speed `v` and acceleration `a` reaches while its acceleration comes back to zero at
+/// jerk `j`: `max(|v|, |v + a |a| / (2 j)|)`, a speed no plan can avoid (`|v|` without a jerk bound).
+fn peak_speed(v: f64, a: f64, j: f64) -> f64 {
+    if j.is_finite() { v.abs().max((v + a * a.abs() / (2.0 * j)).abs()) } else { v.abs() }
+}
+
 /// A finite stand-in for "no bound" on an axis (Ruckig needs numbers): far beyond anything a point can use.
 fn finite(x: f64, scale: f64) -> f64 {
     if x.is_finite() { x } else { scale }
@@ -427,11 +433,8 @@ impl GroupTracker {
         wj.copy_from_slice(wv);
         split(wj, &[0.0; 16][..n]);
         for k in 0..n {
-            // An axis's speed goes on growing while its acceleration comes back to zero at the axis's jerk: to
-            // `v + a |a| / (2 j)`, a speed the plan cannot avoid.
             let (v, a) = (self.input.current_velocity[k], self.input.current_acceleration[k]);
-            let peak = if b.j.is_finite() { v + a * a.abs() / (2.0 * b.j * wj[k]) } else { v };
-            fv[k] = if b.v.is_finite() { v.abs().max(peak.abs()) / b.v } else { 0.0 };
+            fv[k] = if b.v.is_finite() { peak_speed(v, a, b.j * wj[k]) / b.v } else { 0.0 };
             fa[k] = if b.a.is_finite() { a.abs() / b.a } else { 0.0 };
         }
         split(wv, fv);
@@ -442,21 +445,25 @@ impl GroupTracker {
         if let Some((pv, pa, pj)) = self.weights
             && !self.keeps_state(wv, wa, wj)
         {
-            let (cv, ca, cj) = (wv.to_vec(), wa.to_vec(), wj.to_vec());
+            let (mut cv, mut ca, mut cj) = ([0.0; 16], [0.0; 16], [0.0; 16]);
+            cv[..n].copy_from_slice(wv);
+            ca[..n].copy_from_slice(wa);
+            cj[..n].copy_from_slice(wj);
+            let (cv, ca, cj) = (&cv[..n], &ca[..n], &cj[..n]);
             let mix = |out: &mut [f64], prev: &[f64], cand: &[f64], l: f64| {
                 out.iter_mut().zip(prev.iter().zip(cand)).for_each(|(o, (p, c))| *o = (1.0 - l) * p + l * c)
             };
             let (mut lo, mut hi) = (0.0, 1.0);
             for _ in 0..12 {
                 let mid = 0.5 * (lo + hi);
-                mix(wv, &pv[..n], &cv, mid);
-                mix(wa, &pa[..n], &ca, mid);
-                mix(wj, &pj[..n], &cj, mid);
+                mix(wv, &pv[..n], cv, mid);
+                mix(wa, &pa[..n], ca, mid);
+                mix(wj, &pj[..n], cj, mid);
                 if self.keeps_state(wv, wa, wj) { lo = mid } else { hi = mid }
             }
-            mix(wv, &pv[..n], &cv, lo);
-            mix(wa, &pa[..n], &ca, lo);
-            mix(wj, &pj[..n], &cj, lo);
+            mix(wv, &pv[..n], cv, lo);
+            mix(wa, &pa[..n], ca, lo);
+            mix(wj, &pj[..n], cj, lo);
         }
         let mut kept: Weights = ([0.0; 16], [0.0; 16], [0.0; 16]);
         kept.0[..n].copy_from_slice(wv);
@@ -548,8 +555,7 @@ impl GroupTracker {
         let slack = 1.0 + 1e-6;
         (0..wv.len()).all(|k| {
             let (v, a) = (self.input.current_velocity[k], self.input.current_acceleration[k]);
-            let peak = if b.j.is_finite() { v + a * a.abs() / (2.0 * b.j * wj[k]) } else { v };
-            (!b.v.is_finite() || v.abs().max(peak.abs()) <= wv[k] * b.v * slack)
+            (!b.v.is_finite() || peak_speed(v, a, b.j * wj[k]) <= wv[k] * b.v * slack)
                 && (!b.a.is_finite() || a.abs() <= wa[k] * b.a * slack)
         })
     }

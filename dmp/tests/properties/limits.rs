@@ -18,27 +18,18 @@ const DT: f64 = 1e-3;
 
 /// A minimum-jerk reach of 2 s from (0.3, 0, 0.4) to (0.6, 0.2, 0.5), sampled at 1 kHz, learned with the paper's
 /// settings.
-static REACH: LazyLock<Primitive> = LazyLock::new(|| {
-    let (a, b) = ([0.3, 0.0, 0.4], [0.6, 0.2, 0.5]);
-    let t: Vec<f64> = (0..=2000).map(|k| k as f64 * 1e-3).collect();
+static REACH: LazyLock<Primitive> = LazyLock::new(|| reach_of([0.3, 0.2, 0.1], 2.0));
+
+/// A minimum-jerk reach of `seconds` by `way` from (0.3, 0, 0.4), sampled at 1 kHz, learned with the paper's
+/// settings.
+fn reach_of(way: [f64; 3], seconds: f64) -> Primitive {
+    let a = [0.3, 0.0, 0.4];
+    let n = (seconds / 1e-3).round() as usize;
+    let t: Vec<f64> = (0..=n).map(|k| k as f64 * 1e-3).collect();
     let x = t
         .iter()
         .map(|&t| {
-            let u = t / 2.0;
-            let c = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
-            (0..3).map(|i| a[i] + (b[i] - a[i]) * c).collect()
-        })
-        .collect();
-    learn(&Demonstration::new(t, x).unwrap(), &LearnConfig::paper()).unwrap()
-});
-
-/// A minimum-jerk reach of 1 s by `way` from (0.3, 0, 0.4), sampled at 1 kHz, learned with the paper's settings.
-fn reach_of(way: [f64; 3]) -> Primitive {
-    let a = [0.3, 0.0, 0.4];
-    let t: Vec<f64> = (0..=1000).map(|k| k as f64 * 1e-3).collect();
-    let x = t
-        .iter()
-        .map(|&u| {
+            let u = t / seconds;
             let c = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
             (0..3).map(|i| a[i] + way[i] * c).collect()
         })
@@ -346,7 +337,7 @@ proptest! {
             profile,
             obstacle_rollback: 0,
         };
-        let (got, e, _) = stream_of(&reach_of(goal), &c, PROFILES[profile]);
+        let (got, e, _) = stream_of(&reach_of(goal, 1.0), &c, PROFILES[profile]);
         let (past, reach) = overshoot(&got, 0, &e.motion().goal);
         prop_assert!(past <= (0.005 * reach).max(1e-3), "{past} m past the goal after a reach of {reach} m");
     }

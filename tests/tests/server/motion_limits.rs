@@ -99,13 +99,7 @@ async fn a_motion_far_beyond_the_limits_is_tracked_within_them_to_its_goal() {
     let mut motion = spec("base", "dash");
     motion.ignore_scene = true;
     motion.limits = Some(limits_to_proto(&slow));
-    let request =
-        v1::ExecuteRequest { motion: Some(motion.clone()), max_duration_s: 30.0, ..Default::default() };
-    let mut stream = within("execute", client.execute(request)).await.unwrap();
-    let mut segments = Vec::new();
-    while let Some(s) = within("segment", stream.next()).await {
-        segments.push(s.unwrap());
-    }
+    let segments = executed(&client, motion.clone()).await;
     let last = segments.last().unwrap();
     assert_eq!(last.status, v1::SegmentStatus::GoalReached as i32, "{:?}", last.verdict);
     let x = kept(&segments);
