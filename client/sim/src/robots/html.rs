@@ -45,7 +45,12 @@ fn checks(r: &RobotReport, realtime: bool, limits: Option<&CartesianLimits>) -> 
         ("setpoints", r.setpoints > 0, format!("{} in {} segments", r.setpoints, r.segments)),
     ];
     if realtime {
-        c.push(("on time", r.late_setpoints == 0, format!("{} late", r.late_setpoints)));
+        let splices = if r.late_splices > 0 {
+            format!(", {} jumps to late segments", r.late_splices)
+        } else {
+            String::new()
+        };
+        c.push(("on time", r.late_setpoints == 0, format!("{} late{splices}", r.late_setpoints)));
     }
     if let Some(l) = limits {
         c.push(("speed limit", r.peak_speed <= l.speed, format!("{:.3} ≤ {} m/s", r.peak_speed, l.speed)));

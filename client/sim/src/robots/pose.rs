@@ -95,7 +95,7 @@ pub(crate) fn add_pose(
     let Some(o) = &exec.orientations else { return };
     let limits = profile.unwrap_or(&Limits::NONE);
     let (peaks, angular) = angular_differences(&exec.traj.t, &o.q, limits);
-    let (_, linear) = over_rows(&exec.traj, limits);
+    let (_, linear) = over_rows(&exec.traj, limits, &exec.late_splices);
     let rows = o.q.len() / 4;
     let final_orientation_error_deg =
         if rows == 0 { f64::INFINITY } else { angle_deg(&o.q[4 * (rows - 1)..], &goal) };

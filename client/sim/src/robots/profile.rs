@@ -33,14 +33,16 @@ pub struct Peaks {
 
 /// Backward differences of the positions of `traj` (at rest before its first setpoint), each over its own time
 /// step: their peaks, and how many setpoints have a speed, acceleration or jerk over `limits` (by more than
-/// [`ROUNDING`]; a field 0 is no limit).
-pub(crate) fn finite_differences(traj: &Trajectory, limits: &Limits) -> (Peaks, u64) {
-    let (peaks, over) = over_rows(traj, limits);
+/// [`ROUNDING`]; a field 0 is no limit). The rows whose differences reach back across one of `late_splices` (a
+/// switch to a segment that arrived late, [`super::robot::Executed::late_splices`]) are left out: they measure the
+/// lateness, not the stream.
+pub(crate) fn finite_differences(traj: &Trajectory, limits: &Limits, late_splices: &[usize]) -> (Peaks, u64) {
+    let (peaks, over) = over_rows(traj, limits, late_splices);
     (peaks, over.iter().filter(|o| **o).count() as u64)
 }
 
 /// [`finite_differences`] with, per setpoint, whether it is over the linear limits.
-pub(crate) fn over_rows(traj: &Trajectory, limits: &Limits) -> (Peaks, Vec<bool>) {
+pub(crate) fn over_rows(traj: &Trajectory, limits: &Limits, late_splices: &[usize]) -> (Peaks, Vec<bool>) {
     let d = traj.dim();
     let (mut k, mut violations) = (Peaks::default(), vec![false; traj.len()]);
     let (mut v_prev, mut a_prev) = (vec![0.0; d], vec![0.0; d]);
@@ -55,6 +57,11 @@ pub(crate) fn over_rows(traj: &Trajectory, limits: &Limits) -> (Peaks, Vec<bool>
         let jerk: Vec<f64> = (0..d).map(|j| (a[j] - a_prev[j]) / h).collect();
         let norm = |x: &[f64]| x.iter().map(|y| y * y).sum::<f64>().sqrt();
         let (sv, sa, sj) = (norm(&v), norm(&a), norm(&jerk));
+        // The jerk at row `i` differences rows `i - 3 ..= i`.
+        if late_splices.iter().any(|&s| s <= i && i < s + 3) {
+            (v_prev, a_prev) = (v, a);
+            continue;
+        }
         k.peak_speed = k.peak_speed.max(sv);
         k.peak_acceleration = k.peak_acceleration.max(sa);
         k.peak_jerk = k.peak_jerk.max(sj);
@@ -84,17 +91,17 @@ mod tests {
         // x = t^3: jerk 6, acceleration 6 t, speed 3 t^2 (the differences lag by about a step).
         let dt = 1e-3;
         let traj = sampled(|t| t.powi(3), dt, 1001);
-        let (none, violations) = finite_differences(&traj, &Limits::NONE);
+        let (none, violations) = finite_differences(&traj, &Limits::NONE, &[]);
         assert_eq!(violations, 0);
         assert!((none.peak_speed - 3.0).abs() < 1e-2, "{none:?}");
         assert!((none.peak_acceleration - 6.0).abs() < 2e-2, "{none:?}");
         let slow = Limits { max_speed: 0.75, ..Limits::NONE };
-        let (_, over) = finite_differences(&traj, &slow);
+        let (_, over) = finite_differences(&traj, &slow, &[]);
         // Speed 3 t^2 > 0.75 from t = 0.5 s on: about half the points.
         assert!((499..=502).contains(&over), "{over}");
         // Jerk 6 everywhere but at the first differences (from rest): over 1 from the third point on.
         let tight = Limits { max_jerk: 1.0, ..Limits::NONE };
-        let (_, over) = finite_differences(&traj, &tight);
+        let (_, over) = finite_differences(&traj, &tight, &[]);
         assert!((998..=1000).contains(&over), "{over}");
     }
 }

@@ -48,6 +48,9 @@ pub struct RobotReport {
     pub limit_violations: u64,
     /// Setpoints that arrived after their time (real time only).
     pub late_setpoints: u64,
+    /// Steps where the robot had to jump to a superseding segment that arrived late (a consequence of the late
+    /// setpoints; left out of `discontinuities`, `limit_violations` and the peaks).
+    pub late_splices: u64,
     /// Setpoints executed.
     pub setpoints: u64,
     /// Segments read.
@@ -239,9 +242,9 @@ pub(crate) fn measure(
     others: &[Other<'_>],
 ) -> RobotReport {
     let traj = &exec.traj;
-    let checks = check(traj, dt);
+    let checks = check(traj, dt, &exec.late_splices);
     let (finite_difference_peaks, limit_violations) =
-        finite_differences(traj, profile.unwrap_or(&dmp::Limits::NONE));
+        finite_differences(traj, profile.unwrap_or(&dmp::Limits::NONE), &exec.late_splices);
     let mut min: BTreeMap<String, f64> = BTreeMap::new();
     for o in obstacles {
         min.insert(o.id.clone(), f64::INFINITY);
@@ -289,6 +292,7 @@ pub(crate) fn measure(
         profile: profile.copied(),
         limit_violations,
         late_setpoints: exec.late_setpoints,
+        late_splices: checks.late_steps,
         setpoints: traj.len() as u64,
         segments: exec.segments,
         discontinuities: checks.discontinuities,

@@ -49,6 +49,10 @@ pub(crate) struct Executed {
     pub(crate) orientations: Option<OrientationPoints>,
     /// Rows that arrived after their time.
     pub(crate) late_setpoints: u64,
+    /// Rows of `traj` where the robot switched to a superseding segment that arrived late: the step into each
+    /// joins what it executed to what it should have executed, and is a consequence of the lateness (counted in
+    /// `late_setpoints`), not of the stream.
+    pub(crate) late_splices: Vec<usize>,
     /// Segments read.
     pub(crate) segments: u64,
     /// Status of the last segment.
@@ -68,6 +72,7 @@ pub(crate) struct Controller {
     clock: f64,
     origin_unix: Option<f64>,
     late: u64,
+    late_splices: Vec<usize>,
     segments: u64,
     status: v1::SegmentStatus,
 }
@@ -89,6 +94,7 @@ impl Controller {
             clock: f64::NEG_INFINITY,
             origin_unix: None,
             late: 0,
+            late_splices: Vec::new(),
             segments: 0,
             status: v1::SegmentStatus::Unspecified,
         }
@@ -145,6 +151,9 @@ impl Controller {
         if self.committed > kept {
             let traj = self.setpoints.trajectory().map(|t| t.t.clone()).unwrap_or_default();
             self.committed = traj.partition_point(|&t| t < self.clock);
+            if late > 0 {
+                self.late_splices.push(self.executed.as_ref().map_or(0, Trajectory::len));
+            }
         }
         Ok(())
     }
@@ -158,6 +167,7 @@ impl Controller {
             traj: self.executed.unwrap_or_else(|| Trajectory::with_capacity(d, 0)),
             orientations: self.executed_orientations,
             late_setpoints: self.late,
+            late_splices: self.late_splices,
             segments: self.segments,
             final_status: self.status,
         }
@@ -167,8 +177,10 @@ impl Controller {
 /// Checks of an executed trajectory.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(crate) struct Checks {
-    /// Steps that break the continuity bounds (or the time step).
+    /// Steps that break the continuity bounds (or the time step), but for the steps into a late splice.
     pub(crate) discontinuities: u64,
+    /// Steps into a late splice ([`Executed::late_splices`]) that break the continuity bounds.
+    pub(crate) late_steps: u64,
     /// Values that are NaN or infinite.
     pub(crate) non_finite: u64,
     /// Largest acceleration norm.
@@ -194,8 +206,8 @@ fn exceeds(err: f64, bound: f64) -> bool {
     !err.is_finite() || err > bound
 }
 
-/// Checks `traj` (executed at step `dt`).
-pub(crate) fn check(traj: &Trajectory, dt: f64) -> Checks {
+/// Checks `traj` (executed at step `dt`); a step into one of the rows `late_splices` is counted apart.
+pub(crate) fn check(traj: &Trajectory, dt: f64, late_splices: &[usize]) -> Checks {
     let d = traj.dim();
     let n = traj.len();
     let mut c = Checks::default();
@@ -217,7 +229,8 @@ pub(crate) fn check(traj: &Trajectory, dt: f64) -> Checks {
         let da2: f64 =
             row(&traj.xdd, d, k + 1).iter().zip(row(&traj.xdd, d, k)).map(|(a, b)| (a - b).powi(2)).sum();
         let j = da2.sqrt() / h;
-        if j.is_finite() {
+        let spliced = late_splices.contains(&(k + 1));
+        if j.is_finite() && !spliced {
             c.peak_jerk = c.peak_jerk.max(j);
         }
         let mut bad = (h - dt).abs() > 1e-6 * dt;
@@ -231,6 +244,10 @@ pub(crate) fn check(traj: &Trajectory, dt: f64) -> Checks {
             let slack = CONT_FACTOR * amax + da;
             bad |= exceeds((x1 - x0 - v0 * h).abs(), slack * h * h + CONT_ABS);
             bad |= exceeds((v1 - v0).abs(), slack * h + CONT_ABS);
+        }
+        if spliced {
+            c.late_steps += bad as u64;
+            continue;
         }
         if bad && c.first_discontinuity_s.is_none() {
             c.first_discontinuity_s = Some(traj.t[k]);
@@ -267,13 +284,32 @@ mod tests {
         let e = c.finish();
         assert_eq!(e.traj.len(), 4);
         assert_eq!(e.late_setpoints, 0);
-        assert_eq!(check(&e.traj, 0.01).discontinuities, 0);
+        assert_eq!(check(&e.traj, 0.01, &e.late_splices).discontinuities, 0);
 
         let mut c = Controller::new("r", false);
         c.push(&seg(0, 0.0, &[0.0, 0.01, 0.02], 1.0)).unwrap();
         c.push(&seg(1, 0.02, &[0.5, 0.51], 1.0)).unwrap();
         let e = c.finish();
-        assert_eq!(check(&e.traj, 0.01).discontinuities, 1);
+        assert_eq!(check(&e.traj, 0.01, &e.late_splices).discontinuities, 1);
+    }
+
+    #[test]
+    fn a_superseding_segment_that_arrives_late_is_a_late_splice_not_a_discontinuity() {
+        let line = |from: f64, n: usize| (0..n).map(|k| from + 0.01 * k as f64).collect::<Vec<_>>();
+        let mut c = Controller::new("r", false);
+        c.push(&seg(0, 0.0, &line(0.0, 11), 1.0)).unwrap();
+        // The robot's clock is now 0.1: rows 0.0 to 0.09 are executed.
+        c.push(&seg(1, 0.1, &line(0.1, 5), 1.0)).unwrap();
+        // A change from 0.05 on, elsewhere: its rows 0.05 to 0.09 are late, and the robot jumps to its row at 0.1.
+        c.push(&seg(2, 0.05, &line(0.5, 10), 1.0)).unwrap();
+        let e = c.finish();
+        assert_eq!(e.late_setpoints, 5);
+        assert_eq!(e.late_splices, vec![10]);
+        assert_eq!(e.traj.t[10], 0.1);
+        let checks = check(&e.traj, 0.01, &e.late_splices);
+        assert_eq!((checks.discontinuities, checks.late_steps), (0, 1));
+        // Without knowing the splice, the same step is a discontinuity.
+        assert_eq!(check(&e.traj, 0.01, &[]).discontinuities, 1);
     }
 
     #[test]
@@ -284,7 +320,7 @@ mod tests {
             let s = k as f64 * 1e-3;
             t.push(s, &[0.0, 0.0], &[0.5 * s, 0.0], a);
         }
-        let c = check(&t, 1e-3);
+        let c = check(&t, 1e-3, &[]);
         assert_eq!(c.peak_acceleration, 5.0);
         assert!((c.peak_jerk - 5000.0).abs() < 1e-6, "{}", c.peak_jerk);
         assert!((c.peak_speed - 1.5e-3).abs() < 1e-15);

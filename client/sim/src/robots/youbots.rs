@@ -301,6 +301,7 @@ async fn run_one(
             traj: traj.clone(),
             orientations: None,
             late_setpoints: 0,
+            late_splices: Vec::new(),
             segments: 0,
             final_status: v1::SegmentStatus::Unspecified,
         };
