@@ -7,6 +7,7 @@
 //! | the flags and commands, as clap parses them (TLS and token flags included) | `args` |
 //! | the commands that talk to the server (`learn`, `list`, `plan`, `stream`, `scene` ...) | `server_commands` |
 //! | `info`, `stats`, `health` and the server's warnings | `server_info` |
+//! | the warnings of a run counted by kind, for its summary | `warning_tally` |
 //! | the figure of `plan` and `stream` | `server_plot` |
 //! | what a plan or stream reported beside its setpoints: events, limits in force, clearances | `run_record` |
 //! | `robot put`, `show`, `delete`: a robot's record | `robot_commands` |
@@ -51,5 +52,6 @@ mod server_commands;
 mod server_info;
 mod server_plot;
 mod tools;
+mod warning_tally;
 
 pub use error::DmpctlError;

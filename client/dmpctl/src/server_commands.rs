@@ -160,6 +160,8 @@ pub(crate) async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, Dmp
     crate::server_plot::write_plot(client, &a.motion, "plan", traj, seg.dt, &record, &a.out).await;
     let collisions = if r.collisions.is_empty() { "none".to_string() } else { r.collisions.join(", ") };
     let verdict = r.verdict.as_ref();
+    let mut warnings = crate::warning_tally::WarningTally::default();
+    warnings.add(&r.warnings);
     let line = format!(
         "{}/{}: {} points over {} s (dt {}), scene version {}, collisions: {collisions}, stalled: {}, warnings: {}, \
          {}, {}; wrote {}",
@@ -170,7 +172,7 @@ pub(crate) async fn plan(client: &DmpClient, a: &PlanArgs) -> Result<String, Dmp
         seg.dt,
         seg.scene_version,
         r.stalled,
-        r.warnings.len(),
+        warnings.words(),
         verdict_words(verdict),
         limits_words(record.limits.as_ref()),
         a.out.join("trajectory.csv").display()
@@ -308,7 +310,8 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
     let mut stale = false;
     let mut arrived = 0.0;
     let mut versions = crate::run_record::RunRecord::default();
-    let (mut verdict, mut warnings, mut late, mut collision_segments) = (None, 0usize, 0usize, 0usize);
+    let mut warnings = crate::warning_tally::WarningTally::default();
+    let (mut verdict, mut late, mut collision_segments) = (None, 0usize, 0usize);
     let ctrl_c = tokio::signal::ctrl_c();
     tokio::pin!(ctrl_c);
     let progress = crate::progress::Progress::new(format!("stream {}", a.motion.robot));
@@ -322,7 +325,7 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
                     if !a.quiet {
                         progress.println(&segment_line(&seg));
                     }
-                    warnings += seg.warnings.len();
+                    warnings.add(&seg.warnings);
                     if seg.status == v1::SegmentStatus::Collision as i32 {
                         collision_segments += 1;
                     }
@@ -366,13 +369,14 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
     };
     let line = format!(
         "{}/{}: {n} segments{}, {} setpoints in force up to t = {} s, last status {status}, collisions: \
-         {collisions} ({collision_segments} COLLISION segments), warnings: {warnings}, late setpoints: {late}, {}, \
-         {}; wrote {}",
+         {collisions} ({collision_segments} COLLISION segments), warnings: {}, late setpoints: {late}, {}, {}; \
+         wrote {}",
         a.motion.robot,
         a.motion.name,
         if interrupted { " (interrupted)" } else { "" },
         traj.len(),
         traj.t.last().copied().unwrap_or(0.0),
+        warnings.words(),
         verdict_words(verdict.as_ref()),
         limits_words(versions.limits.as_ref()),
         a.out.join("trajectory.csv").display()
