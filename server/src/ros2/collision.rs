@@ -4,8 +4,12 @@
 //! `MOVE` moves it to a new `pose` (its shapes keep their poses relative to it), `REMOVE` deletes it (every
 //! object taken from ROS 2 in the cell, with an empty id). Planes are skipped with a warning; meshes become the
 //! box around their vertices, with a warning.
+//!
+//! An operation applies whole or not at all: when the scene refuses one of its shapes (the cell's
+//! `limits.max_obstacles`, its bytes, the workspace), the shapes it had put are taken back and those it had replaced
+//! or removed are put back, so a REMOVE always finds every obstacle an object added.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use dmp_proto::v1;
 use dmp_ros2::msgs::moveit_msgs::CollisionObject;
@@ -67,7 +71,8 @@ impl Objects {
                 check_id(&msg.id)?;
                 let pose = pose()?;
                 let append = msg.operation == CollisionObject::APPEND;
-                let mut object = match objects.get(&msg.id) {
+                let old = objects.get(&msg.id);
+                let mut object = match old {
                     Some(old) if append => old.clone(),
                     _ => Object { pose, shapes: Vec::new() },
                 };
@@ -81,10 +86,7 @@ impl Objects {
                         local: to_object.then(&local),
                     });
                 }
-                if !append && let Some(old) = objects.remove(&msg.id) {
-                    delete_shapes(cell, &old, now_unix_s);
-                }
-                put_shapes(cell, &object, now_unix_s)?;
+                replace(cell, &msg.id, old, &object, now_unix_s)?;
                 info!(cell = cell.name(), object = %msg.id, shapes = object.shapes.len(), source = "ros2", "collision object placed");
                 objects.insert(msg.id.clone(), object);
                 Ok(())
@@ -97,8 +99,10 @@ impl Objects {
                         format!("`{}`: MOVE of an object not in the scene", msg.id),
                     ));
                 };
-                object.pose = pose;
-                put_shapes(cell, object, now_unix_s)
+                let moved = Object { pose, shapes: object.shapes.clone() };
+                replace(cell, &msg.id, Some(object), &moved, now_unix_s)?;
+                *object = moved;
+                Ok(())
             }
             other => Err(ServerError::invalid(
                 "operation",
@@ -166,9 +170,46 @@ fn obstacle(object: &Rigid, s: &ObjectShape) -> v1::Obstacle {
     }
 }
 
-fn put_shapes(cell: &Cell, object: &Object, now_unix_s: f64) -> Result<(), ServerError> {
-    for s in &object.shapes {
-        cell.put(obstacle(&object.pose, s), now_unix_s)?;
+/// Puts the shapes of `new` (object `id`) in place of those of `old`, all or nothing: when the scene refuses one,
+/// the shapes put so far go back to what they were, the old shapes removed come back, and the error says so.
+fn replace(
+    cell: &Cell,
+    id: &str,
+    old: Option<&Object>,
+    new: &Object,
+    now_unix_s: f64,
+) -> Result<(), ServerError> {
+    let kept: HashSet<&str> = new.shapes.iter().map(|s| s.obstacle_id.as_str()).collect();
+    let before: HashMap<&str, &ObjectShape> =
+        old.iter().flat_map(|o| &o.shapes).map(|s| (s.obstacle_id.as_str(), s)).collect();
+    // Room first: the old shapes the new object does not keep.
+    let dropped: Vec<&ObjectShape> =
+        old.iter().flat_map(|o| &o.shapes).filter(|s| !kept.contains(s.obstacle_id.as_str())).collect();
+    for s in &dropped {
+        cell.delete(&s.obstacle_id, now_unix_s);
+    }
+    for (k, s) in new.shapes.iter().enumerate() {
+        let Err(e) = cell.put(obstacle(&new.pose, s), now_unix_s) else { continue };
+        let restore = |s: &ObjectShape| {
+            let Some(old) = old else { return };
+            if let Err(e) = cell.put(obstacle(&old.pose, s), now_unix_s) {
+                warn!(cell = cell.name(), obstacle = %s.obstacle_id, reason = %e, "collision object: an obstacle it replaced could not be put back");
+            }
+        };
+        for s in &new.shapes[..k] {
+            match before.get(s.obstacle_id.as_str()) {
+                Some(was) => restore(was),
+                None => _ = cell.delete(&s.obstacle_id, now_unix_s),
+            }
+        }
+        dropped.iter().for_each(|s| restore(s));
+        return Err(match e {
+            ServerError::ResourceExhausted(r) => ServerError::ResourceExhausted(format!(
+                "collision object `{id}` ({} shapes) does not fit: shape {k}: {r}; nothing of it was applied",
+                new.shapes.len()
+            )),
+            e => e.within(&format!("shapes[{k}]")),
+        });
     }
     Ok(())
 }
@@ -262,5 +303,36 @@ mod tests {
         assert!(o.apply(&cell, &boxes("a b", CollisionObject::ADD, 1), Rigid::IDENTITY, 0.0).is_err());
         assert!(o.apply(&cell, &boxes("t", 7, 1), Rigid::IDENTITY, 0.0).is_err());
         assert!(cell.snapshot().obstacles.is_empty());
+    }
+
+    #[test]
+    fn an_object_applies_whole_or_not_at_all_and_remove_takes_all_it_added() {
+        let cell = Cell::new("c", 100);
+        let mut o = Objects::default();
+        let e =
+            o.apply(&cell, &boxes("big", CollisionObject::ADD, 10_000), Rigid::IDENTITY, 0.0).unwrap_err();
+        assert!(matches!(e, ServerError::ResourceExhausted(_)), "{e}");
+        assert!(e.to_string().contains("`big` (10000 shapes) does not fit"), "{e}");
+        assert!(cell.snapshot().obstacles.is_empty(), "nothing added");
+        // A replacement that does not fit leaves the object as it was; so does an append.
+        o.apply(&cell, &boxes("t", CollisionObject::ADD, 3), Rigid::IDENTITY, 1.0).unwrap();
+        let before = center(&cell, "t.2");
+        assert!(o.apply(&cell, &boxes("t", CollisionObject::ADD, 500), Rigid::IDENTITY, 2.0).is_err());
+        assert!(o.apply(&cell, &boxes("t", CollisionObject::APPEND, 98), Rigid::IDENTITY, 2.0).is_err());
+        assert_eq!(cell.snapshot().obstacles.len(), 3);
+        assert!(close(&center(&cell, "t.2"), &before));
+        // A move out of the workspace moves nothing.
+        let mut mv = boxes("t", CollisionObject::MOVE, 0);
+        mv.pose = pose(0.0, 0.0, 1e6, [0.0, 0.0, 0.0, 1.0]);
+        assert!(o.apply(&cell, &mv, Rigid::IDENTITY, 3.0).is_err());
+        assert!(close(&center(&cell, "t.2"), &before));
+        // A smaller replacement drops the shapes it no longer has.
+        o.apply(&cell, &boxes("t", CollisionObject::ADD, 1), Rigid::IDENTITY, 4.0).unwrap();
+        assert_eq!(cell.snapshot().obstacles.len(), 1);
+        o.apply(&cell, &boxes("", CollisionObject::REMOVE, 0), Rigid::IDENTITY, 5.0).unwrap();
+        assert!(cell.snapshot().obstacles.is_empty(), "no orphans");
+        // The whole budget is there again.
+        o.apply(&cell, &boxes("u", CollisionObject::ADD, 100), Rigid::IDENTITY, 6.0).unwrap();
+        assert_eq!(cell.snapshot().obstacles.len(), 100);
     }
 }

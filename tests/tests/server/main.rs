@@ -23,6 +23,7 @@ mod python_clients;
 mod robot_records;
 mod robots;
 mod ros2_bridge;
+mod ros2_budget;
 mod ros2_golden;
 mod ros2_trajectories;
 mod scene_over_zenoh;
