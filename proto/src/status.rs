@@ -17,10 +17,12 @@ fn segment_status(outcome: Outcome) -> SegmentStatus {
 }
 
 /// The status of a segment whose points came to `outcome` while keeping the robot's limits did `limit`: a
-/// running segment that braked to rest within them is [`SegmentStatus::LimitBraking`].
+/// running segment that braked to rest within them is [`SegmentStatus::LimitBraking`], and one that braked or
+/// was held before the safety distance is [`SegmentStatus::Blocked`].
 pub fn segment_status_limited(outcome: Outcome, limit: LimitAction) -> SegmentStatus {
     match (outcome, limit) {
         (Outcome::Running, LimitAction::Braking) => SegmentStatus::LimitBraking,
+        (Outcome::Running | Outcome::Stalled, LimitAction::Blocked) => SegmentStatus::Blocked,
         _ => segment_status(outcome),
     }
 }
@@ -59,6 +61,7 @@ mod tests {
             SegmentStatus::LimitBraking
         );
         assert_eq!(segment_status_limited(Outcome::Running, LimitAction::Limited), SegmentStatus::Running);
+        assert_eq!(segment_status_limited(Outcome::Running, LimitAction::Blocked), SegmentStatus::Blocked);
         assert_eq!(
             segment_status_limited(Outcome::GoalReached, LimitAction::Braking),
             SegmentStatus::GoalReached

@@ -73,11 +73,12 @@ impl Execution {
                 &mut p.xdd[range.clone()],
             );
             p.limit = p.limit.max(action);
-            self.stretch_generated.push(matches!(action, LimitAction::Limited | LimitAction::Braking));
+            self.stretch_generated
+                .push(matches!(action, LimitAction::Limited | LimitAction::Braking | LimitAction::Blocked));
 
             // Stalls at the point handed out (checked at its time); contacts below, for all points.
-            if self.holding {
-                // At rest on purpose: not a stall.
+            if self.holding || action == LimitAction::Blocked {
+                // At rest on purpose (held, or before the safety distance): not a stall.
                 for (det, m) in self.stall.iter_mut().zip(self.field.agents()) {
                     *det = StallDetector::new(StallConfig::default(), m.dims.clone());
                 }
@@ -125,6 +126,7 @@ impl Execution {
             }
         }
         p.ignored = self.ignored.take_pending();
+        self.fill_clearance(&mut p);
         self.fill_orientations(&mut p);
         let worst = if !p.contacts.is_empty() || !p.cell_mate_contacts.is_empty() {
             Outcome::Collision

@@ -41,7 +41,7 @@ impl Execution {
         self.ignored.set_other_dim(other_dim, sub);
         obstacles.extend(self.scene.obstacles.iter().filter(|o| !self.ignored.is_dropped(o)).cloned());
         let scene = Scene { obstacles, ..self.scene.clone() };
-        let field = RepulsiveField::new(scene, self.primitive.dim)?;
+        let field = RepulsiveField::new(scene, self.primitive.dim)?.keeping_off(self.keep_off())?;
         // Blended in from the next point, unless nothing was handed out yet or nothing changed.
         if self.has_last && field.scene().obstacles != self.field.scene().obstacles {
             self.blend.forget_before(t - self.history_span);

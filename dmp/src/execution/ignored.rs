@@ -107,7 +107,7 @@ impl Execution {
                 }
             }
             scene.obstacles = kept;
-            match RepulsiveField::new(scene, dim) {
+            match RepulsiveField::new(scene, dim).and_then(|f| f.keeping_off(self.keep_off())) {
                 Ok(f) => self.field = f,
                 Err(_) => return false,
             }

@@ -40,8 +40,9 @@
 //! rollback).
 
 use super::Execution;
+use super::guard::{Guard, Guarded};
 use super::limiter::{Group, Limiter};
-use super::tracking::Tracker;
+use super::tracking::{Tracker, generator_bounds};
 use crate::error::InvalidInput;
 
 pub use super::limits::Limits;
@@ -62,6 +63,9 @@ pub(crate) const COUPLE_PERIOD: f64 = 0.01;
 pub(crate) const COUPLE_RATE_PERIODS: f64 = 4.0;
 /// Braking to rest starts when the DMP asks to decelerate at this many times the acceleration bound.
 pub(crate) const BRAKE_ABOVE: f64 = 4.0;
+/// The potentials act on the obstacles inflated by this many times the safety distance: where the field can keep
+/// the robot away, it keeps it beyond the margin, and the guard acts only where the field cannot.
+pub const KEEP_OFF: f64 = 2.0;
 
 /// What keeping the limits did in a stretch (the most that happened).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord)]
@@ -75,6 +79,9 @@ pub enum LimitAction {
     Limited,
     /// The generator braked: the DMP asked to decelerate far harder than the limits allow.
     Braking,
+    /// Braking to rest, or held at rest, before the safety distance ([`Execution::set_margin`]) that the field
+    /// could not keep.
+    Blocked,
 }
 
 impl Execution {
@@ -110,12 +117,74 @@ impl Execution {
         self.limits = limits;
         let tracked: Vec<_> = groups.iter().map(|g| (g.dims.clone(), g.bounds)).collect();
         self.tracker = Tracker::new(&tracked, self.stepping.dt);
+        self.guard_positions(&tracked, position_end);
         if orientation {
             self.tracker.set_angular(&(dim - 3..dim).collect::<Vec<_>>());
         }
         self.limiter = Limiter::new(groups, dim, self.stepping.dt, &self.knot0.x);
         self.restore_limiter();
         Ok(())
+    }
+
+    /// Keeps the safety distance `margin` (metres; 0: none) from every obstacle's true shape from the next output
+    /// point on (`execution/guard.rs`): the potentials act on the shapes inflated by [`KEEP_OFF`] times it, and
+    /// no point brings a robot with finite acceleration and jerk limits closer than it where it can still brake
+    /// (it brakes to rest before, [`LimitAction::Blocked`]). The contacts stay those with the true shapes.
+    /// Refused (naming `margin`) unless finite and not negative.
+    pub fn set_margin(&mut self, margin: f64) -> crate::error::Result<()> {
+        if !(margin.is_finite() && margin >= 0.0) {
+            return Err(InvalidInput::new(
+                "margin",
+                format!("must be finite and not negative, not {margin}"),
+            )
+            .into());
+        }
+        self.margin = margin;
+        self.rebase();
+        let field = crate::field::RepulsiveField::new(self.field.scene().clone(), self.primitive.dim)?;
+        self.field = field.keeping_off(self.keep_off())?;
+        let (tracked, position_end) = self.linear_groups();
+        self.guard_positions(&tracked, position_end);
+        Ok(())
+    }
+
+    /// The safety distance kept.
+    pub fn margin(&self) -> f64 {
+        self.margin
+    }
+
+    /// How far beyond the true shapes the potentials act.
+    pub(super) fn keep_off(&self) -> f64 {
+        KEEP_OFF * self.margin
+    }
+
+    /// The members' position groups with their linear bounds, and where the position ends.
+    fn linear_groups(&self) -> (Vec<(Vec<usize>, super::limits::Bounds)>, usize) {
+        let dim = self.primitive.dim;
+        let position_end = if self.chart.is_some() { dim - 3 } else { dim };
+        let groups = self
+            .members()
+            .iter()
+            .map(|m| {
+                (
+                    m.dims.iter().copied().filter(|&i| i < position_end).collect::<Vec<_>>(),
+                    self.limits.linear(),
+                )
+            })
+            .filter(|(d, b)| !d.is_empty() && !b.is_none())
+            .collect();
+        (groups, position_end)
+    }
+
+    /// A guard for each robot's position among `tracked` (the final stage's groups).
+    fn guard_positions(&mut self, tracked: &[(Vec<usize>, super::limits::Bounds)], position_end: usize) {
+        let h = self.stepping.dt;
+        let positions: Vec<_> = tracked
+            .iter()
+            .filter(|(dims, _)| dims.iter().all(|&i| i < position_end))
+            .map(|(dims, b)| (dims.clone(), generator_bounds(*b, h)))
+            .collect();
+        self.guard = Guard::new(&positions, self.margin, h);
     }
 
     /// The limits kept.
@@ -152,6 +221,7 @@ impl Execution {
         // restarts from it, and goes on giving the points it gave before (a robot that already carried them out
         // sees no change) while they keep the bounds.
         self.tracker.reset(n > 0 && self.history.last().is_some() && self.history.last_generated());
+        self.guard.reset();
     }
 
     /// Keeps the limits at the DMP's point just computed (rewritten in place by the final stage where it does not
@@ -167,21 +237,41 @@ impl Execution {
         let mut keeps = std::mem::take(&mut self.keeps);
         let verdict = self.limiter.check(x, &mut keeps);
         let tracking = self.tracker.track(x, xd, xdd, &self.motion.goal, &keeps, &self.limiter);
-        for g in 0..keeps.len() {
-            if !self.tracker.generated(g) {
-                self.limiter.hand_out_measured(g, xd, xdd);
+        let mut blocked = false;
+        if !self.guard.is_off() {
+            // Before the measured motion is handed out with the DMP's point: the guard judges what the robot would
+            // be told.
+            for g in 0..keeps.len() {
+                if !self.tracker.generated(g) {
+                    self.limiter.hand_out_measured(g, xd, xdd);
+                }
+            }
+            let t = self.out_t - self.stepping.dt;
+            let obstacles = &self.field.scene().obstacles;
+            if self.guard.guard(t, x, xd, xdd, obstacles, &self.limiter) == Guarded::Braking {
+                blocked = true;
+                // The final stage goes on from the brake's point at the next one.
+                self.tracker.reset(true);
+            }
+        } else {
+            for g in 0..keeps.len() {
+                if !self.tracker.generated(g) {
+                    self.limiter.hand_out_measured(g, xd, xdd);
+                }
             }
         }
         self.keeps = keeps;
         self.limiter.push(x, xd, xdd);
-        let mut action = if !tracking.generated {
+        let mut action = if blocked {
+            LimitAction::Blocked
+        } else if !tracking.generated {
             LimitAction::None
         } else if verdict.decel_usage > BRAKE_ABOVE {
             LimitAction::Braking
         } else {
             LimitAction::Limited
         };
-        if tracking.generated {
+        if tracking.generated || blocked {
             self.cost.limited += 1;
         }
         if !self.holding {

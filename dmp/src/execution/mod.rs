@@ -26,6 +26,7 @@
 mod advance;
 mod blend;
 mod changes;
+mod clearance;
 mod diagnosis;
 mod field_sum;
 mod fields;
@@ -33,6 +34,7 @@ mod goal_changes;
 mod goal_tolerance;
 mod grid;
 mod group;
+mod guard;
 mod history;
 mod hold;
 mod ignored;
@@ -56,13 +58,15 @@ use crate::stall::{Stall, StallConfig, StallDetector};
 
 use self::blend::Blend;
 pub use self::blend::DEFAULT_OBSTACLE_BLEND;
+pub use self::clearance::EXACT_WITHIN as CLEARANCE_EXACT_WITHIN;
 pub use self::goal_tolerance::GoalTolerance;
 pub use self::group::{GroupMember, join_group};
+use self::guard::Guard;
 use self::history::History;
 use self::ignored::Ignored;
 pub use self::ignored::IgnoredObstacle;
 use self::limiter::Limiter;
-pub use self::limiting::{LimitAction, Limits};
+pub use self::limiting::{KEEP_OFF, LimitAction, Limits};
 pub use self::pose::OrientationPoints;
 pub(crate) use self::stepping::check_stability;
 pub use self::stepping::{IntegrationCost, MAX_STIFF_STEP, Stepping};
@@ -155,6 +159,10 @@ pub struct Stretch {
     pub orientation: OrientationPoints,
     /// What keeping the run's limits did in the stretch ([`Execution::set_limits`]): the most that happened.
     pub limit: LimitAction,
+    /// Per member: the smallest distance over the stretch's points from its point to an obstacle's true shape,
+    /// exact under [`clearance::EXACT_WITHIN`] and a lower bound beyond (`execution/clearance.rs`);
+    /// `f64::INFINITY` without obstacles.
+    pub min_clearance: Vec<f64>,
 }
 
 /// One run of a primitive on one phase: the state machine that the offline rollout and the server's streams step.
@@ -243,6 +251,10 @@ pub struct Execution {
     recent: Vec<f64>,
     /// The final stage: tracks the DMP within the limits where it does not keep them.
     tracker: Tracker,
+    /// The safety distance kept from the obstacles' true shapes ([`Execution::set_margin`]).
+    guard: Guard,
+    /// The safety distance, metres.
+    margin: f64,
     /// Scratch: which groups' points keep their bounds.
     keeps: Vec<bool>,
     /// `tau` as set, and the temporal coupling's factor on it (applied, and wanted).
@@ -309,6 +321,8 @@ impl Execution {
             limiter,
             recent: Vec::new(),
             tracker: Tracker::default(),
+            guard: Guard::default(),
+            margin: 0.0,
             keeps: Vec::new(),
             base_tau: motion.tau,
             tau_scale: 1.0,
@@ -465,3 +479,6 @@ mod tests;
 
 #[cfg(test)]
 mod change_tests;
+
+#[cfg(test)]
+mod guard_tests;

@@ -42,6 +42,7 @@ impl Execution {
             }
             self.scene.obstacles = obstacles;
             self.field = RepulsiveField::new(self.scene.clone(), self.primitive.dim)
+                .and_then(|f| f.keeping_off(self.keep_off()))
                 .map_err(|e| InvalidInput::new("tool", e.to_string()))?;
         }
         Ok(())

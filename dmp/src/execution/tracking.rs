@@ -171,13 +171,28 @@ pub(super) fn braking_speed(d: f64, a: f64, j: f64) -> f64 {
 
 /// The largest speed an axis at speed `v` and acceleration `a` reaches while its acceleration comes back to zero at
 /// jerk `j`: `max(|v|, |v + a |a| / (2 j)|)`, a speed no plan can avoid (`|v|` without a jerk bound).
-fn peak_speed(v: f64, a: f64, j: f64) -> f64 {
+pub(super) fn peak_speed(v: f64, a: f64, j: f64) -> f64 {
     if j.is_finite() { v.abs().max((v + a * a.abs() / (2.0 * j)).abs()) } else { v.abs() }
 }
 
 /// A finite stand-in for "no bound" on an axis (Ruckig needs numbers): far beyond anything a point can use.
 fn finite(x: f64, scale: f64) -> f64 {
     if x.is_finite() { x } else { scale }
+}
+
+/// The bounds a generator keeps for a robot's `bounds` at points `h` apart: shrunk by [`GENERATOR_ROOM`], and
+/// the speed bound by what a step can add. The speed handed out, `v* + a* h / 2`, can exceed the generator's own by
+/// up to `J h² / 8`; and a state taken over from what was handed out (after a rollback) has the acceleration of the
+/// positions a step back, up to `J h` off, so that it may still speed up by `A h + J h² / 2` before its
+/// acceleration is back to zero.
+pub(super) fn generator_bounds(bounds: Bounds, h: f64) -> Bounds {
+    let shrink = 1.0 - GENERATOR_ROOM;
+    let v_room = if bounds.a.is_finite() && bounds.j.is_finite() {
+        bounds.j * h * h * (1.0 / 8.0 + 0.5) + bounds.a * h
+    } else {
+        0.0
+    };
+    Bounds { v: (bounds.v - v_room) * shrink, a: bounds.a * shrink, j: bounds.j * shrink }
 }
 
 impl Tracker {
@@ -191,23 +206,9 @@ impl Tracker {
                 let n = dims.len();
                 let mut input = InputParameter::new(Some(n));
                 input.synchronization = Synchronization::Phase;
-                let shrink = 1.0 - GENERATOR_ROOM;
-                // The speed handed out, `v* + a* h / 2`, can exceed the generator's own by up to `J h² / 8`; and a
-                // state taken over from what was handed out (after a rollback) has the acceleration of the positions
-                // a step back, up to `J h` off, so that it may still speed up by `A h + J h² / 2` before its
-                // acceleration is back to zero.
-                let v_room = if bounds.a.is_finite() && bounds.j.is_finite() {
-                    bounds.j * h * h * (1.0 / 8.0 + 0.5) + bounds.a * h
-                } else {
-                    0.0
-                };
                 GroupTracker {
                     dims: dims.clone(),
-                    bounds: Bounds {
-                        v: (bounds.v - v_room) * shrink,
-                        a: bounds.a * shrink,
-                        j: bounds.j * shrink,
-                    },
+                    bounds: generator_bounds(*bounds, h),
                     otg: Ruckig::new(Some(n), h),
                     input,
                     output: OutputParameter::new(Some(n)),
@@ -586,7 +587,7 @@ impl GroupTracker {
 /// `w = (1 + FLOOR_ROOM²) f / |f|`, never below `LEAST_WEIGHT`: a hair over the norm (the bounds the generator
 /// keeps are [`GENERATOR_ROOM`] under the robot's), so that the state is never exactly at an axis's bound, where Ruckig
 /// finds no plan, nor over it, where Ruckig would brake that axis first.
-fn split(u: &mut [f64], f: &[f64]) {
+pub(super) fn split(u: &mut [f64], f: &[f64]) {
     let f2: f64 = f.iter().map(|f| f * f).sum();
     if f2 >= 1.0 / (1.0 + FLOOR_ROOM).powi(2) {
         let nf = f2.sqrt() / (1.0 + FLOOR_ROOM * FLOOR_ROOM);

@@ -89,6 +89,10 @@ pub struct RepulsiveField {
     sub_dim: usize,
     obstacle_samples: Vec<Vec<f64>>,
     footprint_samples: Vec<Vec<f64>>,
+    /// The shapes the potentials act on, each obstacle's true shape inflated by `keep_off`
+    /// ([`RepulsiveField::keeping_off`]); empty: the true shapes.
+    avoided: Vec<Shape>,
+    keep_off: f64,
     max_perturbation: f64,
     /// Classified parameters of the dynamic volumetric method for obstacles and for robots, when used.
     kernels: [Option<DynamicVolumetricKernel>; 2],
@@ -179,10 +183,42 @@ impl RepulsiveField {
             sub_dim,
             obstacle_samples,
             footprint_samples,
+            avoided: Vec::new(),
+            keep_off: 0.0,
             max_perturbation: DEFAULT_MAX_PERTURBATION,
             kernels: [kernel_of(&scene_avoidance), kernel_of(&scene_robot_avoidance)],
             s,
         })
+    }
+
+    /// The same field with its potentials acting on every obstacle's shape inflated by `distance` (its semi-axes
+    /// enlarged, [`Shape::inflated`]), so that the avoidance keeps off the true shapes by about that much: a safety
+    /// distance. Contacts ([`RepulsiveField::contacts`]) stay those with the true shapes. 0 keeps the true shapes.
+    pub fn keeping_off(mut self, distance: f64) -> Result<Self> {
+        if !(distance.is_finite() && distance >= 0.0) {
+            return Err(InvalidInput::new(
+                "margin",
+                format!("must be finite and not negative, not {distance}"),
+            )
+            .into());
+        }
+        if distance == 0.0 || self.scene.obstacles.is_empty() {
+            self.avoided.clear();
+            self.keep_off = 0.0;
+            return Ok(self);
+        }
+        let n = self.obstacle_samples.first().map_or(0, |s| s.len() / self.sub_dim.max(1));
+        let inflated =
+            self.scene.obstacles.iter().map(|o| o.inflated(distance)).collect::<Result<Vec<_>>>()?;
+        self.obstacle_samples = inflated.iter().map(|o| o.boundary_offsets(n)).collect();
+        self.avoided = inflated.into_iter().map(|o| o.shape().clone()).collect();
+        self.keep_off = distance;
+        Ok(self)
+    }
+
+    /// How far beyond the true shapes the potentials act ([`RepulsiveField::keeping_off`]).
+    pub fn keep_off(&self) -> f64 {
+        self.keep_off
     }
 
     /// Moves obstacle `i` in place (centre at time zero, constant velocity), keeping everything compiled: the
@@ -223,7 +259,7 @@ impl RepulsiveField {
                 apply(
                     &av.method,
                     self.kernels[0].as_ref(),
-                    o.shape(),
+                    self.avoided.get(oi).unwrap_or(o.shape()),
                     o.rotation(),
                     &self.obstacle_samples[oi],
                     s,
@@ -279,7 +315,7 @@ impl RepulsiveField {
                 apply(
                     &av.method,
                     self.kernels[0].as_ref(),
-                    o.shape(),
+                    self.avoided.get(oi).unwrap_or(o.shape()),
                     o.rotation(),
                     &self.obstacle_samples[oi],
                     s,

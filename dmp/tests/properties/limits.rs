@@ -43,6 +43,8 @@ struct Received {
     x: Vec<f64>,
     /// The accelerations handed out with the points.
     xdd: Vec<f64>,
+    /// The obstacle that appeared: the index of the first point after it, its centre and radius.
+    appeared: Option<(usize, Vec<f64>, f64)>,
 }
 
 impl Received {
@@ -172,6 +174,7 @@ struct Case {
     alpha: Option<f64>,
     profile: usize,
     obstacle_rollback: usize,
+    margin: f64,
 }
 
 /// The profiles of the property test.
@@ -197,6 +200,7 @@ fn stream_of(p: &Primitive, c: &Case, limits: Limits) -> (Received, Execution, u
     let scene = Scene::with_obstacles(Vec::new(), Avoidance::new(dynamic_volumetric(10.0, 2.0, 0.5)), 0);
     let mut e = Execution::new(p.clone(), motion, scene, CellMateAvoidance::NONE, stepping, 5000).unwrap();
     e.set_limits(limits, false).unwrap();
+    e.set_margin(c.margin).unwrap();
     if let Some(a) = c.alpha {
         e.set_goal_filter(a).unwrap();
     }
@@ -223,12 +227,13 @@ fn stream_of(p: &Primitive, c: &Case, limits: Limits) -> (Received, Execution, u
             && t >= at
         {
             appeared = true;
-            e.rollback_to(t - (c.obstacle_rollback.min(c.segment) as f64) * DT);
+            let back = e.rollback_to(t - (c.obstacle_rollback.min(c.segment) as f64) * DT);
             // Right in front: ahead on the way to the goal.
             let x = &got.x[got.x.len() - 3..];
             let centre: Vec<f64> = (0..3).map(|i| x[i] + 0.3 * (e.motion().goal[i] - x[i])).collect();
             let o = ellipsoid("ball", &centre, &[c.obstacle_radius; 3]);
             e.set_obstacles([(&o, 0.0)]).unwrap();
+            got.appeared = Some(((back / DT).round() as usize, centre, c.obstacle_radius));
         }
     }
     (got, e, last_goal_from)
@@ -261,11 +266,13 @@ fn case() -> impl Strategy<Value = Case> {
             0.03f64..0.15,
         ),
         (0usize..30, 5usize..60, any::<bool>(), prop::option::of(0.0f64..40.0), 0usize..3, 0usize..30),
+        prop_oneof![Just(0.0), 0.005f64..0.03],
     )
         .prop_map(
             |(
                 (goal, new_goal, tau, change_at, obstacle_at, obstacle_radius),
                 (rollback, segment, coarse, alpha, profile, obstacle_rollback),
+                margin,
             )| Case {
                 goal,
                 new_goal,
@@ -279,6 +286,7 @@ fn case() -> impl Strategy<Value = Case> {
                 alpha,
                 profile,
                 obstacle_rollback,
+                margin,
             },
         )
 }
@@ -312,6 +320,37 @@ proptest! {
         prop_assert!(reported <= l.max_jerk, "the handed-out accelerations jump: {reported} m/s³");
     }
 
+    /// The same streams with a safety distance: where the obstacle appeared more than a braking distance beyond the
+    /// margin (and the robot could stop), no point the robot keeps comes closer to its true shape than the margin.
+    #[test]
+    fn an_obstacle_that_appears_beyond_braking_is_kept_at_the_margin(c in case()) {
+        let c = Case { margin: c.margin.max(0.005), obstacle_at: Some(c.obstacle_at.unwrap_or(0.3)), ..c };
+        let l = PROFILES[c.profile];
+        let (got, _, _) = stream(&c, l);
+        let Some((from, centre, radius)) = got.appeared.clone() else { return Ok(()) };
+        let clearance = |k: usize| dist(&got.x[k * 3..k * 3 + 3], &centre) - radius;
+        // The state where it appeared, as the robot kept it: the braking distance's bound from there.
+        let k = from.saturating_sub(1).max(2);
+        let v = dist(&got.x[k * 3..k * 3 + 3], &got.x[(k - 1) * 3..k * 3]) / DT;
+        let a = (0..3)
+            .map(|i| (got.x[k * 3 + i] - 2.0 * got.x[(k - 1) * 3 + i] + got.x[(k - 2) * 3 + i]) / (DT * DT))
+            .map(|x| x * x)
+            .sum::<f64>()
+            .sqrt();
+        let (am, jm) = (l.max_acceleration, l.max_jerk);
+        let vp = v + a * a / (2.0 * jm);
+        let braking = vp * a / jm + vp * vp / (2.0 * am) + vp * am / (2.0 * jm) + vp * DT;
+        prop_assume!(clearance(k) > c.margin + braking);
+        let n = got.x.len() / 3;
+        let closest = (from..n).map(clearance).fold(f64::INFINITY, f64::min);
+        prop_assert!(
+            closest >= c.margin - 1e-9,
+            "came {closest} m from the ball with a margin of {} m (it appeared {} m away)",
+            c.margin,
+            clearance(k)
+        );
+    }
+
     /// Straight reaches (each learned from a minimum-jerk demonstration of 0.05 to 0.8 m, replayed at tau 0.05 to
     /// 2 s) at the three profiles: never past the goal by more than max(1 mm, 0.5 % of the reach).
     #[test]
@@ -336,6 +375,7 @@ proptest! {
             alpha: None,
             profile,
             obstacle_rollback: 0,
+            margin: 0.0,
         };
         let (got, e, _) = stream_of(&reach_of(goal, 1.0), &c, PROFILES[profile]);
         let (past, reach) = overshoot(&got, 0, &e.motion().goal);

@@ -100,6 +100,7 @@ impl MotionServiceImpl {
         }
         run.execution.set_tool(r.tool)?;
         run.execution.set_limits(r.in_force.limits, r.chart.is_some())?;
+        run.execution.set_margin(r.in_force.margin)?;
         run.execution.set_goal_filter(r.goal_filter_alpha)?;
         Ok(run)
     }
@@ -547,6 +548,7 @@ impl MotionService for MotionServiceImpl {
         let mut run = ServedRun::new(primitive, motion, members, avoidance, cfg.stepping, history_len(&cfg))?;
         run.execution.set_goal_tolerance(goal_tolerance).map_err(ServerError::from)?;
         run.execution.set_limits(in_force.limits, false).map_err(ServerError::from)?;
+        run.execution.set_margin(in_force.margin).map_err(ServerError::from)?;
         run.execution.set_goal_filter(goal_filter_alpha).map_err(ServerError::from)?;
         run.judge = Judge::new(end_label(req.max_duration_s, &cfg), None);
         let rx = self.spawn(run, cell, cfg, None, &peer, Owner { claim, grant })?;

@@ -30,7 +30,9 @@ pub(crate) fn member_segments(
     };
     // A pose run has one member, the robot owning the position dimensions.
     let mut orientation = Some(std::mem::take(&mut p.orientation));
-    let mut segment = |robot_id: &str, dim: usize, positions, velocities, accelerations| {
+    let clearance = std::mem::take(&mut p.min_clearance);
+    let clearance_of = |m: usize| clearance.get(m).copied().filter(|c| c.is_finite());
+    let mut segment = |robot_id: &str, dim: usize, positions, velocities, accelerations, min_clearance| {
         let o = orientation.take().unwrap_or_default();
         v1::Segment {
             robot_id: robot_id.to_string(),
@@ -50,16 +52,17 @@ pub(crate) fn member_segments(
             orientations: o.q,
             angular_velocities: o.omega,
             angular_accelerations: o.omega_dot,
-            min_clearance: None,
+            min_clearance,
             verdict: None,
             limits: None,
         }
     };
     let mut batch = match e.members() {
-        [m] if m.dims.len() == d => vec![segment(&m.id, d, p.x, p.xd, p.xdd)],
+        [m] if m.dims.len() == d => vec![segment(&m.id, d, p.x, p.xd, p.xdd, clearance_of(0))],
         members => members
             .iter()
-            .map(|m| {
+            .enumerate()
+            .map(|(mi, m)| {
                 let member_columns = |v: &[f64]| -> Vec<f64> {
                     let mut out = Vec::with_capacity(n * m.dims.len());
                     for row in v.chunks_exact(d) {
@@ -73,6 +76,7 @@ pub(crate) fn member_segments(
                     member_columns(&p.x),
                     member_columns(&p.xd),
                     member_columns(&p.xdd),
+                    clearance_of(mi),
                 )
             })
             .collect(),

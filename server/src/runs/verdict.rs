@@ -28,6 +28,8 @@ pub(crate) struct Judge {
     clearances: Vec<(f64, f64)>,
     /// The status of the last stretch.
     last_status: Option<v1::SegmentStatus>,
+    /// The last stretch braked, or held the robot, before the safety distance.
+    blocked: bool,
     /// How the run's time is bounded, for the reason of a run that ran out of it ("at 3 tau").
     end_label: String,
     /// A pose run: the chart of its orientation dimensions (for the angle to the goal orientation).
@@ -118,6 +120,7 @@ impl Judge {
         if p.limit == LimitAction::Braking {
             self.braking.push(p.start_time);
         }
+        self.blocked = p.limit == LimitAction::Blocked;
         self.last_status = Some(status);
     }
 
@@ -212,7 +215,7 @@ pub(crate) fn verdict(e: &Execution, judge: &Judge, batch: &[v1::Segment], endin
         (O::GoalReached, format!("reached the goal (at rest within the tolerance since t = {since:.3} s)"))
     } else if ending == Ending::Stopped {
         (O::Stopped, format!("stopped on request at t = {end:.3} s, {short}"))
-    } else if judge.last_status == Some(v1::SegmentStatus::Blocked) {
+    } else if judge.blocked || judge.last_status == Some(v1::SegmentStatus::Blocked) {
         (O::Blocked, format!("held before an obstacle's safety distance until the end, {short} {label}"))
     } else if let Some(&(since, _)) = judge.stalls.last().filter(|_| e.at_rest()) {
         (
