@@ -9,6 +9,7 @@
 //! | what `plan` and `stream` replay, and the motion message it makes | `motion` |
 //! | `scene put`, `delete`, `list`, and how an update travels | `scene` |
 //! | `robot put`, `show`, `delete` | `robot` |
+//! | `stream`'s schedule of changes: `--goal-at`, `--tau-at`, `--stop-at` | `schedule` |
 //! | TLS and the bearer token | `connect` |
 //! | values clap does not parse on its own: vectors, positive numbers, avoidance | `values` |
 
@@ -19,6 +20,7 @@ mod motion;
 mod robot;
 mod scenario;
 mod scene;
+mod schedule;
 mod values;
 
 pub use self::command_line::Cli;
@@ -29,6 +31,7 @@ pub(crate) use self::motion::{MotionArgs, PlanArgs, StreamArgs};
 pub(crate) use self::robot::RobotCommand;
 pub(crate) use self::scenario::ScenarioCommand;
 pub(crate) use self::scene::{SceneCommand, Via};
+pub(crate) use self::schedule::{GoalAt, TauAt, finite_number, positive_number};
 // The command line's tests compare the vectors they parse.
 #[cfg(test)]
 pub(crate) use self::values::Vector;

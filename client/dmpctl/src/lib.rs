@@ -9,6 +9,7 @@
 //! | `info`, `stats`, `health` and the server's warnings | `server_info` |
 //! | the warnings of a run counted by kind, for its summary | `warning_tally` |
 //! | the figure of `plan` and `stream` | `server_plot` |
+//! | changes during a `stream`: its schedule and its stdin commands | `stream_controls` |
 //! | what a plan or stream reported beside its setpoints: events, limits in force, clearances | `run_record` |
 //! | `robot put`, `show`, `delete`: a robot's record | `robot_commands` |
 //! | `scenario run --server`: the offline experiment computed by the server | [`scenario_through_server`] |
@@ -51,6 +52,7 @@ pub mod scenario_through_server;
 mod server_commands;
 mod server_info;
 mod server_plot;
+mod stream_controls;
 mod tools;
 mod warning_tally;
 

@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::time::Duration;
 
-use dmp_client::grpc::{DmpClient, record_primitive};
+use dmp_client::grpc::{DmpClient, SessionSender, record_primitive};
 use dmp_client::setpoints::Setpoints;
 use dmp_client::zenoh_pub::ObstaclePublisher;
 use dmp_proto::keys::obstacle_key;
@@ -20,6 +20,7 @@ use crate::outputs::{to_json, trajectory_csv, write_file};
 use crate::primitive_json::record_json;
 use crate::scenario_file::load_scenario;
 use crate::server_info::print_warnings;
+use crate::stream_controls::{Command, Schedule, read_stdin};
 
 /// How long `scene ... --via zenoh` waits for the server's subscriber.
 pub(crate) const ZENOH_SUBSCRIBER_WAIT: Duration = Duration::from_secs(5);
@@ -304,7 +305,16 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
         integration_tolerance: 0.0,
         take_over: false,
     };
-    let mut segments = client.execute(request).await?;
+    let mut schedule = Schedule::new(&a.goal_at, &a.tau_at, a.stop_at);
+    // Changes need a session; a stream without any is the plain Execute call.
+    let (session, mut segments) = if schedule.is_empty() && !a.stdin {
+        (None, client.execute(request).await?)
+    } else {
+        let (sender, segments) = client.session(request).await?.into_parts();
+        (Some(sender), segments)
+    };
+    let mut typed = if a.stdin { Some(read_stdin()) } else { None };
+    let mut stopped = false;
     let mut s = Setpoints::new();
     let mut interrupted = false;
     let mut stale = false;
@@ -338,8 +348,22 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
                     arrived = seg.goal_reached_time;
                     s.push(&seg)?;
                     versions.see(&seg);
+                    if let Some(session) = &session {
+                        for (at, c) in schedule.due(seg.start_time) {
+                            progress.println(&format!("dmpctl: at t = {at} s (segment at {:.4} s): {}", seg.start_time, c.words()));
+                            stopped |= c == Command::Stop;
+                            send_command(session, &c).await;
+                        }
+                    }
                 }
             },
+            Some(c) = async { typed.as_mut()?.recv().await }, if typed.is_some() => {
+                if let Some(session) = &session {
+                    progress.println(&format!("dmpctl: from stdin: {}", c.words()));
+                    stopped |= c == Command::Stop;
+                    send_command(session, &c).await;
+                }
+            }
             _ = &mut ctrl_c => {
                 interrupted = true;
                 break;
@@ -347,6 +371,7 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
         }
     }
     drop(segments);
+    drop(session);
     let status = match s.last_status() {
         None => "none".to_string(),
         Some(v1::SegmentStatus::GoalReached) => {
@@ -381,9 +406,17 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
         limits_words(versions.limits.as_ref()),
         a.out.join("trajectory.csv").display()
     );
-    // Ctrl-C is a stop the user asked for: how the run would have ended is not judged, what it did is.
-    let mut problems =
-        if interrupted { Vec::new() } else { verdict_problems(verdict.as_ref(), a.allow_collision) };
+    // Ctrl-C and a stop command are stops the user asked for: how the run would have ended is not judged, what it
+    // did is.
+    let asked_to_stop = stopped
+        && verdict
+            .as_ref()
+            .is_some_and(|v| v.outcome == v1::Outcome::Stopped as i32 && v.collisions.is_empty());
+    let mut problems = if interrupted || asked_to_stop {
+        Vec::new()
+    } else {
+        verdict_problems(verdict.as_ref(), a.allow_collision)
+    };
     if (interrupted || verdict.is_none()) && collision_segments > 0 && !a.allow_collision {
         problems.push(format!(
             "{collision_segments} segments in COLLISION (--allow-collision if it is meant to)"
@@ -393,6 +426,13 @@ pub(crate) async fn stream(client: &DmpClient, a: &StreamArgs) -> Result<String,
         problems.push(format!("{late} late setpoints"));
     }
     gate(line, problems)
+}
+
+/// Sends a change to the running stream; one that cannot be sent (the run has just ended) is said on stderr.
+async fn send_command(session: &SessionSender, c: &Command) {
+    if let Err(e) = c.send(session).await {
+        eprintln!("dmpctl: `{}` not sent: {e}", c.words());
+    }
 }
 
 /// The wall clock, Unix seconds.

@@ -7,6 +7,7 @@ use clap::Args;
 use dmp_proto::avoidance::avoidance_to_proto;
 use dmp_proto::v1;
 
+use super::schedule::{GoalAt, TauAt, stop_time};
 use super::values::{Vector, parse_avoidance, positive};
 
 /// What to replay and how (shared by `plan` and `stream`).
@@ -144,4 +145,17 @@ pub(crate) struct StreamArgs {
     /// No line per segment: only warnings, problems and the summary.
     #[arg(long)]
     pub(crate) quiet: bool,
+    /// At the run's time T (seconds), change the goal to X,Y,...; repeatable.
+    #[arg(long = "goal-at", value_name = "T=X,Y[,Z]", allow_hyphen_values = true)]
+    pub(crate) goal_at: Vec<GoalAt>,
+    /// At the run's time T (seconds), change tau (larger is slower); repeatable.
+    #[arg(long = "tau-at", value_name = "T=TAU")]
+    pub(crate) tau_at: Vec<TauAt>,
+    /// At the run's time T (seconds), stop: decelerate to rest and end the run.
+    #[arg(long = "stop-at", value_name = "T", value_parser = stop_time)]
+    pub(crate) stop_at: Option<f64>,
+    /// Read commands from stdin during the stream, one a line: `goal X Y [Z]`, `tau T`, `pause`, `resume`,
+    /// `stop`; a bad line is reported and ignored.
+    #[arg(long)]
+    pub(crate) stdin: bool,
 }
