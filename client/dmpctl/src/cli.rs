@@ -106,8 +106,8 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
         Command::Delete { robot, name } => server_commands::delete(&connect().await?, robot, name).await,
         Command::Plan(a) => server_commands::plan(&connect().await?, a).await,
         Command::Stream(a) => server_commands::stream(&connect().await?, a).await,
-        Command::Scene(SceneCommand::Put { via, .. }) => {
-            server_commands::scene_put(connect, &zenoh, &obstacles, *via).await
+        Command::Scene(SceneCommand::Put { via, wait, .. }) => {
+            server_commands::scene_put(connect, &zenoh, &obstacles, *via, *wait).await
         }
         Command::Scene(SceneCommand::Delete { id, via }) => {
             server_commands::scene_delete(connect, &zenoh, id, *via).await

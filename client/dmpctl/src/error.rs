@@ -68,6 +68,9 @@ pub enum DmpctlError {
         /// What went wrong, one entry each.
         problems: Vec<String>,
     },
+    /// An update published over Zenoh did not show in the server's scene (the message names the obstacle and why).
+    #[error("{0}")]
+    NotApplied(String),
     /// The command was interrupted (Ctrl-C) after cleaning up what it had stored (`dmpctl` exits with 130).
     #[error("interrupted{}", if cleaned.is_empty() { String::new() } else { format!(" ({cleaned})") })]
     Interrupted {
@@ -88,6 +91,7 @@ impl DmpctlError {
             | DmpctlError::Plot(_)
             | DmpctlError::Problems { .. }
             | DmpctlError::Interrupted { .. }
+            | DmpctlError::NotApplied(_)
             | DmpctlError::Unhealthy(_) => false,
         }
     }

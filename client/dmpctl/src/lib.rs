@@ -13,6 +13,7 @@
 //! | what a plan or stream reported beside its setpoints: events, limits in force, clearances | `run_record` |
 //! | `robot put`, `show`, `delete`: a robot's record | `robot_commands` |
 //! | `scenario run --server`: the offline experiment computed by the server | [`scenario_through_server`] |
+//! | `scene put --via zenoh` confirmed by the server's scene | `scene_confirm` |
 //! | where a command acts: its cell and Zenoh endpoints, its server found over Zenoh | `place` |
 //! | the tools with robots of their own (`sim`, `load`, `scenario run --server`): clean-up on Ctrl-C | `tools` |
 //! | offline runs and timing | [`offline`] |
@@ -49,6 +50,7 @@ mod robot_commands;
 mod run_record;
 pub mod scenario_file;
 pub mod scenario_through_server;
+mod scene_confirm;
 mod server_commands;
 mod server_info;
 mod server_plot;

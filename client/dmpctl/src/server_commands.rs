@@ -19,6 +19,7 @@ use crate::error::DmpctlError;
 use crate::outputs::{to_json, trajectory_csv, write_file};
 use crate::primitive_json::record_json;
 use crate::scenario_file::load_scenario;
+use crate::scene_confirm::Confirmation;
 use crate::server_info::print_warnings;
 use crate::stream_controls::{Command, Schedule, read_stdin};
 
@@ -474,6 +475,7 @@ pub(crate) async fn scene_put<F: Future<Output = Result<DmpClient, DmpctlError>>
     z: &ZenohArgs,
     obstacles: &[JsonObstacle],
     via: Via,
+    wait_s: f64,
 ) -> Result<String, DmpctlError> {
     let mut lines = Vec::with_capacity(obstacles.len());
     match via {
@@ -485,12 +487,26 @@ pub(crate) async fn scene_put<F: Future<Output = Result<DmpClient, DmpctlError>>
             }
         }
         Via::Zenoh => {
+            // The watch opens first: a change that comes before it was open would be missed.
+            let confirmation = if wait_s > 0.0 {
+                let wait = Duration::try_from_secs_f64(wait_s)
+                    .map_err(|_| DmpctlError::argument("--wait-s", "too long"))?;
+                Some(Confirmation::open(connect().await?, wait).await?)
+            } else {
+                None
+            };
             let p = publisher(z).await?;
             for o in obstacles {
                 p.put_obstacle(o).await?;
                 lines.push(format!("published `{}` on {}", o.spec.id, obstacle_key(&z.cell, &o.spec.id)));
             }
-            p.close().await?;
+            if let Some(c) = confirmation {
+                let version = c.wait(obstacles).await;
+                p.close().await?;
+                lines.push(format!("the server's scene shows them: scene version {}", version?));
+            } else {
+                p.close().await?;
+            }
         }
     }
     Ok(lines.join("\n"))

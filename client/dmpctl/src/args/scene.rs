@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::{Subcommand, ValueEnum};
 
 use super::values::non_negative;
+use crate::scene_confirm::DEFAULT_WAIT_S;
 
 /// How an obstacle update travels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -29,6 +30,10 @@ pub(crate) enum SceneCommand {
         /// Seconds after which the obstacles expire (replaces the file's `ttl_s`; 0: never). `--ttl` is an alias.
         #[arg(long = "ttl-s", alias = "ttl", value_parser = non_negative, allow_hyphen_values = true)]
         ttl: Option<f64>,
+        /// With `--via zenoh`: how long to wait, seconds, for the server's scene (watched over gRPC) to show each
+        /// obstacle; one that does not is an error naming it. 0 publishes without confirming.
+        #[arg(long = "wait-s", value_name = "S", value_parser = non_negative, default_value_t = DEFAULT_WAIT_S)]
+        wait: f64,
     },
     /// Remove an obstacle.
     Delete {
