@@ -83,15 +83,17 @@ impl Limits {
     };
 
     /// The KUKA youBot's omnidirectional base: top speed about 0.8 m/s (KUKA's youBot data sheet, "base: speed
-    /// 0.8 m/s"). KUKA gives no acceleration or jerk; 1 m/s² and 10 m/s³ are the project's working figures (a
-    /// mecanum base on a smooth floor), and its yaw rate is left unlimited by the profile.
+    /// 0.8 m/s"). KUKA gives no acceleration, jerk or yaw rate; 1 m/s², 10 m/s³ and a yaw of 1.5 rad/s, 3 rad/s²,
+    /// 30 rad/s³ are the project's working figures (a mecanum base on a smooth floor: at 0.8 m/s on its wheels'
+    /// 0.47 m diagonal, turning on the spot at 1.5 rad/s drives a wheel at about 0.35 m/s), to be replaced by
+    /// measured ones.
     pub const YOUBOT_BASE: Self = Self {
         max_speed: 0.8,
         max_acceleration: 1.0,
         max_jerk: 10.0,
-        max_angular_speed: 0.0,
-        max_angular_acceleration: 0.0,
-        max_angular_jerk: 0.0,
+        max_angular_speed: 1.5,
+        max_angular_acceleration: 3.0,
+        max_angular_jerk: 30.0,
     };
 
     /// The profile of a robot kind by name (`panda`, `dvrk_psm`, `youbot_base`).
