@@ -281,6 +281,9 @@ impl SceneUpdater {
     fn refuse(&self, sample: &Sample, reason: ServerError) {
         let count = self.malformed.fetch_add(1, Ordering::Relaxed) + 1;
         warn!(key = %sample.key_expr(), %reason, malformed_payloads = count, "zenoh payload refused");
+        // A sample names no identity (see `revocation`): the audit line names the key.
+        let reason = format_args!("{}: {reason}", sample.key_expr());
+        crate::access::audit::refused(crate::access::audit::ZENOH_PEER, "zenoh publish", &reason);
     }
 }
 
@@ -296,6 +299,8 @@ pub(crate) struct ZenohSide {
     pub robots: RobotBus,
     /// What the session listens on (empty without Zenoh).
     pub locators: Vec<String>,
+    /// Audits the Zenoh peers a reload of the access file revoked ([`revocation`]); none on an open server.
+    revocation: Option<JoinHandle<()>>,
 }
 
 impl ZenohSide {
@@ -317,22 +322,34 @@ impl ZenohSide {
                 bridge: None,
                 robots: RobotBus::new(None),
                 locators: Vec::new(),
+                revocation: None,
             });
         }
-        let access = access.current();
+        let mut reloads = access.reloads();
+        let access = reloads.borrow_and_update().clone();
         let security = Security { config: &config.security, access: access.as_deref() };
         let session = open_secured_session(&config.zenoh, &security).await?;
+        // Zenoh's access control is the one of the file in force now, whatever a reload brings later.
+        let revocation = match &access {
+            Some(opened) => {
+                Some(revocation::spawn(&session, opened.clone(), reloads, shutdown.child_token()).await?)
+            }
+            None => None,
+        };
         let bridge =
             ZenohBridge::start(session.clone(), cells.clone(), clock, admission.clone(), shutdown.clone())
                 .await?;
         let locators = locators(&session).await;
         let robots = RobotBus::new(Some((session.clone(), config.defaults.robot_state_period_s)))
             .mirroring(cells.clone());
-        Ok(Self { session: Some(session), bridge: Some(bridge), robots, locators })
+        Ok(Self { session: Some(session), bridge: Some(bridge), robots, locators, revocation })
     }
 
     /// Closes the bridge, then the session.
     pub(crate) async fn close(self) {
+        if let Some(r) = self.revocation {
+            r.abort();
+        }
         if let Some(b) = self.bridge {
             b.close().await;
         }
@@ -454,5 +471,6 @@ impl ZenohBridge {
 
 pub(crate) mod catch_up;
 pub(crate) mod reachability;
+pub(crate) mod revocation;
 #[cfg(test)]
 mod tests;

@@ -2,11 +2,13 @@
 //! client certificate, each with a role and the cells and robots it acts on. Every gRPC request is authenticated
 //! by one layer ([`crate::grpc::authentication`]) before any handler runs, and authorised by its handler with the [`Action`] it
 //! performs; streams are authorised again whenever the file is reloaded (SIGHUP), and end with PERMISSION_DENIED
-//! once it no longer allows them. Every change is logged on the tracing target `audit` with its identity.
+//! once it no longer allows them. Every change is logged on the tracing target `audit` with its identity, and so is
+//! every refused attempt, rate-limited ([`audit`]).
 //!
 //! Without an access file the server is open: every caller is `anonymous` with the admin role (the server then
 //! listens on loopback only, unless told `--insecure`).
 
+pub(crate) mod audit;
 pub(crate) mod credential;
 pub(crate) mod exposure;
 pub(crate) mod file;
@@ -61,8 +63,13 @@ impl Caller {
         self.identity.as_ref().map_or(Role::Admin, |i| i.role)
     }
 
-    /// Whether it may do `action`; PERMISSION_DENIED naming the identity and the action if not.
+    /// Whether it may do `action`; PERMISSION_DENIED naming the identity and the action if not, audited.
     pub(crate) fn check(&self, action: &Action<'_>) -> Result<(), ServerError> {
+        self.allows(action).inspect_err(|e| audit::refused(self.name(), action.kind(), e))
+    }
+
+    /// [`Caller::check`] without the audit line (a stream's check at a reload is audited as the stream's end).
+    fn allows(&self, action: &Action<'_>) -> Result<(), ServerError> {
         match &self.identity {
             None => Ok(()),
             Some(i) if role::allows(i.role, &i.scope, action) => Ok(()),
@@ -85,7 +92,7 @@ impl Caller {
         };
         match again {
             Some(i) => {
-                Caller { identity: Some(i.clone()), credential: self.credential.clone() }.check(action)
+                Caller { identity: Some(i.clone()), credential: self.credential.clone() }.allows(action)
             }
             None => Err(ServerError::PermissionDenied(format!(
                 "identity `{}` is no longer in the access file: it may not {}",
@@ -133,6 +140,11 @@ impl AccessControl {
         self.path.is_some()
     }
 
+    /// Follows the reloads: the identities in force now, and every change.
+    pub(crate) fn reloads(&self) -> watch::Receiver<Option<Arc<Access>>> {
+        self.current.subscribe()
+    }
+
     /// The identities in force (None on an open server).
     pub(crate) fn current(&self) -> Option<Arc<Access>> {
         self.current.borrow().clone()
@@ -163,6 +175,10 @@ impl AccessControl {
         token: Option<&str>,
         common_name: Option<&str>,
     ) -> Result<Caller, ServerError> {
+        self.identify(token, common_name).inspect_err(|e| audit::refused(UNAUTHENTICATED, "authenticate", e))
+    }
+
+    fn identify(&self, token: Option<&str>, common_name: Option<&str>) -> Result<Caller, ServerError> {
         let Some(access) = self.current() else { return Ok(Caller::open()) };
         if let Some(token) = token {
             let d = credential::digest(token);
@@ -186,6 +202,9 @@ impl AccessControl {
         ))
     }
 }
+
+/// The identity the audit log names a caller that proved none by.
+pub(crate) const UNAUTHENTICATED: &str = "unauthenticated";
 
 /// What a long request (a stream, a watch) was allowed to do, checked again at every reload of the access file.
 pub(crate) struct Grant {
@@ -216,10 +235,12 @@ impl Grant {
         }
     }
 
-    /// Checks again if the file was reloaded since the last check (for loops that do not wait).
+    /// Checks again if the file was reloaded since the last check (for loops that do not wait); a refusal ends
+    /// the request, audited.
     pub(crate) fn check_now(&mut self) -> Result<(), ServerError> {
         let access = self.reloads.borrow_and_update().clone();
         (self.recheck)(&self.caller, access.as_deref())
+            .inspect_err(|e| audit::refused(self.caller.name(), "stream", e))
     }
 }
 
@@ -234,7 +255,7 @@ impl AccessControl {
         let mut reloads = self.current.subscribe();
         // Checked against what is in force now: a reload between the request's authentication and here counts.
         let access = reloads.borrow_and_update().clone();
-        recheck(&caller, access.as_deref())?;
+        recheck(&caller, access.as_deref()).inspect_err(|e| audit::refused(caller.name(), "stream", e))?;
         Ok(Grant { caller, reloads, recheck: Box::new(recheck) })
     }
 
@@ -249,9 +270,13 @@ impl AccessControl {
         };
         match identity {
             Some(i) => Ok(Caller { identity: Some(i.clone()), credential: caller.credential.clone() }),
-            None => Err(ServerError::Unauthenticated(
-                "the credential is no longer in the access file (it was reloaded)".into(),
-            )),
+            None => {
+                let e = ServerError::Unauthenticated(
+                    "the credential is no longer in the access file (it was reloaded)".into(),
+                );
+                audit::refused(caller.name(), "authenticate", &e);
+                Err(e)
+            }
         }
     }
 }

@@ -91,6 +91,21 @@ pub(crate) enum Action<'a> {
 }
 
 impl Action<'_> {
+    /// Its kind, without its robots and cells: what the audit log's refusals are counted by.
+    pub(crate) fn kind(&self) -> &'static str {
+        match self {
+            Action::WritePrimitive { .. } => "write primitive",
+            Action::DeletePrimitive { .. } => "delete primitive",
+            Action::ReadPrimitive { .. } => "read primitive",
+            Action::Plan { .. } => "plan",
+            Action::Execute { .. } => "execute",
+            Action::ChangeScene { .. } => "change scene",
+            Action::ReadScene { .. } => "read scene",
+            Action::Stats => "stats",
+            Action::Reflection => "reflection",
+        }
+    }
+
     /// The action in words, for refusals and the audit log: `execute robot `r1` in cell `a``.
     pub(crate) fn describe(&self) -> String {
         let robots = |rs: &[&str]| match rs {

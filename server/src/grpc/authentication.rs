@@ -1,7 +1,7 @@
 //! The one layer every gRPC request passes before any handler: it finds who calls (a bearer token, else the
 //! verified TLS client certificate) and puts the [`crate::access::Caller`] in the request's extensions for the handlers to
 //! authorise. Health answers everyone (probes carry no credentials); reflection follows the observer role. A
-//! request without a known identity ends here with UNAUTHENTICATED.
+//! request without a known identity ends here with UNAUTHENTICATED, audited ([`crate::access::audit`]).
 //!
 //! It also marks the request's connection active (the idle timeout counts from the last request), and under TLS
 //! lifts the connection's information out of tonic's TLS wrapper, so that the rest of the server finds it the
@@ -14,7 +14,7 @@ use std::task::{Context, Poll};
 
 use tonic::transport::server::{TcpConnectInfo, TlsConnectInfo};
 
-use crate::access::{AccessControl, Action, credential};
+use crate::access::{AccessControl, Action, UNAUTHENTICATED, audit, credential};
 use crate::connections::write_batching::BatchedConnectInfo;
 use crate::error::ServerError;
 
@@ -88,9 +88,13 @@ where
                 // A header that is not a bearer token is refused, never ignored in favour of the certificate.
                 Some(v) => match v.and_then(credential::bearer) {
                     Some(token) => self.access.authenticate(Some(token), None),
-                    None => Err(ServerError::Unauthenticated(
-                        "the `authorization` metadata must be `Bearer <token>`".into(),
-                    )),
+                    None => {
+                        let e = ServerError::Unauthenticated(
+                            "the `authorization` metadata must be `Bearer <token>`".into(),
+                        );
+                        audit::refused(UNAUTHENTICATED, "authenticate", &e);
+                        Err(e)
+                    }
                 },
                 None => self.access.authenticate(None, common_name.as_deref()),
             };

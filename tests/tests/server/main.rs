@@ -3,6 +3,7 @@
 
 mod access;
 mod arrival;
+mod audit_log;
 mod bad_input;
 mod catch_up;
 mod default_limits;
@@ -20,6 +21,8 @@ mod plant_joiner;
 mod poses;
 mod primitives;
 mod python_clients;
+mod refusals;
+mod revocation;
 mod robot_records;
 mod robots;
 mod ros2_bridge;
