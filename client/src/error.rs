@@ -52,7 +52,7 @@ pub enum ClientError {
     },
     /// Zenoh failed (opening the session, publishing), or nobody subscribes.
     #[cfg(feature = "zenoh")]
-    #[error("zenoh: {0}")]
+    #[error("zenoh: {}", without_source_paths(.0))]
     Zenoh(String),
 }
 
@@ -90,6 +90,18 @@ impl ClientError {
     /// The server has no such thing (a primitive, an obstacle).
     pub fn is_not_found(&self) -> bool {
         self.code() == Some(tonic::Code::NotFound)
+    }
+
+    /// A failure of the connection itself rather than an answer of the server: refused, reset, a broken pipe
+    /// (plaintext HTTP/2 against a TLS server fails so). [`crate::tls_probe::https_hint`] tells that case apart.
+    pub fn is_transport_failure(&self) -> bool {
+        match self {
+            ClientError::Connect { .. } => true,
+            ClientError::Status { code, .. } => {
+                matches!(code, tonic::Code::Unavailable | tonic::Code::Unknown | tonic::Code::Internal)
+            }
+            _ => false,
+        }
     }
 }
 
@@ -142,5 +154,46 @@ mod tests {
         .map_err(ClientError::from)
         .unwrap_err();
         assert!(e.is_bad_input() && e.to_string().starts_with("o.bogus"), "{e}");
+    }
+}
+
+/// `message` without the source locations some libraries append to their errors (Zenoh's
+/// `at /root/.cargo/registry/src/.../orchestrator.rs:123.`): a user is not helped by them.
+pub fn without_source_paths(message: &str) -> String {
+    let is_source = |w: &str| {
+        let w = w.trim_end_matches(['.', ',', ')', ']']);
+        w.contains(".cargo/")
+            || w.contains("/rustc/")
+            || (w.contains(".rs:") && (w.contains('/') || w.starts_with("src")))
+    };
+    let words: Vec<&str> = message.split(' ').collect();
+    let mut out: Vec<&str> = Vec::with_capacity(words.len());
+    for (i, w) in words.iter().enumerate() {
+        if is_source(w) {
+            continue;
+        }
+        // The `at` that introduces a location.
+        if *w == "at" && words.get(i + 1).is_some_and(|n| is_source(n)) {
+            continue;
+        }
+        out.push(w);
+    }
+    out.join(" ").trim_end().to_string()
+}
+
+#[cfg(test)]
+mod source_path_tests {
+    use super::*;
+
+    #[test]
+    fn source_locations_are_left_out_of_messages() {
+        let m = "Unable to connect to any of [tcp/127.0.0.1:7447]! at \
+                 /root/.cargo/registry/src/index.crates.io-1949cf8c6b5b557f/zenoh-1.5.0/src/net/runtime/orchestrator.rs:1005.";
+        assert_eq!(without_source_paths(m), "Unable to connect to any of [tcp/127.0.0.1:7447]!");
+        assert_eq!(without_source_paths("failed at src/foo.rs:12: boom"), "failed boom");
+        assert_eq!(
+            without_source_paths("no subscriber of dmp/a/obstacles/**"),
+            "no subscriber of dmp/a/obstacles/**"
+        );
     }
 }

@@ -45,6 +45,24 @@ fn zerr(context: &str) -> impl FnOnce(zenoh::Error) -> ClientError + '_ {
     move |e| ClientError::Zenoh(format!("{context}: {e}"))
 }
 
+/// `opened`, or its error with the reason when a `tcp/` endpoint of `connect` listens with TLS (plaintext against
+/// TLS fails after a timeout, saying only that it could not connect).
+async fn with_tls_hint<T>(opened: Result<T, ClientError>, connect: &[String]) -> Result<T, ClientError> {
+    let Err(ClientError::Zenoh(message)) = opened else { return opened };
+    for endpoint in connect {
+        let Some(addr) = endpoint.strip_prefix("tcp/") else { continue };
+        let addr = addr.split(['#', '?']).next().unwrap_or(addr);
+        if crate::tls_probe::speaks_tls(addr).await {
+            return Err(ClientError::Zenoh(format!(
+                "{addr} listens with TLS (the server's Zenoh is secured), and `{endpoint}` is plaintext: connect \
+                 to tls/{addr} with the CA and a certificate, e.g. --zenoh-config zenoh-perception.json5 as \
+                 `dmp-server access init` writes it ({message})"
+            )));
+        }
+    }
+    Err(ClientError::Zenoh(message))
+}
+
 /// What a publishing peer opens with. With `connect` endpoints, scouting is off, opening fails fast if they cannot
 /// be reached, and only the `listen` endpoints are listened on (none: nothing, a publisher needs no port); without,
 /// multicast scouting finds the server on the LAN and Zenoh's default `listen` applies unless some are given.
@@ -126,7 +144,8 @@ impl ObstaclePublisher {
     /// without, multicast scouting finds the server on the LAN and Zenoh's default `listen` applies unless some
     /// are given.
     pub async fn open(cell: &str, connect: &[String], listen: &[String]) -> Result<Self, ClientError> {
-        Self::open_with(cell, session_config(&publisher_options(connect, listen))?).await
+        let opened = Self::open_with(cell, session_config(&publisher_options(connect, listen))?).await;
+        with_tls_hint(opened, connect).await
     }
 
     /// Opens a session from a stock Zenoh configuration file (JSON5: endpoints, TLS, credentials), as
@@ -149,7 +168,7 @@ impl ObstaclePublisher {
                 .insert_json5("connect/endpoints", &value)
                 .map_err(|e| ClientError::argument("zenoh-connect", e.to_string()))?;
         }
-        Self::open_with(cell, config).await
+        with_tls_hint(Self::open_with(cell, config).await, connect).await
     }
 
     /// Opens a session with a given configuration.

@@ -6,7 +6,9 @@
 
 use std::path::{Path, PathBuf};
 
+use dmp_client::ClientError;
 use dmp_client::grpc::{DEFAULT_SERVER, DmpClient};
+use dmp_client::tls_probe::https_hint;
 use dmp_sim::robots::robot::segments_read;
 
 pub use crate::args::Cli;
@@ -58,19 +60,36 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
         cli.connect.options(std::env::var(TOKEN_ENV).ok(), |w| eprintln!("dmpctl: warning: {w}"))?;
     let default_server = if options.tls.is_some() { "https://127.0.0.1:50051" } else { DEFAULT_SERVER };
     let server = resolve_server(&cli, default_server).await;
+    let result = Box::pin(dispatch_to(&cli, &server, &options)).await;
+    match result {
+        Err(DmpctlError::Client(e)) if e.is_transport_failure() => match https_hint(&server).await {
+            Some(hint) => Err(DmpctlError::Client(ClientError::Connect { url: server, message: hint })),
+            None => Err(DmpctlError::Client(e)),
+        },
+        other => other,
+    }
+}
+
+/// Runs the command against `server`.
+async fn dispatch_to(
+    cli: &Cli,
+    server: &str,
+    options: &dmp_client::connect::ConnectOptions,
+) -> Result<String, DmpctlError> {
+    let server = server.to_string();
     // Local inputs first: a bad file is refused before the server is asked anything.
     let obstacles = match &cli.command {
         Command::Scene(SceneCommand::Put { file, ttl, .. }) => server_commands::read_obstacles(file, *ttl)?,
         _ => Vec::new(),
     };
-    let place = resolve_place(&cli, &server, &options).await?;
+    let place = resolve_place(cli, &server, options).await?;
     let zenoh = ZenohArgs {
         cell: place.zenoh_cell().to_owned(),
         connect: place.zenoh_connect.clone(),
         config_file: cli.zenoh_config.clone(),
     };
     let connect = || async {
-        Ok::<_, DmpctlError>(DmpClient::connect_with(&server, &options).await?.with_cell(place.grpc_cell()))
+        Ok::<_, DmpctlError>(DmpClient::connect_with(&server, options).await?.with_cell(place.grpc_cell()))
     };
     match &cli.command {
         Command::Scenario(ScenarioCommand::Run { file, out, allow_collision, keep }) => match &cli.server {
@@ -128,9 +147,9 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
         Command::Robot(RobotCommand::Delete { id }) => robot_commands::delete(&connect().await?, id).await,
         Command::Load(a) => {
             let run =
-                async { Ok(dmp_sim::load::run_with(a, &server, &place.zenoh_connect, &options).await?) };
+                async { Ok(dmp_sim::load::run_with(a, &server, &place.zenoh_connect, options).await?) };
             let clean_up = async {
-                dmp_sim::load::clean_up(a, &server, &place.zenoh_connect, &options).await?;
+                dmp_sim::load::clean_up(a, &server, &place.zenoh_connect, options).await?;
                 Ok("deleted the robots' primitives and the cells' fixed obstacles".to_string())
             };
             let progress = Progress::new("load");
@@ -143,7 +162,7 @@ async fn dispatch(cli: Cli) -> Result<String, DmpctlError> {
             let cell = place.zenoh_cell();
             let run = async {
                 let sim =
-                    dmp_sim::robots::run_sim(a, &server, &options, cell, &place.zenoh_connect, zenoh_config);
+                    dmp_sim::robots::run_sim(a, &server, options, cell, &place.zenoh_connect, zenoh_config);
                 Ok(sim.await?)
             };
             let clean_up = async {

@@ -43,6 +43,9 @@ pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstrati
     let mut q_columns: Option<[usize; 4]> = None;
     let mut width = None;
     if let Some(&(n, first)) = lines.peek() {
+        if let Some(message) = not_comma_separated(first) {
+            return Err(err(format!("line {n}"), message));
+        }
         let cells: Vec<&str> = first.split(',').map(str::trim).collect();
         if cells[0].parse::<f64>().is_err() {
             lines.next();
@@ -79,7 +82,12 @@ pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstrati
         }
     }
     let (mut t, mut x, mut q) = (Vec::new(), Vec::new(), Vec::new());
+    let mut first_sample = None;
     for (n, line) in lines {
+        first_sample.get_or_insert(n);
+        if let Some(message) = not_comma_separated(line) {
+            return Err(err(format!("line {n}"), message));
+        }
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
         let w = *width.get_or_insert(cells.len());
         if cells.len() != w {
@@ -108,7 +116,57 @@ pub fn parse_demonstration_csv(text: &str, path: &Path) -> Result<CsvDemonstrati
     if t.len() < 2 {
         return Err(err("(document)".into(), format!("needs at least 2 samples, found {}", t.len())));
     }
+    if let Some(message) = time_unit_problem(&t) {
+        return Err(err(format!("line {}, column 1", first_sample.unwrap_or(1)), message));
+    }
     Ok(CsvDemonstration { t, x, q })
+}
+
+/// A line separated by `;` or tabs rather than commas (a spreadsheet's export in some locales): what to say.
+fn not_comma_separated(line: &str) -> Option<String> {
+    // A `;` is never in a number nor a name; with it, a comma is a decimal comma (`0,5`).
+    let delimiter = if line.contains(';') {
+        "`;`"
+    } else if line.contains(',') {
+        return None;
+    } else if line.contains('\t') {
+        "tabs"
+    } else {
+        return None;
+    };
+    Some(format!(
+        "the delimiter must be a comma; this line is separated by {} (in a spreadsheet, export as CSV with a comma \
+         and a decimal point)",
+        delimiter
+    ))
+}
+
+/// Times in ms, µs or ns since the Unix epoch (the first one between the years 2000 and 2100 in that unit), or
+/// spanning more than a day: what to say. The times must be seconds.
+fn time_unit_problem(t: &[f64]) -> Option<String> {
+    /// 2000-01-01 and 2100-01-01, seconds since the Unix epoch.
+    const EPOCH_SECONDS: std::ops::Range<f64> = 946_684_800.0..4_102_444_800.0;
+    let first = t[0];
+    for (unit, per_second) in [("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9)] {
+        let s = first / per_second;
+        if EPOCH_SECONDS.contains(&s) {
+            let date = humantime::format_rfc3339_seconds(
+                std::time::UNIX_EPOCH + std::time::Duration::from_secs_f64(s),
+            );
+            return Some(format!(
+                "the times look like {unit} since the Unix epoch (the first, {first}, is {date}); give seconds, \
+                 e.g. (t - t0) / {per_second:e}"
+            ));
+        }
+    }
+    let span =
+        t.iter().copied().fold(f64::NEG_INFINITY, f64::max) - t.iter().copied().fold(f64::INFINITY, f64::min);
+    (span > 86_400.0).then(|| {
+        format!(
+            "the times span {span} s, more than a day: give seconds (if they are milliseconds, microseconds or \
+             nanoseconds, divide them by 1e3, 1e6 or 1e9)"
+        )
+    })
 }
 
 /// Reads and parses a CSV demonstration.
@@ -155,5 +213,33 @@ mod tests {
         assert!(parse("t,x1\n0,1\n").unwrap_err().to_string().contains("at least 2 samples"));
         assert!(parse("t\n0\n1\n").is_err());
         assert!(parse("0\n1\n").is_err());
+    }
+
+    #[test]
+    fn a_semicolon_separated_file_is_told_the_delimiter_must_be_a_comma() {
+        let e = parse("t;x1;x2\n0;0;0\n1;1;1\n").unwrap_err().to_string();
+        assert!(
+            e.contains("line 1") && e.contains("the delimiter must be a comma") && e.contains("`;`"),
+            "{e}"
+        );
+        let e = parse("# exported\n0;0,5\n1;1,5\n").unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("`;`"), "{e}");
+        let e = parse("t,x1\n0,0\n1;1\n").unwrap_err().to_string();
+        assert!(e.contains("line 3") && e.contains("`;`"), "{e}");
+        let e = parse("t\tx1\n0\t0\n1\t1\n").unwrap_err().to_string();
+        assert!(e.contains("separated by tabs"), "{e}");
+    }
+
+    #[test]
+    fn times_in_nanoseconds_since_the_epoch_are_named_as_such() {
+        let e = parse("t,x1\n1795000000000000000,0\n1795000000010000000,1\n").unwrap_err().to_string();
+        assert!(e.contains("line 2, column 1") && e.contains("nanoseconds since the Unix epoch"), "{e}");
+        assert!(e.contains("2026-11-18"), "{e}");
+        let e = parse("t,x1\n1795000000000000,0\n1795000000010000,1\n").unwrap_err().to_string();
+        assert!(e.contains("microseconds since the Unix epoch"), "{e}");
+        let e = parse("t,x1\n0,0\n2000000,1\n").unwrap_err().to_string();
+        assert!(e.contains("more than a day"), "{e}");
+        // Seconds since the epoch are seconds.
+        assert!(parse("t,x1\n1795000000.0,0\n1795000001.0,1\n").is_ok());
     }
 }

@@ -20,6 +20,7 @@
 //! | reading scenario files, errors at the field | [`scenario_file`] |
 //! | obstacles from JSON (`scene put`, a scenario's), one error style `FILE:LINE:COLUMN: FIELD: REASON` | `obstacle_file` |
 //! | the line and column of a value at a field path | `json_position` |
+//! | `NaN` and `Infinity` in a JSON file, found and named | `json_non_finite` |
 //! | demonstrations from CSV | [`demo_csv`] |
 //! | the JSON printed of a stored primitive | `primitive_json` |
 //! | output files | `outputs` |
@@ -39,6 +40,7 @@ mod args;
 pub mod cli;
 pub mod demo_csv;
 mod error;
+mod json_non_finite;
 mod json_position;
 mod obstacle_file;
 pub mod offline;

@@ -5,6 +5,7 @@
 use std::process::ExitCode;
 
 use clap::Parser;
+use dmp_client::without_source_paths;
 use dmpctl::cli::{Cli, run};
 
 /// The load generator decodes a hundred thousand segments a second (a few vectors each): mimalloc makes that
@@ -21,11 +22,13 @@ fn main() -> ExitCode {
         }
         Err(dmpctl::DmpctlError::Problems { summary, problems }) => {
             println!("{summary}");
-            eprintln!("dmpctl: the run completed with problems: {}", problems.join("; "));
+            let problems = without_source_paths(&problems.join("; "));
+            eprintln!("dmpctl: the run completed with problems: {problems}");
             ExitCode::from(3)
         }
         Err(e) => {
-            eprintln!("dmpctl: {e}");
+            // No source location of a library reaches the user.
+            eprintln!("dmpctl: {}", without_source_paths(&e.to_string()));
             ExitCode::from(e.exit_code())
         }
     }

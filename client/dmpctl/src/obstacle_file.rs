@@ -8,6 +8,7 @@ use dmp_proto::obstacle_json::JsonObstacle;
 use serde_json::Value;
 
 use crate::error::DmpctlError;
+use crate::json_non_finite::json_error;
 use crate::json_position::locate;
 
 /// A parse error at `field` of the file at `path`, pointing at the value's line and column in `text` when found.
@@ -23,12 +24,7 @@ pub(crate) fn obstacles_of(
     path: &Path,
     ttl_s: Option<f64>,
 ) -> Result<Vec<JsonObstacle>, DmpctlError> {
-    let value: Value = serde_json::from_str(text).map_err(|e| DmpctlError::Parse {
-        path: path.to_path_buf(),
-        position: Some((e.line(), e.column())),
-        field: "(document)".into(),
-        message: without_position(&e.to_string()),
-    })?;
+    let value: Value = serde_json::from_str(text).map_err(|e| json_error(path, text, &e))?;
     let out = match value.get("obstacles") {
         Some(Value::Array(list)) => listed(text, path, list, ttl_s)?,
         Some(_) => return Err(error_at(path, text, "obstacles".into(), "must be an array".into())),

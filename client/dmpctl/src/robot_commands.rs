@@ -11,6 +11,7 @@ use serde::Deserialize;
 use serde_json::{Value, json};
 
 use crate::error::DmpctlError;
+use crate::json_non_finite::{json_error, non_finite_at};
 use crate::outputs::to_json;
 
 /// `--limits`: a profile name (`panda`, `psm`, `youbot`, or `dvrk_psm`, `youbot_base`) or a JSON file of the six
@@ -44,8 +45,11 @@ pub(crate) fn read_limits(given: &str) -> Result<Limits, DmpctlError> {
     }
     let text = std::fs::read_to_string(path)
         .map_err(|e| DmpctlError::argument("--limits", format!("{}: {e}", path.display())))?;
-    let f: File = serde_json::from_str(&text)
-        .map_err(|e| DmpctlError::argument("--limits", format!("{}: {e}", path.display())))?;
+    let f: File =
+        serde_json::from_str(&text).map_err(|e| match non_finite_at(&text, e.line(), e.column()) {
+            Some(_) => json_error(path, &text, &e),
+            None => DmpctlError::argument("--limits", format!("{}: {e}", path.display())),
+        })?;
     let l = Limits {
         max_speed: f.max_speed,
         max_acceleration: f.max_acceleration,
@@ -76,8 +80,11 @@ pub(crate) fn read_tool(path: &Path) -> Result<v1::Tool, DmpctlError> {
     }
     let text = std::fs::read_to_string(path)
         .map_err(|e| DmpctlError::argument("--tool", format!("{}: {e}", path.display())))?;
-    let f: File = serde_json::from_str(&text)
-        .map_err(|e| DmpctlError::argument("--tool", format!("{}: {e}", path.display())))?;
+    let f: File =
+        serde_json::from_str(&text).map_err(|e| match non_finite_at(&text, e.line(), e.column()) {
+            Some(_) => json_error(path, &text, &e),
+            None => DmpctlError::argument("--tool", format!("{}: {e}", path.display())),
+        })?;
     Ok(v1::Tool {
         shape: Some(v1::Superquadric { semi_axes: f.semi_axes, exponents: f.exponents }),
         offset: f.offset,
