@@ -4,7 +4,7 @@
 //!
 //! | role | keys | messages |
 //! | --- | --- | --- |
-//! | perception | `dmp/<cell>/obstacles/**` of its cells | publish and delete obstacles, answer the server's catch-up queries, see its subscribers |
+//! | perception | `dmp/<cell>/obstacles/**` of its cells | publish and delete obstacles, answer the server's catch-up queries (declaring its queryable on `dmp/*/obstacles/**`, replying only for its cells), see its subscribers |
 //! | planner | `dmp/<cell>/obstacles/**` of its cells; `dmp/<cell>/**` read | the same, and subscribe to its cells |
 //! | observer | `dmp/<cell>/**` of its cells | subscribe and query only |
 //! | server | `dmp/<cell>/**` of its cells; the plant's keys `dmp/@servers/**`, `dmp/@cells/**`, `dmp/@primitives/**` | everything: robot states and primitives are taken only from servers |
@@ -70,6 +70,14 @@ pub(crate) fn access_control(access: &Access) -> Value {
             ingress: (PUBLISH, keys("obstacles/**")),
             egress: (READ, vec!["dmp/*/obstacles/**".into()]),
         };
+        // A node serving its latest obstacles declares one queryable on every cell's (`dmp/*/obstacles/**`, the
+        // expression the server asks): the declaration is allowed for every cell, its replies only for its cells
+        // (a reply is checked on its own key, by `obstacles`).
+        let catch_up = || Grant {
+            what: "catch-up",
+            ingress: (&["declare_queryable"], vec!["dmp/*/obstacles/**".into()]),
+            egress: (&["query"], vec!["dmp/*/obstacles/**".into()]),
+        };
         let read = || Grant { what: "read", ingress: (READ, keys("**")), egress: (SAMPLES, keys("**")) };
         let all =
             |keys: Vec<String>| Grant { what: "all", ingress: (ALL, keys.clone()), egress: (ALL, keys) };
@@ -86,8 +94,8 @@ pub(crate) fn access_control(access: &Access) -> Value {
             // A server of some cells publishes and reads those cells only; `*` gives `dmp/*/**`. Every server
             // takes part in the plant: only servers publish primitives.
             Role::Server => vec![all(keys("**")), plant()],
-            Role::Perception => vec![obstacles(), directory()],
-            Role::Planner => vec![obstacles(), read(), directory()],
+            Role::Perception => vec![obstacles(), catch_up(), directory()],
+            Role::Planner => vec![obstacles(), catch_up(), read(), directory()],
             Role::Observer => vec![read(), directory()],
             Role::Robot => Vec::new(),
         };
@@ -135,7 +143,9 @@ mod tests {
         assert_eq!(rule("eyes:obstacles:ingress")["key_exprs"], json!(["dmp/a/obstacles/**"]));
         assert_eq!(rule("eyes:obstacles:ingress")["messages"], json!(PUBLISH));
         assert_eq!(rule("eyes:obstacles:egress")["messages"], json!(READ));
-        assert_eq!(rules.iter().filter(|r| r["id"].as_str().unwrap().starts_with("eyes:")).count(), 4);
+        assert_eq!(rules.iter().filter(|r| r["id"].as_str().unwrap().starts_with("eyes:")).count(), 6);
+        assert_eq!(rule("eyes:catch-up:ingress")["messages"], json!(["declare_queryable"]));
+        assert_eq!(rule("eyes:catch-up:ingress")["key_exprs"], json!(["dmp/*/obstacles/**"]));
         assert_eq!(rule("eyes:directory:ingress")["messages"], json!(READ));
         assert!(!rule("eyes:directory:ingress")["key_exprs"].to_string().contains("@primitives"));
         // Only servers (and the admin) may publish primitives.

@@ -6,6 +6,7 @@ mod arrival;
 mod audit_log;
 mod bad_input;
 mod catch_up;
+mod catch_up_cells;
 mod default_limits;
 mod forged_versions;
 mod hostile_compute;
