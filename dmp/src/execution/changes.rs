@@ -84,6 +84,7 @@ impl Execution {
             self.integrator.goal_filter_mut().restore(restored.t, &g, &self.motion.goal);
             self.restart_at(&restored);
             self.restore_limiter();
+            self.guard.rollback(restored.t - self.stepping.dt, &self.limiter);
             // The last point handed out is now the one before the restored point.
             match self.history.last() {
                 Some((x, xd)) => {

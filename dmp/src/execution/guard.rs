@@ -27,7 +27,9 @@
 //! An obstacle is checked only when its bounding ball can come within `m` of the brake: with `R` its bounding radius,
 //! `S` a bound on the brake's length (`v_p t_a + v_p² / (2 A) + v_p A / (2 J)`, where `v_p = |v| + |a|² / (2 J)` is
 //! the speed's peak while the acceleration returns to zero in `t_a = |a| / J`) and `T` on its duration, it is
-//! skipped when `|p - c| - R - |w| T > m + S`.
+//! skipped when `|p - c| - R - |w| T > m + S`. Likewise no brake is planned when the exact clearance `d` leaves
+//! room for the brake, `d - S_axes - |w| T >= m`, with `S_axes` the same bound per axis under its share, summed as a
+//! vector: a brake planned later from that point (at a rejection) keeps the margin.
 //!
 //! A robot already within the margin (an obstacle moved or appeared there) is held to its clearance at the last
 //! point handed out instead: it may move away, never closer.
@@ -52,13 +54,20 @@ struct GuardGroup {
     bounds: Bounds,
     otg: Ruckig<0, IgnoreErrorHandler>,
     input: InputParameter<0>,
-    /// The verified brake of the last point handed out (`verified`), or the brake being followed.
+    /// The verified brake of the point handed out at run time `plan_at` (`verified`).
     plan: Trajectory<0>,
+    plan_at: f64,
     verified: bool,
     /// A candidate's brake.
     spare: Trajectory<0>,
-    /// While braking: the time along `plan` of the last point handed out.
-    braking_at: Option<f64>,
+    /// The per-axis bounds `plan` and `spare` were planned with (speed, acceleration, jerk per axis).
+    plan_bounds: Vec<f64>,
+    spare_bounds: Vec<f64>,
+    /// The brake being followed (or last followed), from the state at run time `brake_from`.
+    brake: Trajectory<0>,
+    brake_from: f64,
+    /// The recent brakes, the last one last (at most [`EPISODES`]).
+    episodes: std::collections::VecDeque<Episode>,
     /// Clearance of the last point handed out from the nearest obstacle checked (infinite: none near).
     clearance: f64,
     /// Clearance of the candidate point.
@@ -70,6 +79,19 @@ struct GuardGroup {
     center: Vec<f64>,
     eval: WorldEval,
     halfspaces: Vec<HalfSpace>,
+}
+
+/// Brakes remembered for rollbacks.
+const EPISODES: usize = 64;
+
+/// One brake: from its first point (`since`) to the first point handed out after it (`ended`), planned with
+/// `bounds` per axis. A per-axis time-optimal brake planned again with the same bounds from one of its points goes on
+/// the same way, so a rollback into it plans it again from the point kept.
+#[derive(Debug, Clone)]
+struct Episode {
+    since: f64,
+    ended: Option<f64>,
+    bounds: Vec<f64>,
 }
 
 /// A half-space that holds an obstacle: `n . (y - z - w s) <= 0` at time `s` after the candidate's.
@@ -86,7 +108,7 @@ impl std::fmt::Debug for GuardGroup {
             .field("dims", &self.dims)
             .field("bounds", &self.bounds)
             .field("verified", &self.verified)
-            .field("braking_at", &self.braking_at)
+            .field("episodes", &self.episodes)
             .finish_non_exhaustive()
     }
 }
@@ -106,6 +128,14 @@ pub(super) enum Guarded {
     Clear,
     /// The point is the brake's: the robot is blocked.
     Braking,
+}
+
+/// A bound on how far one axis at speed `v` and acceleration `a` (magnitudes) travels while braking to rest at
+/// acceleration `am` and jerk `jm`: its speed peaks at `v_p = v + a² / (2 jm)` while the acceleration returns to
+/// zero (in `a / jm`), then braking from `v_p` covers `v_p² / (2 am) + v_p am / (2 jm)`.
+fn stopping_distance(v: f64, a: f64, am: f64, jm: f64) -> f64 {
+    let v_p = v + a * a / (2.0 * jm);
+    v_p * a / jm + v_p * v_p / (2.0 * am) + v_p * am / (2.0 * jm)
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -133,9 +163,14 @@ impl Guard {
                     otg: Ruckig::new(Some(n), h),
                     input,
                     plan: Trajectory::new(Some(n)),
+                    plan_at: f64::NEG_INFINITY,
                     verified: false,
                     spare: Trajectory::new(Some(n)),
-                    braking_at: None,
+                    plan_bounds: vec![0.0; 3 * n],
+                    spare_bounds: vec![0.0; 3 * n],
+                    brake: Trajectory::new(Some(n)),
+                    brake_from: 0.0,
+                    episodes: Default::default(),
                     clearance: f64::INFINITY,
                     candidate_clearance: f64::INFINITY,
                     sample: DataArrayOrVec::new(Some(n), 0.0),
@@ -150,16 +185,44 @@ impl Guard {
         Self { margin, groups, h }
     }
 
+    /// Whether the last point handed out was a brake's (braking, or held at rest, before the margin).
+    pub(super) fn is_blocked(&self) -> bool {
+        self.groups.iter().any(|g| g.episodes.back().is_some_and(|e| e.ended.is_none()))
+    }
+
     /// True when there is nothing to guard.
     pub(super) fn is_off(&self) -> bool {
         self.groups.is_empty()
     }
 
-    /// The output restarts (a rollback, new limits or obstacles): no brake is known any more.
+    /// The output restarts (new limits): no brake is known any more.
     pub(super) fn reset(&mut self) {
         for g in &mut self.groups {
             g.verified = false;
-            g.braking_at = None;
+            g.episodes.clear();
+            g.clearance = f64::INFINITY;
+        }
+    }
+
+    /// The run rolled back: the last point kept is at run time `kept`, its state in `limiter`. A brake it was part
+    /// of goes on from it (planned again with the same bounds); from a point that was handed out as a candidate, a
+    /// brake is planned afresh when needed: the one it was checked with.
+    pub(super) fn rollback(&mut self, kept: f64, limiter: &Limiter) {
+        let half = 0.5 * self.h;
+        for g in &mut self.groups {
+            while g.episodes.back().is_some_and(|e| e.since > kept + half) {
+                g.episodes.pop_back();
+            }
+            if let Some(e) = g.episodes.back_mut()
+                && e.ended.is_none_or(|end| kept < end - half)
+            {
+                e.ended = None;
+                let bounds = e.bounds.clone();
+                g.plan_brake(limiter, Some(&bounds));
+                g.brake_from = kept;
+            }
+            // The verified brake belongs to a later point, unless it is the kept one's.
+            g.verified &= (g.plan_at - kept).abs() < half;
             g.clearance = f64::INFINITY;
         }
     }
@@ -185,12 +248,12 @@ impl Guard {
         }
         if clear {
             for g in &mut self.groups {
-                g.accept();
+                g.accept(t);
             }
             return Guarded::Clear;
         }
         for g in &mut self.groups {
-            g.brake_step(x, xd, xdd, limiter, h);
+            g.brake_step(t, x, xd, xdd, limiter, h);
             g.note_clearance(t, x, obstacles, margin);
         }
         Guarded::Braking
@@ -325,13 +388,30 @@ impl GuardGroup {
         if self.halfspaces.is_empty() {
             return true;
         }
-        // The candidate's brake, sampled.
         for (k, &i) in self.dims.iter().enumerate() {
             self.input.current_position[k] = x[i];
             self.input.current_velocity[k] = xd[i];
             self.input.current_acceleration[k] = xdd[i];
         }
         self.set_brake_bounds();
+        self.save_bounds(false);
+        // Every brake from here with these shares stays within `axes` of the candidate (each axis within its own
+        // stopping distance), plus what the obstacles travel: one computed later from it (at a rejection) keeps the
+        // margin as well, so none is planned now.
+        let axes = (0..n)
+            .map(|k| {
+                let (v, a) = (self.input.current_velocity[k].abs(), self.input.current_acceleration[k].abs());
+                let (am, jm) = (self.input.max_acceleration[k], self.input.max_jerk[k]);
+                stopping_distance(v, a, am, jm).powi(2)
+            })
+            .sum::<f64>()
+            .sqrt();
+        let travel = self.halfspaces.iter().map(|hs| norm(&hs.w)).fold(0.0, f64::max) * duration;
+        if d - axes - travel - v_p * h >= required {
+            self.halfspaces.clear();
+            return true;
+        }
+        // The candidate's brake, sampled.
         if !matches!(
             self.otg.calculate(&self.input, &mut self.spare),
             Ok(RuckigResult::Working | RuckigResult::Finished)
@@ -373,47 +453,105 @@ impl GuardGroup {
         );
     }
 
-    /// The candidate is handed out: its brake (if it was computed) becomes the verified one.
-    fn accept(&mut self) {
+    /// The candidate at run time `t` is handed out: its brake (if it was computed) becomes the verified one.
+    fn accept(&mut self, t: f64) {
         if self.halfspaces.is_empty() {
             self.verified = false;
         } else {
             std::mem::swap(&mut self.plan, &mut self.spare);
+            std::mem::swap(&mut self.plan_bounds, &mut self.spare_bounds);
+            self.plan_at = t;
             self.verified = true;
         }
-        self.braking_at = None;
+        if let Some(e) = self.episodes.back_mut().filter(|e| e.ended.is_none()) {
+            e.ended = Some(t);
+        }
         self.clearance = self.candidate_clearance;
     }
 
-    /// Rewrites the group's dimensions of the point with the next point of the brake of the last point handed out.
-    fn brake_step(&mut self, x: &mut [f64], xd: &mut [f64], xdd: &mut [f64], limiter: &Limiter, h: f64) {
-        if !self.verified && self.braking_at.is_none() {
-            // No verified brake (nothing was near at the last point): brake from it now.
-            for (k, &i) in self.dims.iter().enumerate() {
-                let (p, v, a) = limiter.last_state(i);
-                self.input.current_position[k] = p;
-                self.input.current_velocity[k] = v;
-                self.input.current_acceleration[k] = a;
+    /// Copies the per-axis bounds in `self.input` into `plan_bounds` (`to_plan`) or `spare_bounds`.
+    fn save_bounds(&mut self, to_plan: bool) {
+        let n = self.dims.len();
+        let out = if to_plan { &mut self.plan_bounds } else { &mut self.spare_bounds };
+        for k in 0..n {
+            out[3 * k] = self.input.max_velocity[k];
+            out[3 * k + 1] = self.input.max_acceleration[k];
+            out[3 * k + 2] = self.input.max_jerk[k];
+        }
+    }
+
+    /// Plans `brake` from the last point handed out (in `limiter`), with the per-axis `bounds` given (a brake
+    /// planned again) or those of its state (a new one, saved in `plan_bounds`). False when Ruckig finds no plan.
+    fn plan_brake(&mut self, limiter: &Limiter, bounds: Option<&[f64]>) -> bool {
+        for (k, &i) in self.dims.iter().enumerate() {
+            let (p, v, a) = limiter.last_state(i);
+            self.input.current_position[k] = p;
+            self.input.current_velocity[k] = v;
+            self.input.current_acceleration[k] = a;
+        }
+        self.set_brake_bounds();
+        match bounds {
+            Some(b) => {
+                for k in 0..self.dims.len() {
+                    self.input.max_velocity[k] = b[3 * k];
+                    self.input.max_acceleration[k] =
+                        b[3 * k + 1].max(self.input.current_acceleration[k].abs());
+                    self.input.max_jerk[k] = b[3 * k + 2];
+                }
             }
-            self.set_brake_bounds();
-            if self.otg.calculate(&self.input, &mut self.plan).is_err() {
+            None => self.save_bounds(true),
+        }
+        self.otg.calculate(&self.input, &mut self.brake).is_ok()
+    }
+
+    /// Rewrites the group's dimensions of the point at run time `t` with the brake's point there: the brake being
+    /// followed, or else the verified brake of the last point handed out, or else (nothing was near at that point,
+    /// or it had room enough for any brake) one planned from it now.
+    fn brake_step(
+        &mut self,
+        t: f64,
+        x: &mut [f64],
+        xd: &mut [f64],
+        xdd: &mut [f64],
+        limiter: &Limiter,
+        h: f64,
+    ) {
+        let following = self.episodes.back().is_some_and(|e| e.ended.is_none());
+        if !following {
+            let last = t - h;
+            let planned = if self.verified && (self.plan_at - last).abs() < 0.5 * h {
+                std::mem::swap(&mut self.brake, &mut self.plan);
+                self.verified = false;
+                true
+            } else {
+                self.plan_brake(limiter, None)
+            };
+            if !planned {
                 // No plan at all (not expected from a state within the bounds): hold the last position.
                 for &i in &self.dims {
                     let (p, _, _) = limiter.last_state(i);
                     let (p, v, a) = limiter.motion_to(i, p);
                     (x[i], xd[i], xdd[i]) = (p, v, a);
                 }
-                self.braking_at = Some(0.0);
                 return;
             }
+            self.brake_from = last;
+            if self.episodes.len() == EPISODES {
+                self.episodes.pop_front();
+            }
+            self.episodes.push_back(Episode { since: t, ended: None, bounds: self.plan_bounds.clone() });
         }
-        let at = self.braking_at.map_or(h, |s| s + h);
-        self.plan.at_time(at, &mut Some(&mut self.sample), &mut None, &mut None, &mut None, &mut None);
+        self.brake.at_time(
+            t - self.brake_from,
+            &mut Some(&mut self.sample),
+            &mut None,
+            &mut None,
+            &mut None,
+            &mut None,
+        );
         for (k, &i) in self.dims.iter().enumerate() {
             let (p, v, a) = limiter.motion_to(i, self.sample[k]);
             (x[i], xd[i], xdd[i]) = (p, v, a);
         }
-        self.braking_at = Some(at);
-        self.verified = true;
     }
 }

@@ -148,6 +148,12 @@ impl Execution {
         Ok(())
     }
 
+    /// Whether the last point handed out was braking, or held at rest, before the safety distance
+    /// ([`LimitAction::Blocked`]).
+    pub fn is_blocked(&self) -> bool {
+        self.guard.is_blocked()
+    }
+
     /// The safety distance kept.
     pub fn margin(&self) -> f64 {
         self.margin
@@ -185,6 +191,7 @@ impl Execution {
             .map(|(dims, b)| (dims.clone(), generator_bounds(*b, h)))
             .collect();
         self.guard = Guard::new(&positions, self.margin, h);
+        self.guard.reset();
     }
 
     /// The limits kept.
@@ -221,7 +228,6 @@ impl Execution {
         // restarts from it, and goes on giving the points it gave before (a robot that already carried them out
         // sees no change) while they keep the bounds.
         self.tracker.reset(n > 0 && self.history.last().is_some() && self.history.last_generated());
-        self.guard.reset();
     }
 
     /// Keeps the limits at the DMP's point just computed (rewritten in place by the final stage where it does not

@@ -37,6 +37,11 @@ pub(crate) fn advance_cancellable(
         all.stalls.extend(p.stalls);
         all.ignored.extend(p.ignored);
         all.limit = all.limit.max(p.limit);
+        if all.min_clearance.is_empty() {
+            all.min_clearance = p.min_clearance;
+        } else {
+            all.min_clearance.iter_mut().zip(&p.min_clearance).for_each(|(a, b)| *a = a.min(*b));
+        }
         last = p.outcome;
         done += k;
         if n == 0 {

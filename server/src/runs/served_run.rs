@@ -11,7 +11,7 @@ use dmp_proto::v1;
 
 use crate::cells::cell::{ObstacleSet, SeenRobot};
 use crate::error::ServerError;
-use crate::runs::compute::cost::{Avoided, Workload};
+use crate::runs::compute::cost::{Avoided, LIMITED_COST, Workload};
 use crate::runs::verdict::Judge;
 
 /// How a request asked its run to avoid things.
@@ -108,7 +108,9 @@ impl ServedRun {
             // Each member avoids, in its own dimensions, the others of its group and the cell's robots.
             robot_count: (c.members.saturating_sub(1) + cell_robots) * points,
         };
-        Workload::of(self.execution.dim(), c.basis, avoided, self.execution.stepping())
+        let w = Workload::of(self.execution.dim(), c.basis, avoided, self.execution.stepping());
+        // The final stage tracks the DMP where a run keeps limits.
+        if self.execution.limits().is_none() { w } else { w.scaled(LIMITED_COST) }
     }
 
     /// Sets the cell's obstacles (as they are at wall time `now_unix_s`, which is the run's current time) and its

@@ -28,7 +28,7 @@ pub(crate) struct Judge {
     clearances: Vec<(f64, f64)>,
     /// The status of the last stretch.
     last_status: Option<v1::SegmentStatus>,
-    /// The last stretch braked, or held the robot, before the safety distance.
+    /// The last point was braking, or held at rest, before the safety distance.
     blocked: bool,
     /// How the run's time is bounded, for the reason of a run that ran out of it ("at 3 tau").
     end_label: String,
@@ -120,7 +120,7 @@ impl Judge {
         if p.limit == LimitAction::Braking {
             self.braking.push(p.start_time);
         }
-        self.blocked = p.limit == LimitAction::Blocked;
+        self.blocked = e.is_blocked();
         self.last_status = Some(status);
     }
 

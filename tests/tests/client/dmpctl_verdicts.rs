@@ -88,11 +88,22 @@ async fn plan_and_stream_exit_3_on_a_collision_or_a_missed_goal_and_0_at_the_goa
         "{e}"
     );
 
-    // A stream through the wall: exit 3 with the collision, not "last status STOPPED" and 0.
+    // A stream towards the wall at the server's defaults: it brakes before the safety distance and is held there to
+    // the end: exit 3, blocked, no collision.
     let stream = ["stream", "--robot", "r", "--name", "line", "--avoidance", "none", "--out"];
     let mut args = stream.to_vec();
     let out = d("stream");
     args.push(&out);
+    let e = run_at(&url, &args).await.unwrap_err();
+    assert_eq!(e.exit_code(), 3, "{e}");
+    let DmpctlError::Problems { summary, problems } = &e else { panic!("{e}") };
+    assert!(summary.contains("verdict BLOCKED") && !summary.contains("collisions: wall"), "{summary}");
+    assert!(problems.iter().any(|p| p.contains("held before an obstacle's safety distance")), "{problems:?}");
+    // Without limits or margin: through the wall, exit 3 with the collision, not "last status STOPPED" and 0.
+    let mut args = stream.to_vec();
+    let out = d("stream-through");
+    args.push(&out);
+    args.push("--no-limits");
     let e = run_at(&url, &args).await.unwrap_err();
     assert_eq!(e.exit_code(), 3, "{e}");
     let DmpctlError::Problems { summary, problems } = &e else { panic!("{e}") };

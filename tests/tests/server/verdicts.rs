@@ -47,24 +47,43 @@ async fn all_segments(mut stream: dmp_client::grpc::SegmentStream) -> Vec<v1::Se
     out
 }
 
+/// Without avoidance, at the server's default limits and safety distance, a plan towards a wall brakes before the
+/// margin and is held there (BLOCKED, never closer than the margin); with the margin off, it goes through the wall and
+/// the verdict is a collision naming it.
 #[tokio::test(flavor = "multi_thread")]
-async fn a_plan_through_a_wall_without_avoidance_is_a_collision_naming_it() {
+async fn a_plan_through_a_wall_without_avoidance_is_blocked_before_it_or_a_collision_without_a_margin() {
     let dir = tempfile::tempdir().unwrap();
     let (handle, client) = with_line(dir.path()).await;
     let mut motion = spec("r", "line");
     motion.ignore_scene = true;
     motion.extra_obstacles = vec![wall()];
     motion.avoidance = Some(no_avoidance());
-    let r = within(
-        "plan",
-        client.plan(v1::PlanRequest { motion: Some(motion), duration: 3.0, ..Default::default() }),
-    )
-    .await
-    .unwrap();
+    let plan = |motion: &v1::MotionSpec| v1::PlanRequest {
+        motion: Some(motion.clone()),
+        duration: 3.0,
+        ..Default::default()
+    };
+    let r = within("plan", client.plan(plan(&motion))).await.unwrap();
+    let v = r.verdict.expect("a plan has a verdict");
+    assert_eq!(outcome(&v), v1::Outcome::Blocked, "{v:?}");
+    assert!(v.collisions.is_empty() && r.collisions.is_empty(), "{v:?}");
+    assert!(v.reason.starts_with("held before an obstacle's safety distance"), "{}", v.reason);
+    let margin = r.limits.as_ref().map(|l| l.margin).unwrap_or_default();
+    assert!(margin > 0.0, "the server's default margin is in force");
+    let clearance = v.min_clearance.expect("a clearance with an obstacle");
+    assert!(
+        clearance >= margin - 1e-9 && clearance < margin + 0.01,
+        "clearance {clearance} m, margin {margin} m"
+    );
+
+    // The margin off (the paper's experiments): straight through, a collision naming the wall.
+    motion.margin = -1.0;
+    let r = within("plan", client.plan(plan(&motion))).await.unwrap();
     let v = r.verdict.expect("a plan has a verdict");
     assert_eq!(outcome(&v), v1::Outcome::Collision, "{v:?}");
     assert_eq!(v.collisions, vec!["wall".to_string()]);
     assert!(v.reason.starts_with("collision with obstacle 'wall' at t = "), "{}", v.reason);
+    assert!(v.min_clearance.is_some_and(|c| c < 0.0), "{v:?}");
     assert_eq!(r.collisions, vec!["wall".to_string()]);
     // The trajectory (the plan's only segment) carries the same verdict.
     assert_eq!(r.trajectory.unwrap().verdict.as_ref(), Some(&v));

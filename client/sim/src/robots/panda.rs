@@ -117,7 +117,7 @@ pub(super) fn world() -> Vec<Body> {
 pub(crate) async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimReport, SimError> {
     learn(client, "move-to-ring", &HOME, &RING, (Q_HOME, Q_GRASP), TAU_REACH, 3050.0).await?;
     learn(client, "carry", &RING, &PLACE, (Q_GRASP, Q_PLACE), TAU_CARRY, 3050.0).await?;
-    put_profile(client, &server_robot(ROBOT), &PROFILE).await?;
+    put_profile(client, &server_robot(ROBOT), &PROFILE, None).await?;
     let dynamic = Method::DynamicVolumetric(DynamicVolumetric { lambda: 10.0, beta: 2.0, eta: 2.0 });
     let to_ring = PoseRun {
         key: "move-to-ring",

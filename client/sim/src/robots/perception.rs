@@ -55,7 +55,10 @@ use crate::error::SimError;
 
 /// Control period (and integration step): 1 kHz.
 pub(crate) const DT: f64 = 1e-3;
-/// The limit profile of the youBot base, in each robot's record.
+/// The limit profile of the youBot base, in each robot's record. The record's safety distance is none: the box and
+/// the walls carry the robot's size as their own margin, and the static potential on shapes inflated further (the
+/// field keeps off twice the margin) would hold the robot's rest point more than the 1 mm arrival tolerance short of
+/// its goal.
 pub(crate) const PROFILE: dmp::Limits = dmp::Limits::YOUBOT_BASE;
 /// Cruise speed of the drive, m/s (the youBot's top speed is 0.8 m/s).
 pub(crate) const CRUISE_SPEED: f64 = 0.4;
@@ -252,7 +255,7 @@ pub(crate) async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimR
     let robots = ROBOT_IDS.map(server_robot);
     for robot in &robots {
         within("learn", client.learn(robot, "corridor", &t, &rows, parameters.clone())).await??;
-        put_profile(client, robot, &PROFILE).await?;
+        put_profile(client, robot, &PROFILE, Some(-1.0)).await?;
     }
     let as_robot = [options.robot_client(client, &robots[0])?, options.robot_client(client, &robots[1])?];
     let mut publisher = within("zenoh open", open_publisher(options)).await??;

@@ -4,6 +4,7 @@
 
 use dmp::{Limits, Trajectory};
 use dmp_client::grpc::DmpClient;
+use dmp_proto::v1;
 use serde::Serialize;
 
 use super::within;
@@ -14,9 +15,21 @@ use crate::error::SimError;
 pub(crate) const ROUNDING: f64 = 1e-6;
 
 /// Stores `limits` as the limits of `robot`'s record (its footprint and tool left unset: the simulations send
-/// their footprints with each request).
-pub(crate) async fn put_profile(client: &DmpClient, robot: &str, limits: &Limits) -> Result<(), SimError> {
-    within("put robot", client.put_robot_limits(robot, limits)).await??;
+/// their footprints with each request), and its safety distance: the server's default (`None`), or `Some(m)`
+/// (negative: none).
+pub(crate) async fn put_profile(
+    client: &DmpClient,
+    robot: &str,
+    limits: &Limits,
+    margin: Option<f64>,
+) -> Result<(), SimError> {
+    let record = v1::RobotRecord {
+        robot_id: robot.into(),
+        limits: Some(dmp_proto::limits::limits_to_proto(limits)),
+        margin: margin.unwrap_or(0.0),
+        ..Default::default()
+    };
+    within("put robot", client.put_robot(record)).await??;
     Ok(())
 }
 

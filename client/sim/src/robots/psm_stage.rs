@@ -362,7 +362,7 @@ pub(crate) async fn run(client: &DmpClient, options: &SimOptions) -> Result<SimR
         }
     }
     for robot in ROBOT_IDS {
-        put_profile(client, &server_robot(robot), &PROFILE).await?;
+        put_profile(client, &server_robot(robot), &PROFILE, Some(-1.0)).await?;
     }
     let mut report = SimReport::new("psm", options.realtime);
     report.notes.push(

@@ -227,7 +227,7 @@ async fn store_primitives(client: &DmpClient) -> Result<(f64, f64), SimError> {
             v1::LearnParameters { n_basis: N_BASIS as u32, k: vec![K], d: Vec::new(), alpha: ALPHA };
         within("learn", client.learn(&server_robot(b.id), Kind::ConstantSpeed.name(), &t, &rows, parameters))
             .await??;
-        put_profile(client, &server_robot(b.id), &PROFILE).await?;
+        put_profile(client, &server_robot(b.id), &PROFILE, None).await?;
     }
     Ok((tau_line, duration))
 }

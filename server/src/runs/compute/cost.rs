@@ -20,6 +20,11 @@ const DP_STAGES: f64 = 7.0;
 /// run, charged on average over the run.
 const ADAPTIVE_STEPS_PER_LARGEST: f64 = 2.0;
 
+/// What a run under limits costs per point, relative to the same run without: the final stage (a jerk-limited
+/// generator that tracks the DMP) measured 14 – 22 % more per point on the benchmark's reaches (BENCHMARKS.md,
+/// "Final stage"), charged at the top of that range with some room.
+pub const LIMITED_COST: f64 = 1.25;
+
 /// The weight of one boundary sample (point methods) or one obstacle (volumetric methods) of `method`, in basis
 /// functions: the relative cost of its term, from the engine's step benchmark (`cargo bench -p dmp --bench step`).
 pub fn term_weight(method: &Method) -> f64 {
@@ -93,6 +98,12 @@ impl Workload {
         }
     }
 
+    /// The same workload with each step and point costing `factor` times as much (a run under limits,
+    /// [`LIMITED_COST`]).
+    pub fn scaled(self, factor: f64) -> Self {
+        Self { per_step: self.per_step * factor, per_point: self.per_point * factor, ..self }
+    }
+
     /// Work units of `points` output points.
     pub fn of_points(&self, points: f64) -> f64 {
         points * (self.per_point + self.steps_per_point * self.per_step)
@@ -130,6 +141,16 @@ mod tests {
         let coarse =
             Workload::of(3, 51, avoided(10), &Stepping { dt: 0.001, step_points: 10, tolerance: None });
         assert!(coarse.of_points(1000.0) < w10.of_points(1000.0) / 5.0);
+    }
+
+    #[test]
+    fn a_limited_run_costs_more_per_point_and_per_step() {
+        let none = Method::None;
+        let a = Avoided { obstacles: (&none, 0), obstacle_count: 0, robots: (&none, 0), robot_count: 0 };
+        let w = Workload::of(3, 51, a, &Stepping::rk4(0.001));
+        let limited = w.scaled(LIMITED_COST);
+        assert_eq!(limited.per_second(0.001), LIMITED_COST * w.per_second(0.001));
+        assert_eq!(limited.per_scene, w.per_scene);
     }
 
     #[test]
