@@ -21,7 +21,10 @@
 //! [`crate::integrate::goal_filter`]), and a change of the obstacles is blended in (`blend.rs`), so that the
 //! acceleration stays continuous. A robot's [`Limits`] are kept at every point handed out (`limiting.rs`): the phase
 //! slows first (temporal coupling), a limiter holds each setpoint within them, and the robot brakes to rest where
-//! the DMP asks for far more ([`Stretch::limit`]).
+//! the DMP asks for far more ([`Stretch::limit`]). A safety distance ([`Execution::set_margin`], `guard.rs`) keeps it
+//! off the obstacles' true shapes: the field acts on them inflated, and a robot that can brake brakes to rest before
+//! the margin where the field cannot keep it ([`LimitAction::Blocked`]); each stretch reports its clearance
+//! (`clearance.rs`).
 
 mod advance;
 mod blend;
