@@ -14,7 +14,8 @@ use tokio::sync::watch;
 #[derive(Debug, Clone)]
 pub struct Directory {
     servers: Arc<Mutex<BTreeMap<String, v1::PlantServer>>>,
-    /// Each cell's home: the server whose announcement listed it last, remembered after it is gone.
+    /// Each cell's home: the smallest id of the live servers that list it ([`Directory::insert`]), remembered after
+    /// it is gone.
     homes: Arc<Mutex<BTreeMap<String, String>>>,
     /// Bumped at every change.
     changes: Arc<watch::Sender<u64>>,
@@ -27,20 +28,42 @@ impl Default for Directory {
 }
 
 impl Directory {
-    /// Records (or replaces) a live server, and it as the home of the cells it lists.
+    /// Records (or replaces) a live server, and settles the home of the cells it lists.
     pub(crate) fn insert(&self, server: v1::PlantServer) {
         {
             let mut homes = self.homes.lock().unwrap_or_else(|p| p.into_inner());
-            for cell in &server.cells {
-                homes.insert(cell.clone(), server.server_id.clone());
-            }
             // The cells whose server it knows gone: their home, unless this server knows it already.
             for (cell, home) in &server.homes_away {
                 homes.entry(cell.clone()).or_insert_with(|| home.clone());
             }
         }
+        let cells = server.cells.clone();
         self.lock().insert(server.server_id.clone(), server);
+        self.settle(&cells);
         self.changes.send_modify(|n| *n += 1);
+    }
+
+    /// Sets the home of each of `cells` by the one rule every server applies to the same live set: the smallest id
+    /// of the live servers that list it. A cell that none lists keeps the home it had (gone: the fail-over holds
+    /// it), so that the order announcements arrive in never decides, and a claimant that leaves hands the cell to
+    /// the other claimants at once.
+    fn settle(&self, cells: &[String]) {
+        let claimants: Vec<(String, Option<String>)> = {
+            let servers = self.lock();
+            cells
+                .iter()
+                .map(|c| {
+                    let first = servers.values().find(|s| s.cells.contains(c)).map(|s| s.server_id.clone());
+                    (c.clone(), first)
+                })
+                .collect()
+        };
+        let mut homes = self.homes.lock().unwrap_or_else(|p| p.into_inner());
+        for (cell, first) in claimants {
+            if let Some(home) = first {
+                homes.insert(cell, home);
+            }
+        }
     }
 
     /// Every cell's home, as last announced.
@@ -73,9 +96,11 @@ impl Directory {
         Some((home, holder))
     }
 
-    /// Forgets a server (its token went).
+    /// Forgets a server (its token went); the cells it listed go to the other live servers that list them.
     pub(crate) fn remove(&self, server_id: &str) {
-        if self.lock().remove(server_id).is_some() {
+        let gone = self.lock().remove(server_id);
+        if let Some(gone) = gone {
+            self.settle(&gone.cells);
             self.changes.send_modify(|n| *n += 1);
         }
     }
@@ -134,6 +159,26 @@ mod tests {
         d.remove("s1");
         assert_eq!(d.owner_of("a").unwrap().server_id, "s2");
         assert_eq!(d.server_ids(), ["s2"]);
+    }
+
+    #[test]
+    fn competing_claims_resolve_alike_in_any_order_and_converge_when_a_claimant_leaves() {
+        let (x, y) = (Directory::default(), Directory::default());
+        // A fake server `0` claims cell a: two directories hearing the claims in opposite orders agree.
+        x.insert(server("s1", &["a"]));
+        x.insert(server("0", &["a"]));
+        y.insert(server("0", &["a"]));
+        y.insert(server("s1", &["a"]));
+        y.insert(server("s2", &["b"]));
+        x.insert(server("s2", &["b"]));
+        assert_eq!(x.homes(), y.homes());
+        // It leaves: a goes back to s1 at once, and nobody takes it over (no split brain).
+        x.remove("0");
+        y.remove("0");
+        for d in [&x, &y] {
+            assert_eq!(d.homes().get("a").map(String::as_str), Some("s1"));
+            assert_eq!(d.holder_of("a", Some("s2")), Some(("s1".into(), "s1".into())));
+        }
     }
 
     #[test]

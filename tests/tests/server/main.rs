@@ -7,6 +7,7 @@ mod audit_log;
 mod bad_input;
 mod catch_up;
 mod catch_up_cells;
+mod cell_claims;
 mod default_limits;
 mod forged_versions;
 mod hostile_compute;
