@@ -3,7 +3,9 @@ for Python robot drivers, planners and perception nodes."""
 
 from __future__ import annotations
 
+import atexit
 import threading
+import weakref
 from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Union
 
 import grpc
@@ -53,6 +55,51 @@ def motion_limits(limits: Mapping[str, float]) -> motion.Limits:
     return motion.Limits(**{f: number(f"limits.{f}", v) for f, v in limits.items()})
 
 
+class _Resources:
+    """What a `Client` holds open: its channel and its Zenoh publishers. Apart from the client, so that the
+    finaliser that closes them at exit does not keep the client alive."""
+
+    def __init__(self, channel: grpc.Channel):
+        self.channel = channel
+        self.publishers: Dict[tuple, ObstaclePublisher] = {}
+        self.lock = threading.Lock()
+        self.closed = False
+
+    def close(self) -> None:
+        with self.lock:
+            if self.closed:
+                return
+            self.closed = True
+            publishers, self.publishers = self.publishers, {}
+        for p in publishers.values():
+            p.close()
+        self.channel.close()
+
+
+#: The resources of the clients not closed yet, closed when the interpreter exits.
+_OPEN: "weakref.WeakSet[_Resources]" = weakref.WeakSet()
+
+
+def _close_all_at_exit() -> None:
+    for resources in list(_OPEN):
+        try:
+            resources.close()
+        except Exception:  # noqa: BLE001 - the interpreter is going: nothing can be done about it any more
+            pass
+
+
+# At exit the interpreter first waits for the threads that are not daemons (Zenoh's session has some), and only
+# then runs `atexit`: a Zenoh session left open would make it wait for ever. `threading._register_atexit` runs
+# before that wait (concurrent.futures closes its pools there); `atexit` is the fallback where it is missing.
+_register = getattr(threading, "_register_atexit", None)
+try:
+    if _register is None:
+        raise AttributeError
+    _register(_close_all_at_exit)
+except (AttributeError, RuntimeError):
+    atexit.register(_close_all_at_exit)
+
+
 class Client:
     """A client of the DMP cell's server.
 
@@ -95,18 +142,18 @@ class Client:
         self._motion = motion_grpc.MotionServiceStub(self._channel)
         self._scene = scene_grpc.SceneServiceStub(self._channel)
         self._server = server_grpc.ServerServiceStub(self._channel)
-        self._publishers: Dict[tuple, ObstaclePublisher] = {}
-        self._publishers_lock = threading.Lock()
+        self._resources = _Resources(self._channel)
+        _OPEN.add(self._resources)
+        # A client dropped without `close` closes its channel and sessions then, at the latest at exit.
+        self._finalizer = weakref.finalize(self, self._resources.close)
 
     # --- Lifetime ---------------------------------------------------------------------------------------------
 
     def close(self) -> None:
-        """Closes the Zenoh sessions (gracefully: what was published is sent first) and the channel."""
-        with self._publishers_lock:
-            publishers, self._publishers = self._publishers, {}
-        for p in publishers.values():
-            p.close()
-        self._channel.close()
+        """Closes the Zenoh sessions (gracefully: what was published is sent first) and the channel. A script that
+        never calls it exits all the same: what a client holds is closed when it is collected, or at exit."""
+        self._resources.close()
+        _OPEN.discard(self._resources)
 
     def __enter__(self) -> "Client":
         return self
@@ -356,10 +403,13 @@ class Client:
 
     def _publisher(self, connect: List[str]) -> ObstaclePublisher:
         key = (tuple(connect), self.zenoh_config)
-        with self._publishers_lock:
-            if key not in self._publishers:
-                self._publishers[key] = ObstaclePublisher(connect, self.zenoh_config)
-            return self._publishers[key]
+        r = self._resources
+        with r.lock:
+            if r.closed:
+                raise ArgumentError("client", "is closed")
+            if key not in r.publishers:
+                r.publishers[key] = ObstaclePublisher(connect, self.zenoh_config)
+            return r.publishers[key]
 
     def publish_obstacle(
         self,
