@@ -189,7 +189,17 @@ fn check(e: &IdentityEntry) -> Result<Identity, (&'static str, String)> {
         }
     }
     for robot in &e.robots {
-        name_rule("robots", robot)?;
+        // A prefix (`sim.*`) names every robot id that starts with it.
+        match robot.strip_suffix(super::role::PREFIX_WILDCARD) {
+            Some(prefix) if !prefix.is_empty() => name_rule("robots", prefix)?,
+            Some(_) => {
+                return Err((
+                    "robots",
+                    "`*` alone: leave `robots` empty for every robot of its cells".into(),
+                ));
+            }
+            None => name_rule("robots", robot)?,
+        }
     }
     if e.cells.is_empty() && e.role != Role::Admin {
         return Err(("cells", "is empty: list its cells, or `*` for every cell".into()));

@@ -128,12 +128,24 @@ impl Action<'_> {
     }
 }
 
+/// The end of a robot entry that names every robot id starting with what comes before it (`sim.*`: `sim.panda`,
+/// `sim.youbot1` ...).
+pub(crate) const PREFIX_WILDCARD: &str = "*";
+
+/// Whether the robot entry `entry` (an id, or a prefix ending in [`PREFIX_WILDCARD`]) names `robot`.
+fn names_robot(entry: &str, robot: &str) -> bool {
+    match entry.strip_suffix(PREFIX_WILDCARD) {
+        Some(prefix) => robot.starts_with(prefix),
+        None => entry == robot,
+    }
+}
+
 /// The cells and robots an identity may act on.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub(crate) struct Scope {
     /// Its cells; `*` is every cell.
     pub cells: Vec<String>,
-    /// Its robots; empty is every robot of its cells.
+    /// Its robots, each an id or a prefix ending in `*` (`sim.*`); empty is every robot of its cells.
     pub robots: Vec<String>,
 }
 
@@ -145,7 +157,7 @@ impl Scope {
 
     /// Whether `robot` is one of its robots (every robot when none is listed).
     pub(crate) fn has_robot(&self, robot: &str) -> bool {
-        self.robots.is_empty() || self.robots.iter().any(|r| r == robot)
+        self.robots.is_empty() || self.robots.iter().any(|r| names_robot(r, robot))
     }
 
     /// Whether the primitives of `robot` are its own. Primitives belong to a robot, not to a cell: an identity that
@@ -155,7 +167,7 @@ impl Scope {
         if self.robots.is_empty() {
             self.cells.iter().any(|c| c == "*")
         } else {
-            self.robots.iter().any(|r| r == robot)
+            self.robots.iter().any(|r| names_robot(r, robot))
         }
     }
 
@@ -208,6 +220,24 @@ mod tests {
             cells: cells.iter().map(|s| s.to_string()).collect(),
             robots: robots.iter().map(|s| s.to_string()).collect(),
         }
+    }
+
+    #[test]
+    fn a_prefix_grants_the_robots_it_starts_and_refuses_the_others() {
+        let s = scope(&["a"], &["panda-1", "sim.*"]);
+        for robot in ["sim.panda", "sim.youbot1", "panda-1"] {
+            assert!(allows(Role::Planner, &s, &Action::Execute { cell: "a", robots: &[robot] }), "{robot}");
+            assert!(allows(Role::Planner, &s, &Action::WritePrimitive { robot }), "{robot}");
+        }
+        for robot in ["simulated", "sim", "panda-2", "xsim.panda"] {
+            assert!(!allows(Role::Planner, &s, &Action::Execute { cell: "a", robots: &[robot] }), "{robot}");
+            assert!(!allows(Role::Planner, &s, &Action::WritePrimitive { robot }), "{robot}");
+        }
+        assert!(!allows(
+            Role::Planner,
+            &s,
+            &Action::Execute { cell: "a", robots: &["sim.panda", "panda-2"] }
+        ));
     }
 
     #[test]

@@ -6,7 +6,7 @@ use std::io::IsTerminal;
 use std::process::ExitCode;
 
 use clap::Parser;
-use dmp_server::access::init::{InitOptions, init};
+use dmp_server::access::init::{CA_KEY, InitExtras, InitOptions, init_with, uncovered_locators};
 use dmp_server::config::command_line::{AccessCommand, Args, Command, load_config};
 use dmp_server::zenoh_bridge::threads::{self, ZENOH_RUNTIME};
 use tokio::signal::unix::{SignalKind, signal};
@@ -23,9 +23,18 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    if let Some(Command::Access(AccessCommand::Init { dir, cells, robots, hosts })) = &args.command {
+    if let Some(Command::Access(AccessCommand::Init {
+        dir,
+        cells,
+        robots,
+        hosts,
+        zenoh_port,
+        robot_prefixes,
+    })) = &args.command
+    {
         let options = InitOptions { cells: cells.clone(), robots: robots.clone(), hosts: hosts.clone() };
-        return match init(dir, &options) {
+        let extras = InitExtras { zenoh_port: Some(*zenoh_port), robot_prefixes: robot_prefixes.clone() };
+        return match init_with(dir, &options, &extras) {
             Ok(set) => {
                 println!(
                     "wrote a CA, the server's certificate and the access file into {}",
@@ -35,8 +44,13 @@ fn main() -> ExitCode {
                     println!("  identity `{name}`: {name}.pem, {name}.key, {name}.token");
                 }
                 println!(
+                    "the CA's private key is {d}/{CA_KEY}: keep it apart, never hand it out (it signs new \
+                     certificates)",
+                    d = set.dir.display()
+                );
+                println!(
                     "serve with: dmp-server --access {d}/access.toml --tls-cert {d}/server.pem --tls-key {d}/server.key \
-                     --tls-client-ca {d}/ca.pem",
+                     --tls-client-ca {d}/ca.pem --zenoh-listen tls/0.0.0.0:{zenoh_port}",
                     d = set.dir.display()
                 );
                 ExitCode::SUCCESS
@@ -133,7 +147,12 @@ fn main() -> ExitCode {
         let hangups =
             signal(SignalKind::hangup()).map_err(|e| format!("cannot install the SIGHUP handler: {e}"))?;
         let hangups = tokio_stream::wrappers::SignalStream::new(hangups);
-        dmp_server::server::run(config, shutdown, hangups).await.map_err(|e| e.to_string())
+        let certificate = config.security.tls_cert.clone();
+        let handle = dmp_server::server::start(config).await.map_err(|e| e.to_string())?;
+        if let Some(path) = certificate {
+            warn_uncovered_locators(&path, &handle.zenoh_locators);
+        }
+        serve(handle, shutdown, hangups).await
     });
     // What is pending goes to the collector before the process exits.
     if let Some(traces) = traces
@@ -151,6 +170,50 @@ fn main() -> ExitCode {
             eprintln!("dmp-server: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Serves until `shutdown`, reloading the access file on each SIGHUP, then stops cleanly (as
+/// `dmp_server::server::run`, once the started server has been checked).
+async fn serve(
+    handle: dmp_server::server::ServerHandle,
+    shutdown: impl Future<Output = ()>,
+    mut hangups: impl tokio_stream::Stream<Item = ()> + Unpin,
+) -> Result<(), String> {
+    tokio::pin!(shutdown);
+    loop {
+        tokio::select! {
+            _ = &mut shutdown => break,
+            Some(()) = tokio_stream::StreamExt::next(&mut hangups) => {
+                info!("SIGHUP: reloading the access file");
+                // A refused file is logged and changes nothing.
+                let _ = handle.reload_access();
+            }
+        }
+    }
+    info!("shutting down: draining streams, closing Zenoh");
+    handle.shutdown().await.map_err(|e| e.to_string())
+}
+
+/// Warns when the server advertises a Zenoh address its certificate (`path`) does not name: a client that
+/// connects there fails the TLS handshake. The fix is a set made with that address (`access init --host`).
+fn warn_uncovered_locators(path: &std::path::Path, locators: &[String]) {
+    let pem = match std::fs::read(path) {
+        Ok(pem) => pem,
+        Err(e) => {
+            return warn!(certificate = %path.display(), error = %e, "cannot read the server's certificate");
+        }
+    };
+    match uncovered_locators(&pem, locators) {
+        Ok(uncovered) if !uncovered.is_empty() => warn!(
+            certificate = %path.display(),
+            locators = ?uncovered,
+            "the server advertises Zenoh addresses its certificate does not name: clients that connect there fail \
+             the TLS handshake. Make a set that names them (dmp-server access init DIR --host ADDRESS, one --host \
+             per address), or listen only on addresses it names (--zenoh-listen)"
+        ),
+        Ok(_) => {}
+        Err(e) => warn!(certificate = %path.display(), error = %e, "cannot read the server's certificate"),
     }
 }
 

@@ -127,6 +127,13 @@ pub enum AccessCommand {
         /// A host name or address the server is reached at, besides loopback (repeatable).
         #[arg(long = "host", value_name = "NAME")]
         hosts: Vec<String>,
+        /// The port of the server's Zenoh endpoint, in the Zenoh configurations written and the command printed.
+        #[arg(long = "zenoh-port", value_name = "PORT", default_value_t = crate::access::init::DEFAULT_ZENOH_PORT)]
+        zenoh_port: u16,
+        /// A robot id prefix (e.g. `sim.`): the planner and the observer get every robot whose id starts with it
+        /// (repeatable).
+        #[arg(long = "robot-prefix", value_name = "PREFIX")]
+        robot_prefixes: Vec<String>,
     },
 }
 
