@@ -19,7 +19,7 @@ def test_a_plan_and_a_stream_say_which_limits_they_keep(plain_server, demonstrat
     t, rows = demonstration
     with plain_server.client() as c:
         c.learn("l1", "reach", t=t, positions=rows)
-        plan = c.plan("l1", "reach", ignore_scene=True, duration=4.0)
+        plan = c.plan("l1", "reach", ignore_scene=True, duration_s=4.0)
         assert isinstance(plan.limits, dmp_cell.LimitsInForce)
         assert plan.limits.limits == DEFAULT
         assert plan.limits.profile == "server default"

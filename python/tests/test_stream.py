@@ -121,8 +121,8 @@ def test_stop_ends_the_stream_at_rest(server, learned):
 def test_a_plan_is_the_whole_trajectory_at_once(server, learned):
     goal = [0.9, 0.4]
     with server.client(ROBOT) as c:
-        plan = c.plan(ROBOT, "reach", goal=goal, dt=0.002, **EXACT)
-        with c.stream(ROBOT, "reach", goal=goal, dt=0.002, deadline_s=DEADLINE_S, **EXACT) as s:
+        plan = c.plan(ROBOT, "reach", goal=goal, dt_s=0.002, **EXACT)
+        with c.stream(ROBOT, "reach", goal=goal, dt_s=0.002, deadline_s=DEADLINE_S, **EXACT) as s:
             streamed = s.collect()
     assert not plan.collisions and not plan.stalled and not plan.warnings
     sps = list(plan.setpoints)

@@ -18,7 +18,7 @@ def plain(plain_server, demonstration):
 
 
 def test_a_plan_says_whether_it_reached_its_goal_and_how_far_it_stopped_short(plain):
-    short = plain.plan("v1", "reach", ignore_scene=True, duration=0.3)
+    short = plain.plan("v1", "reach", ignore_scene=True, duration_s=0.3)
     v = short.verdict
     assert isinstance(v, dmp_cell.Verdict)
     assert v.outcome == "OUT_OF_TIME" and not v.goal_reached
@@ -28,7 +28,7 @@ def test_a_plan_says_whether_it_reached_its_goal_and_how_far_it_stopped_short(pl
     assert f"{left:.3f} m short of the goal" in v.reason and "out of time" in v.reason
     assert v.collisions == () and v.min_clearance is None
     assert str(v).startswith("OUT_OF_TIME: ended ")
-    reached = plain.plan("v1", "reach", ignore_scene=True, duration=4.0).verdict
+    reached = plain.plan("v1", "reach", ignore_scene=True, duration_s=4.0).verdict
     assert reached.outcome == "GOAL_REACHED" and reached.goal_reached and reached.goal_distance < 1e-3
 
 

@@ -15,6 +15,7 @@ from . import pb
 from .client import NO_LIMITS, Client, Plan
 from .errors import ArgumentError, ConnectError, DmpError, ProtocolError, StatusError, ZenohError
 from .obstacles import check_obstacle, obstacle_to_dict, obstacle_to_proto
+from .records import PrimitiveSummary, RobotRecord, ServerSummary
 from .setpoints import FINAL_STATUSES, LimitsInForce, ServerWarning, Setpoint, Setpoints, Verdict
 from .stream import Stream
 
@@ -27,7 +28,10 @@ __all__ = [
     "LimitsInForce",
     "NO_LIMITS",
     "Plan",
+    "PrimitiveSummary",
     "ProtocolError",
+    "RobotRecord",
+    "ServerSummary",
     "Setpoint",
     "Setpoints",
     "StatusError",

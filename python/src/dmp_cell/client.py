@@ -5,15 +5,18 @@ from __future__ import annotations
 
 import atexit
 import threading
+import warnings
 import weakref
 from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Union
 
 import grpc
 
 from . import connect as conn
-from .pb import motion, motion_grpc, primitives, primitives_grpc, scene, scene_grpc, server, server_grpc, types
+from .pb import (motion, motion_grpc, primitives, primitives_grpc, robots, robots_grpc, scene, scene_grpc, server,
+                 server_grpc, types)
 from .errors import ArgumentError, from_rpc
 from .obstacles import check_name, check_obstacle, obstacle_to_dict, obstacle_to_proto
+from .records import PrimitiveSummary, RobotRecord, ServerSummary, robot_record_of
 from .setpoints import (LIMIT_FIELDS, LimitsInForce, ServerWarning, Setpoints, Verdict, limits_of, verdict_of,
                         warning_of)
 from .stream import Stream
@@ -53,6 +56,18 @@ def motion_limits(limits: Mapping[str, float]) -> motion.Limits:
         if field not in LIMIT_FIELDS:
             raise ArgumentError(f"limits.{field}", f"is not a field of dmp.v1.Limits ({', '.join(LIMIT_FIELDS)})")
     return motion.Limits(**{f: number(f"limits.{f}", v) for f, v in limits.items()})
+
+
+def _renamed(old: str, new: str, old_value: float, new_value: float) -> float:
+    """The value of a keyword renamed from `old` to `new` (as the gRPC field and the CLI flag say): `new`'s, or
+    `old`'s with a DeprecationWarning; both given is an error."""
+    if old_value is None:
+        return new_value
+    if new_value:
+        raise ArgumentError(old, f"give `{new}` only (`{old}` is its old name)")
+    warnings.warn(f"`{old}` is now `{new}` (seconds, as the gRPC field and dmpctl's flag)", DeprecationWarning,
+                  stacklevel=3)
+    return old_value
 
 
 class _Resources:
@@ -142,6 +157,7 @@ class Client:
         self._motion = motion_grpc.MotionServiceStub(self._channel)
         self._scene = scene_grpc.SceneServiceStub(self._channel)
         self._server = server_grpc.ServerServiceStub(self._channel)
+        self._robots = robots_grpc.RobotServiceStub(self._channel)
         self._resources = _Resources(self._channel)
         _OPEN.add(self._resources)
         # A client dropped without `close` closes its channel and sessions then, at the latest at exit.
@@ -172,10 +188,11 @@ class Client:
 
     # --- Server -----------------------------------------------------------------------------------------------
 
-    def info(self) -> server.ServerInfo:
+    def info(self) -> ServerSummary:
         """How the server is set up (TLS, access control, its default cell, Zenoh locators, limits) and who this
-        client is to it."""
-        return self._call(self._server.GetInfo, server.GetInfoRequest())
+        client is to it: the `dmp.v1.ServerInfo` (its fields read as attributes, `.message` the message itself),
+        printed as a one-line summary."""
+        return ServerSummary(self._call(self._server.GetInfo, server.GetInfoRequest()))
 
     # --- Primitives -------------------------------------------------------------------------------------------
 
@@ -191,12 +208,13 @@ class Client:
         d: Union[None, float, Sequence[float]] = None,
         alpha: float = 0.0,
         orientations: Any = None,
-    ) -> types.PrimitiveRecord:
+    ) -> PrimitiveSummary:
         """Learns a primitive from one demonstration and stores it as the next version of `(robot, name)`; returns
         the stored record once it is durable. `t` are the sample times (strictly increasing), `positions` one row
         per sample (a list of lists or a 2-D numpy array). `n_basis`, `k`, `d` (one value or one per dimension)
         and `alpha` default to the server's (N = 50, K = 1050, critical damping, alpha = 4). `orientations`, one
-        unit quaternion (x, y, z, w) per sample, learns a pose primitive."""
+        unit quaternion (x, y, z, w) per sample, learns a pose primitive. The record returned reads as the
+        `dmp.v1.PrimitiveRecord` (`.version`, `.primitive`, `.message`) and prints as a summary, not its weights."""
         times = vector("t", t)
         flat, dim = rows("positions", positions)
         if len(flat) // dim != len(times):
@@ -224,7 +242,7 @@ class Client:
                 n_basis=int(n_basis), k=gains("k", k), d=gains("d", d), alpha=number("alpha", alpha)
             ),
         )
-        return self._call(self._primitives.Learn, request).record
+        return PrimitiveSummary(self._call(self._primitives.Learn, request).record)
 
     def get_primitive(self, robot: str, name: str, version: int = 0) -> types.PrimitiveRecord:
         """One primitive: `version` 0 is the latest."""
@@ -275,24 +293,27 @@ class Client:
         version: int = 0,
         cell: Optional[str] = None,
         ignore_scene: bool = False,
-        dt: float = 0.0,
-        duration: float = 0.0,
+        dt_s: float = 0.0,
+        duration_s: float = 0.0,
         goal_orientation: Optional[Sequence[float]] = None,
         start_orientation: Optional[Sequence[float]] = None,
         limits: Optional[Mapping[str, float]] = None,
         margin: float = 0.0,
+        dt: Optional[float] = None,
+        duration: Optional[float] = None,
     ) -> Plan:
         """The whole trajectory of the primitive `(robot, name)` at once, around the cell's obstacles: its
-        setpoints, the contacts met, whether it stalled, the server's warnings, the limits it kept. `dt` defaults
-        to 1 ms, `duration` to 1.2 tau. `limits` maps fields of `dmp.v1.Limits` (`max_speed`, ...) to a bound, a
+        setpoints, the contacts met, whether it stalled, the server's warnings, the limits it kept, and how it
+        ended (`verdict`). `dt_s` defaults to 1 ms, `duration_s` to 1.2 tau (`dt` and `duration`, their old names,
+        still work with a DeprecationWarning). `limits` maps fields of `dmp.v1.Limits` (`max_speed`, ...) to a bound, a
         negative value turning the limit off (`NO_LIMITS`: all off); a field left out takes the robot's record's,
         then the server's default profile. `margin` is the safety distance from the obstacles, metres (0: the
         record's or the server's, negative: none)."""
         request = motion.PlanRequest(
             motion=self._motion_spec(robot, name, goal, start, tau, version, cell, ignore_scene,
                                      goal_orientation, start_orientation, limits, margin),
-            dt=number("dt", dt),
-            duration=number("duration", duration),
+            dt=number("dt_s", _renamed("dt", "dt_s", dt, dt_s)),
+            duration=number("duration_s", _renamed("duration", "duration_s", duration, duration_s)),
         )
         r = self._call(self._motion.Plan, request)
         setpoints = Setpoints()
@@ -332,7 +353,7 @@ class Client:
         version: int = 0,
         cell: Optional[str] = None,
         ignore_scene: bool = False,
-        dt: float = 0.0,
+        dt_s: float = 0.0,
         segment_s: float = 0.0,
         lookahead_s: float = 0.0,
         max_duration_s: float = 0.0,
@@ -342,19 +363,20 @@ class Client:
         start_orientation: Optional[Sequence[float]] = None,
         limits: Optional[Mapping[str, float]] = None,
         margin: float = 0.0,
+        dt: Optional[float] = None,
     ) -> Stream:
         """Executes the primitive `(robot, name)` (latest `version` by default) as a session, and returns the
         `Stream`: iterate it for the setpoints in force (supersession applied), send it `set_goal`, `set_tau`,
         `pause`, `resume` or `stop` meanwhile. `goal`, `start` and `tau` default to the primitive's; `realtime`
         paces the segments (and the iteration) on the wall clock, otherwise they come as fast as they are read.
-        `dt`, `segment_s`, `lookahead_s` and `max_duration_s` default to the server's (1 ms, 10 ms, 50 ms, until
-        the goal); `take_over` ends another stream of the robot; `deadline_s` bounds the whole call. A pose
+        `dt_s`, `segment_s`, `lookahead_s` and `max_duration_s` default to the server's (1 ms, 10 ms, 50 ms, until
+        the goal; `dt`, the old name of `dt_s`, still works with a DeprecationWarning); `take_over` ends another stream of the robot; `deadline_s` bounds the whole call. A pose
         primitive's `goal_orientation` and `start_orientation` (x, y, z, w) default to its own. `limits` and
         `margin` as `plan`'s; the stream's `limits` says which it keeps."""
         request = motion.ExecuteRequest(
             motion=self._motion_spec(robot, name, goal, start, tau, version, cell, ignore_scene, goal_orientation,
                                      start_orientation, limits, margin),
-            dt=number("dt", dt),
+            dt=number("dt_s", _renamed("dt", "dt_s", dt, dt_s)),
             segment_s=number("segment_s", segment_s),
             pacing=motion.PACING_REALTIME if realtime else motion.PACING_AS_FAST_AS_READ,
             lookahead_s=number("lookahead_s", lookahead_s),
@@ -362,6 +384,42 @@ class Client:
             take_over=take_over,
         )
         return Stream(self._motion, request, self._metadata, realtime, deadline_s)
+
+    # --- Robot records ------------------------------------------------------------------------------------------
+
+    def put_robot(
+        self,
+        robot: str,
+        *,
+        limits: Optional[Mapping[str, float]] = None,
+        margin: float = 0.0,
+        footprint: Optional[Mapping[str, Sequence[float]]] = None,
+    ) -> RobotRecord:
+        """Stores the record of `robot`, replacing the one before: its `limits` (fields of `dmp.v1.Limits`, SI
+        units, 0 or left out meaning no limit on a field), its safety distance `margin` from the obstacles, metres
+        (0: the server's default, negative: none), and its `footprint` (`{"semi_axes": [...], "exponents": [...]}`),
+        published with its state so that the other robots avoid it. Plans and streams of the robot keep these
+        unless a request says otherwise. Returns the stored record."""
+        record = robots.RobotRecord(robot_id=check_name("robot", robot), margin=number("margin", margin))
+        if limits is not None:
+            record.limits.CopyFrom(motion_limits(limits))
+        if footprint is not None:
+            unknown = set(footprint) - {"semi_axes", "exponents"}
+            if unknown:
+                raise ArgumentError(f"footprint.{sorted(unknown)[0]}", "expected `semi_axes` and `exponents`")
+            record.footprint.CopyFrom(types.Superquadric(
+                semi_axes=vector("footprint.semi_axes", footprint.get("semi_axes", [])),
+                exponents=vector("footprint.exponents", footprint.get("exponents", [])),
+            ))
+        return robot_record_of(self._call(self._robots.PutRobot, robots.PutRobotRequest(robot=record)))
+
+    def get_robot(self, robot: str) -> RobotRecord:
+        """The record of `robot`; raises `DmpError` (code NOT_FOUND) when it has none."""
+        return robot_record_of(self._call(self._robots.GetRobot, robots.GetRobotRequest(robot_id=robot)))
+
+    def delete_robot(self, robot: str) -> None:
+        """Deletes the record of `robot` (its primitives stay); raises `DmpError` (NOT_FOUND) when it has none."""
+        self._call(self._robots.DeleteRobot, robots.DeleteRobotRequest(robot_id=robot))
 
     # --- Scene over gRPC --------------------------------------------------------------------------------------
 
