@@ -370,9 +370,10 @@ class Client:
         `pause`, `resume` or `stop` meanwhile. `goal`, `start` and `tau` default to the primitive's; `realtime`
         paces the segments (and the iteration) on the wall clock, otherwise they come as fast as they are read.
         `dt_s`, `segment_s`, `lookahead_s` and `max_duration_s` default to the server's (1 ms, 10 ms, 50 ms, until
-        the goal; `dt`, the old name of `dt_s`, still works with a DeprecationWarning); `take_over` ends another stream of the robot; `deadline_s` bounds the whole call. A pose
-        primitive's `goal_orientation` and `start_orientation` (x, y, z, w) default to its own. `limits` and
-        `margin` as `plan`'s; the stream's `limits` says which it keeps."""
+        the goal; `dt`, the old name of `dt_s`, still works with a DeprecationWarning); `take_over` ends another
+        stream of the robot; `deadline_s` bounds the whole call. A pose primitive's `goal_orientation` and
+        `start_orientation` (x, y, z, w) default to its own. `limits` and `margin` as `plan`'s; the stream's
+        `limits` says which it keeps, its `verdict` how it ended."""
         request = motion.ExecuteRequest(
             motion=self._motion_spec(robot, name, goal, start, tau, version, cell, ignore_scene, goal_orientation,
                                      start_orientation, limits, margin),
