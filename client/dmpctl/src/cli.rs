@@ -146,8 +146,7 @@ async fn dispatch_to(
         Command::Robot(RobotCommand::Show { id }) => robot_commands::show(&connect().await?, id).await,
         Command::Robot(RobotCommand::Delete { id }) => robot_commands::delete(&connect().await?, id).await,
         Command::Load(a) => {
-            let run =
-                async { Ok(dmp_sim::load::run_with(a, &server, &place.zenoh_connect, options).await?) };
+            let run = async { Ok(dmp_sim::load::run_with(a, &server, &place.zenoh_connect, options).await?) };
             let clean_up = async {
                 dmp_sim::load::clean_up(a, &server, &place.zenoh_connect, options).await?;
                 Ok("deleted the robots' primitives and the cells' fixed obstacles".to_string())
