@@ -8,7 +8,8 @@
 //! | action | refused by |
 //! | --- | --- |
 //! | `authenticate` | the authentication of a gRPC request (no credentials, an unknown token or certificate) |
-//! | `write primitive`, `execute`, … ([`super::Action::kind`]) | a role or scope that does not allow it (PERMISSION_DENIED) |
+//! | the gRPC method (`/dmp.v1.PrimitiveService/List`, …) | a role or scope that does not allow it (PERMISSION_DENIED, [`crate::grpc::authentication`]) |
+//! | `reflection` | gRPC reflection, for a role without it |
 //! | `stream` | a reload of the access file that ends a stream it no longer allows |
 //! | `zenoh publish` | a Zenoh sample the server refuses (its key, payload or a limit) |
 //! | `zenoh session` | a Zenoh peer whose identity a reload revoked, still or newly connected ([`crate::zenoh_bridge::revocation`]) |

@@ -63,13 +63,9 @@ impl Caller {
         self.identity.as_ref().map_or(Role::Admin, |i| i.role)
     }
 
-    /// Whether it may do `action`; PERMISSION_DENIED naming the identity and the action if not, audited.
+    /// Whether it may do `action`; PERMISSION_DENIED naming the identity and the action if not. Not audited here:
+    /// handlers also ask it to filter; a request refused with it is audited by the authentication layer.
     pub(crate) fn check(&self, action: &Action<'_>) -> Result<(), ServerError> {
-        self.allows(action).inspect_err(|e| audit::refused(self.name(), action.kind(), e))
-    }
-
-    /// [`Caller::check`] without the audit line (a stream's check at a reload is audited as the stream's end).
-    fn allows(&self, action: &Action<'_>) -> Result<(), ServerError> {
         match &self.identity {
             None => Ok(()),
             Some(i) if role::allows(i.role, &i.scope, action) => Ok(()),
@@ -92,7 +88,7 @@ impl Caller {
         };
         match again {
             Some(i) => {
-                Caller { identity: Some(i.clone()), credential: self.credential.clone() }.allows(action)
+                Caller { identity: Some(i.clone()), credential: self.credential.clone() }.check(action)
             }
             None => Err(ServerError::PermissionDenied(format!(
                 "identity `{}` is no longer in the access file: it may not {}",

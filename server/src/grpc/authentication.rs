@@ -1,7 +1,8 @@
 //! The one layer every gRPC request passes before any handler: it finds who calls (a bearer token, else the
 //! verified TLS client certificate) and puts the [`crate::access::Caller`] in the request's extensions for the handlers to
 //! authorise. Health answers everyone (probes carry no credentials); reflection follows the observer role. A
-//! request without a known identity ends here with UNAUTHENTICATED, audited ([`crate::access::audit`]).
+//! request without a known identity ends here with UNAUTHENTICATED; that refusal, and a handler's
+//! PERMISSION_DENIED answered before any message of the response, are audited ([`crate::access::audit`]).
 //!
 //! It also marks the request's connection active (the idle timeout counts from the last request), and under TLS
 //! lifts the connection's information out of tonic's TLS wrapper, so that the rest of the server finds it the
@@ -14,7 +15,7 @@ use std::task::{Context, Poll};
 
 use tonic::transport::server::{TcpConnectInfo, TlsConnectInfo};
 
-use crate::access::{AccessControl, Action, UNAUTHENTICATED, audit, credential};
+use crate::access::{AccessControl, Action, Caller, UNAUTHENTICATED, audit, credential};
 use crate::connections::write_batching::BatchedConnectInfo;
 use crate::error::ServerError;
 
@@ -100,7 +101,8 @@ where
             };
             let caller = caller.and_then(|c| {
                 if reflection {
-                    c.check(&Action::Reflection)?;
+                    c.check(&Action::Reflection)
+                        .inspect_err(|e| audit::refused(c.name(), Action::Reflection.kind(), e))?;
                 }
                 Ok(c)
             });
@@ -118,9 +120,25 @@ where
         if let Some(connection) = request.extensions().get::<Connection>() {
             connection.activity.touch();
         }
+        // A handler's PERMISSION_DENIED is audited here, once per request: handlers also ask `check` to filter
+        // (which robots a caller may see), and those answers are not refusals.
+        let who = request
+            .extensions()
+            .get::<Caller>()
+            .map(|c| (c.name().to_owned(), request.uri().path().to_owned()));
         // The service that was made ready is the one called (tower's rule); a clone takes its place.
         let clone = self.inner.clone();
         let mut inner = std::mem::replace(&mut self.inner, clone);
-        Box::pin(inner.call(request))
+        let response = inner.call(request);
+        Box::pin(async move {
+            let response = response.await?;
+            if let Some((identity, method)) = who
+                && let Some(status) = tonic::Status::from_header_map(response.headers())
+                && status.code() == tonic::Code::PermissionDenied
+            {
+                audit::refused(&identity, &method, &status.message());
+            }
+            Ok(response)
+        })
     }
 }

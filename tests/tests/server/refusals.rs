@@ -34,7 +34,7 @@ async fn refusals_are_audited_with_identity_action_and_reason_at_most_five_per_w
         assert_eq!(e.code(), Some(Code::PermissionDenied), "{e}");
     }
     let denied =
-        ["identity=audited-1", "action=read primitive", "may not read the primitives of robot `audited-2`"];
+        ["identity=audited-1", "action=/dmp.v1.", "may not read the primitives of robot `audited-2`"];
     until("the refusals are audited", || lines_with(&denied).len() == 5).await;
     assert!(lines_with(&denied).iter().all(|l| l.contains("level=WARN") && l.contains("suppressed=0")));
 
