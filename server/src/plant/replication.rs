@@ -9,7 +9,8 @@
 //! order they arrive in, a version up to a tombstone is deleted and a later one kept. What arrives is checked as a Put is (names, the
 //! primitive's ranges and `limits`, the message size), and a version or tombstone stamped more than the HLC's bound
 //! ahead of this server's clock is refused (forged numbers, `store/tombstones.rs`): a refused record is logged
-//! (its key, claimed origin and source session) and counted, never stored.
+//! (its key, claimed origin, the Zenoh id that stamped it and, when that session is linked to this one, its
+//! certificate's common name), audited (`replicate`) and counted, never stored.
 //!
 //! Only servers may publish on these keys: the access control generated from the access file allows them to server
 //! identities alone ([`crate::access::zenoh_acl`]).
@@ -82,10 +83,10 @@ impl Replication {
         let (stored, refused) = (Arc::new(AtomicU64::new(0)), Arc::new(AtomicU64::new(0)));
         let mut tasks = Vec::new();
         // Applies what arrives, in order, one store transaction each.
-        let (st, counts) = (store.clone(), (stored.clone(), refused.clone()));
+        let (st, counts, on) = (store.clone(), (stored.clone(), refused.clone()), session.clone());
         tasks.push(tokio::spawn(async move {
             while let Some(sample) = rx.recv().await {
-                apply(&st, &limits, &sample, &counts).await;
+                apply(&on, &st, &limits, &sample, &counts).await;
             }
         }));
         // Answers the other servers' catch-up queries.
@@ -205,6 +206,7 @@ async fn catch_up(
 
 /// Stores (or deletes) what one sample says, after checking it.
 async fn apply(
+    session: &Session,
     store: &Store,
     limits: &RequestLimits,
     sample: &Sample,
@@ -234,9 +236,30 @@ async fn apply(
         Ok(false) => debug!(key, "plant: replicated primitive held already"),
         Err(e) => {
             refused.fetch_add(1, Ordering::Relaxed);
-            warn!(key, origin, source, reason = %e, "plant: replicated primitive refused");
+            let (stamped_by, sender) = sender(session, sample).await;
+            warn!(key, origin, source, stamped_by, sender, reason = %e, "plant: replicated primitive refused");
+            let who = if sender.is_empty() { crate::access::audit::ZENOH_PEER } else { sender.as_str() };
+            let reason = format_args!("{key} (claimed origin `{origin}`, stamped by `{stamped_by}`): {e}");
+            crate::access::audit::refused(who, "replicate", &reason);
         }
     }
+}
+
+/// Who sent a sample, as far as this server knows: the Zenoh id whose clock stamped it (the sending session's, or
+/// a router's that stamped it on the way), and, when that session is linked to this one, the common name of its
+/// verified certificate (empty when unknown). Zenoh does not say which link a sample came in on: a session may
+/// stamp with another's id, so the name is a lead for the operator, not a proof.
+async fn sender(session: &Session, sample: &Sample) -> (String, String) {
+    let Some(stamp) = sample.timestamp() else { return (String::new(), String::new()) };
+    let zid = stamp.get_id().to_string();
+    let cn = session
+        .info()
+        .links()
+        .await
+        .find(|l| l.zid().to_string() == zid)
+        .and_then(|l| l.auth_identifier().map(str::to_owned))
+        .unwrap_or_default();
+    (zid, cn)
 }
 
 /// What a replication sample asks for.

@@ -9,6 +9,7 @@ mod catch_up;
 mod catch_up_cells;
 mod cell_claims;
 mod default_limits;
+mod forged_sender;
 mod forged_versions;
 mod hostile_compute;
 mod hostile_sessions;
