@@ -40,7 +40,7 @@ pub(crate) fn non_finite_at(text: &str, line: usize, column: usize) -> Option<(S
 pub(crate) fn json_error(path: &std::path::Path, text: &str, e: &serde_json::Error) -> crate::DmpctlError {
     let (field, message) = match non_finite_at(text, e.line(), e.column()) {
         Some((token, field)) => (field, non_finite_message(&token)),
-        None => ("(document)".to_string(), crate::obstacle_file::without_position(&e.to_string())),
+        None => ("(document)".to_string(), crate::json_position::without_position(&e.to_string())),
     };
     crate::DmpctlError::Parse {
         path: path.to_path_buf(),

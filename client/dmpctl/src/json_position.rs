@@ -2,6 +2,14 @@
 //! `obstacles[0].semi_axes[1]`, so that an error about a value can point at it in the file, whichever check found
 //! it (the parser, a type, or a rule checked after parsing).
 
+/// A parser's message without its trailing ` at line L column C` (the position is given apart).
+pub(crate) fn without_position(message: &str) -> String {
+    match message.rfind(" at line ") {
+        Some(i) if message[i..].contains(" column ") => message[..i].to_string(),
+        _ => message.to_string(),
+    }
+}
+
 /// One step of a field path.
 #[derive(Debug, PartialEq)]
 enum Step<'a> {

@@ -72,11 +72,3 @@ fn one(
     })?;
     Ok(o)
 }
-
-/// A parser's message without its trailing ` at line L column C` (the position is given apart).
-pub(crate) fn without_position(message: &str) -> String {
-    match message.rfind(" at line ") {
-        Some(i) if message[i..].contains(" column ") => message[..i].to_string(),
-        _ => message.to_string(),
-    }
-}

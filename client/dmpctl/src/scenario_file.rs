@@ -6,7 +6,8 @@ use std::path::Path;
 use dmp::scenario::Scenario;
 
 use crate::error::DmpctlError;
-use crate::obstacle_file::{check_scenario_obstacles, error_at, without_position};
+use crate::json_position::without_position;
+use crate::obstacle_file::{check_scenario_obstacles, error_at};
 
 /// Parses a scenario from text; `path` only names the source in errors, which give the value's line and column.
 /// Its obstacles are read as `scene put` reads them (`obstacle_file::check_scenario_obstacles`): the same broken
