@@ -201,6 +201,9 @@ async fn catch_up(
                 },
             }
         }
+        // The matching listener before its querier (the other way round, zenoh logs an ERROR at shutdown).
+        drop(listener);
+        drop(querier);
     }))
 }
 

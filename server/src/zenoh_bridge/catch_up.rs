@@ -100,6 +100,8 @@ pub(super) async fn spawn(
                 }
             }
         }
+        // The matching listener first: undeclared after its querier, zenoh logs an ERROR that it cannot find it.
+        drop(listener);
         if let Err(e) = querier.undeclare().await {
             debug!(error = %e, "zenoh querier undeclare failed (session closed?)");
         }
