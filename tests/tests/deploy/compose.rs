@@ -47,7 +47,7 @@ fn compose_parses_and_its_commands_ports_and_paths_agree_with_the_image() {
     let init_args = strings(&init["command"], "access-init");
     let init_parsed = dmp_server_args(&init_args, "access-init");
     let Some(dmp_server::config::command_line::Command::Access(
-        dmp_server::config::command_line::AccessCommand::Init { dir, cells, robots, hosts },
+        dmp_server::config::command_line::AccessCommand::Init { dir, cells, robots, hosts, .. },
     )) = init_parsed.command
     else {
         panic!("access-init does not run `access init`: {init_args:?}")
