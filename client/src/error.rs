@@ -92,14 +92,19 @@ impl ClientError {
         self.code() == Some(tonic::Code::NotFound)
     }
 
-    /// A failure of the connection itself rather than an answer of the server: refused, reset, a broken pipe
-    /// (plaintext HTTP/2 against a TLS server fails so). [`crate::tls_probe::https_hint`] tells that case apart.
+    /// A failure of the connection itself rather than an answer of the server: refused, reset, a broken pipe, a
+    /// connection closed under the call (plaintext HTTP/2 against a TLS server fails in any of these ways, depending
+    /// on when the server hangs up). [`crate::tls_probe::https_hint`] tells that case apart.
     pub fn is_transport_failure(&self) -> bool {
         match self {
             ClientError::Connect { .. } => true,
-            ClientError::Status { code, .. } => {
-                matches!(code, tonic::Code::Unavailable | tonic::Code::Unknown | tonic::Code::Internal)
-            }
+            ClientError::Status { code, .. } => matches!(
+                code,
+                tonic::Code::Unavailable
+                    | tonic::Code::Unknown
+                    | tonic::Code::Internal
+                    | tonic::Code::Cancelled
+            ),
             _ => false,
         }
     }
