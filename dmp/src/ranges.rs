@@ -52,7 +52,7 @@ pub const EXPONENT: RangeInclusive<f64> = 1.0..=8.0;
 pub const SOLID_DIMENSION_M: RangeInclusive<f64> = 2e-3..=5e3;
 
 /// How far a rotation may be from orthonormal (the largest entry of `R R^T - I`).
-pub(crate) const ROTATION_TOLERANCE: f64 = 1e-6;
+pub const ROTATION_TOLERANCE: f64 = 1e-6;
 
 /// Magnitude of an obstacle's velocity, metres per second: a moving obstacle stays inside the reach for minutes
 /// from anywhere in the default workspace, and `tau * o_dot` (with `tau <= 1e4`) stays under `1e6`.

@@ -210,8 +210,9 @@ fn orientation(obj: &Map<String, Value>) -> Result<Option<Vec<Vec<f64>>>, WireEr
                     ),
                 ));
             }
-            // An orthonormal matrix stays as written (a file read and written again is the same).
-            Ok(Some(if off > 1e-12 { orthonormalised(rows) } else { rows }))
+            // A matrix the engine takes as orthonormal stays as written (a message written to JSON and read again is
+            // the same message); only one further off is re-orthonormalised.
+            Ok(Some(if off > dmp::ranges::ROTATION_TOLERANCE { orthonormalised(rows) } else { rows }))
         }
         None => Ok(None),
     }
