@@ -150,3 +150,28 @@ fn a_margin_must_be_finite_and_not_negative() {
     }
     e.set_margin(0.0).unwrap();
 }
+
+/// Each stretch's reported clearance is the smallest exact distance over its points (within the exact band), though
+/// the exact distance is computed at few of them: a reach past a long, moving ellipse.
+#[test]
+fn the_reported_clearance_is_the_exact_minimum_over_the_points() {
+    let p = reach([1.0, 0.0], 1.0);
+    let shape = Shape::Superquadric(Superquadric::ellipsoid(vec![0.3, 0.05]).unwrap());
+    let long = Obstacle::new("long", shape, vec![0.5, 0.15], None, Some(vec![0.0, -0.02])).unwrap();
+    let mut e = alone(&p, Scene::empty(), Stepping::rk4(1e-3), 200);
+    e.set_obstacles([(&long, 0.0)]).unwrap();
+    let mut checked = 0;
+    while e.time() < 1.5 {
+        let s = e.advance(10).unwrap();
+        let exact = (0..s.x.len() / 2)
+            .map(|k| signed_distance_world(&long, &s.x[2 * k..2 * k + 2], s.start_time + k as f64 * e.dt()))
+            .fold(f64::INFINITY, f64::min);
+        if exact < super::clearance::EXACT_WITHIN {
+            assert!((s.min_clearance[0] - exact).abs() < 1e-9, "{} against {exact}", s.min_clearance[0]);
+            checked += 1;
+        } else {
+            assert!(s.min_clearance[0] <= exact + 1e-9);
+        }
+    }
+    assert!(checked > 50, "{checked} stretches within the exact band");
+}
